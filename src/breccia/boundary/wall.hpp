@@ -1,0 +1,121 @@
+#pragma once
+// Rigid walls (physics.md §6.1): an unbounded plane or a cylinder about an axis, moving with a
+// prescribed velocity reached through a cosine ramp, or driven by a controller (servo, later
+// issues) that sets the velocity each step. The wall is body 1 of every wall contact.
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "breccia/core/vec3.hpp"
+
+namespace breccia {
+
+enum class WallShape : std::uint8_t { Plane, Cylinder };
+
+// Cosine velocity ramp from 0 to 1 over `duration` seconds starting at `start` (§6.1).
+struct VelocityRamp {
+  double start = 0.0;
+  double duration = 0.0;
+  double factor(double t) const noexcept {
+    if (t <= start) return duration > 0.0 ? 0.0 : 1.0;
+    if (duration <= 0.0 || t >= start + duration) return 1.0;
+    return 0.5 * (1.0 - std::cos(std::numbers::pi * (t - start) / duration));
+  }
+};
+
+struct Wall {
+  std::string name;
+  WallShape shape = WallShape::Plane;
+  // Plane: a point on it and the unit normal pointing into the sample.
+  // Cylinder: a point on the axis, the unit axis, and the radius; particles are inside.
+  Vec3 point;
+  Vec3 normal{0, 0, 1};
+  Vec3 axis{0, 0, 1};
+  double radius = 0.0;
+
+  // Prescribed motion: plane velocity (any direction) or cylinder radial speed (positive inward).
+  Vec3 target_velocity;
+  double target_radial_speed = 0.0;
+  VelocityRamp ramp;
+  bool controlled = false;  // true: a controller sets `velocity` / `radial_speed` each step
+
+  // Current motion over the step being taken.
+  Vec3 velocity;
+  double radial_speed = 0.0;
+
+  // Results of the last step.
+  Vec3 force;              // resultant force the wall exerts on the particles
+  std::size_t contacts = 0;
+  double work = 0.0;       // cumulative work done by the wall on the particles
+  double radial_force = 0.0;  // cylinder: sum of F . n over its contacts (positive pushes inward)
+  Vec3 force_prev;            // previous step's force (and radial force), for the trapezoidal
+  double radial_force_prev = 0.0;  // work rule that matches the leapfrog kinetic energy
+  double moved = 0.0;      // distance moved since the last neighbour rebuild
+
+  static Wall plane(std::string name, Vec3 point, Vec3 inward_normal) {
+    Wall w;
+    w.name = std::move(name);
+    w.shape = WallShape::Plane;
+    w.point = point;
+    w.normal = unit(inward_normal);
+    return w;
+  }
+  static Wall cylinder(std::string name, Vec3 axis_point, Vec3 axis, double radius) {
+    Wall w;
+    w.name = std::move(name);
+    w.shape = WallShape::Cylinder;
+    w.point = axis_point;
+    w.axis = unit(axis);
+    w.radius = radius;
+    return w;
+  }
+
+  // Velocity of the wall surface at a contact whose wall-to-particle normal is n.
+  Vec3 surface_velocity(const Vec3& n) const noexcept {
+    return shape == WallShape::Plane ? velocity : n * radial_speed;
+  }
+
+  // Signed gap between a sphere (x, R) and the wall surface, and the wall-to-particle normal.
+  double gap(const Vec3& x, double R, Vec3& n) const noexcept {
+    if (shape == WallShape::Plane) {
+      n = normal;
+      return dot(x - point, normal) - R;
+    }
+    const Vec3 rel = x - point;
+    const Vec3 radial = rel - axis * dot(rel, axis);
+    const double rho = norm(radial);
+    n = rho > 0.0 ? radial * (-1.0 / rho) : Vec3{};
+    return radius - rho - R;
+  }
+
+  // Sets the motion for the step starting at time t (prescribed walls only).
+  void update_motion(double t) noexcept {
+    if (controlled) return;
+    const double f = ramp.factor(t);
+    velocity = target_velocity * f;
+    radial_speed = target_radial_speed * f;
+  }
+
+  void advance(double dt) noexcept {
+    if (shape == WallShape::Plane) {
+      point += velocity * dt;
+      moved += norm(velocity) * dt;
+    } else {
+      radius -= radial_speed * dt;
+      moved += std::abs(radial_speed) * dt;
+    }
+  }
+};
+
+// Contact history between particles and one wall: candidate particles (sorted) and their states.
+template <class Law>
+struct WallContacts {
+  std::vector<std::uint32_t> particle;
+  std::vector<typename Law::State> state;
+  std::vector<Vec3> force, torque;  // on the particle, this step
+  std::vector<double> normal_force; // force . wall normal, this step
+};
+
+}  // namespace breccia

@@ -1,0 +1,54 @@
+#pragma once
+// Deterministic parallel helpers. Work is cut into fixed-size blocks that do not depend on the
+// thread count; partial sums are kept per block and added in block order, so every reduction is
+// bitwise identical for any number of threads (design.md, "two passes, no atomics").
+#include <cstddef>
+#include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace breccia {
+
+inline constexpr std::size_t kBlock = 1024;
+
+inline std::size_t block_count(std::size_t n) noexcept { return (n + kBlock - 1) / kBlock; }
+
+inline int max_threads() noexcept {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+inline void set_threads(int n) noexcept {
+#ifdef _OPENMP
+  if (n > 0) omp_set_num_threads(n);
+#else
+  (void)n;
+#endif
+}
+
+// Calls body(begin, end, block) for each block of [0, n) in parallel.
+template <class Body>
+void for_blocks(std::size_t n, Body&& body) {
+  const std::ptrdiff_t nb = static_cast<std::ptrdiff_t>(block_count(n));
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t b = 0; b < nb; ++b) {
+    const std::size_t begin = static_cast<std::size_t>(b) * kBlock;
+    const std::size_t end = begin + kBlock < n ? begin + kBlock : n;
+    body(begin, end, static_cast<std::size_t>(b));
+  }
+}
+
+// Adds per-block partials in block order.
+template <class T>
+T ordered_sum(const std::vector<T>& partials) {
+  T s{};
+  for (const T& p : partials) s += p;
+  return s;
+}
+
+}  // namespace breccia

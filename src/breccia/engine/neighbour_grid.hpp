@@ -1,0 +1,16 @@
+#pragma once
+// Neighbour search: particles are binned in a uniform cell grid (cell edge >= 2 R_max + skin) and
+// every pair closer than R_i + R_j + skin is listed once (i < j), sorted by (i, j). Cost is linear
+// in the particle count; the result does not depend on the thread count.
+#include <vector>
+
+#include "breccia/state/pair_list.hpp"
+#include "breccia/state/particle_store.hpp"
+
+namespace breccia {
+
+// Fills `out.first/second` (sorted) with all pairs within R_i + R_j + skin and builds its index.
+void build_neighbour_pairs(const std::vector<PosRad>& particles, double skin, bool planar,
+                           PairList& out);
+
+}  // namespace breccia

@@ -1,0 +1,679 @@
+#include "breccia/engine/simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "breccia/core/error.hpp"
+#include "breccia/core/format.hpp"
+#include "breccia/core/parallel.hpp"
+#include "breccia/engine/neighbour_grid.hpp"
+
+namespace breccia {
+
+namespace {
+
+bool has_history(const Vec3& n_old) noexcept {
+  return n_old.x != 0.0 || n_old.y != 0.0 || n_old.z != 0.0;
+}
+
+// Carries contact history from an old sorted pair list to a new one (same particle indexing).
+template <class State>
+void merge_history(const PairList& old_pairs, const std::vector<State>& old_state,
+                   const PairList& new_pairs, std::vector<State>& new_state) {
+  new_state.assign(new_pairs.size(), State{});
+  if (old_pairs.offsets.empty()) return;
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(new_pairs.offsets.size()) - 1;
+#pragma omp parallel for schedule(static, 1024)
+  for (std::ptrdiff_t si = 0; si < n; ++si) {
+    const std::size_t i = static_cast<std::size_t>(si);
+    std::uint32_t a = old_pairs.offsets[i];
+    const std::uint32_t ae = old_pairs.offsets[i + 1];
+    for (std::uint32_t b = new_pairs.offsets[i]; b < new_pairs.offsets[i + 1]; ++b) {
+      while (a < ae && old_pairs.second[a] < new_pairs.second[b]) ++a;
+      if (a < ae && old_pairs.second[a] == new_pairs.second[b]) new_state[b] = old_state[a];
+    }
+  }
+}
+
+}  // namespace
+
+Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactModel contact)
+    : p_(std::move(particles)), cfg_(config), contact_(std::move(contact)) {
+  const std::string where = "engine settings";
+  if (!(cfg_.time_step >= 0.0) || !std::isfinite(cfg_.time_step))
+    throw InputError(where, "time_step", num(cfg_.time_step), "must be >= 0 s (0 = automatic)");
+  if (!(cfg_.safety_factor > 0.0 && cfg_.safety_factor <= 1.0))
+    throw InputError(where, "safety_factor", num(cfg_.safety_factor), "allowed: 0 < value <= 1");
+  if (!(cfg_.hertz_rayleigh_factor > 0.0 && cfg_.hertz_rayleigh_factor <= 1.0))
+    throw InputError(where, "hertz_rayleigh_factor", num(cfg_.hertz_rayleigh_factor),
+                     "allowed: 0 < value <= 1");
+  if (!(cfg_.local_damping >= 0.0 && cfg_.local_damping < 1.0))
+    throw InputError(where, "local_damping", num(cfg_.local_damping), "allowed: 0 <= value < 1");
+  if (!(cfg_.skin >= 0.0) || !std::isfinite(cfg_.skin))
+    throw InputError(where, "skin", num(cfg_.skin), "must be >= 0 m (0 = automatic)");
+  std::visit(
+      [&]<class Law>(ContactSet<Law>& c) {
+        validate_params<Law>(c.params, std::string("contact law '") + std::string(Law::name) + "'");
+        validate_params<Law>(c.wall_params,
+                             std::string("wall contact law '") + std::string(Law::name) + "'");
+        wall_contacts_ = std::vector<WallContacts<Law>>{};
+      },
+      contact_);
+}
+
+std::size_t Simulation::add_wall(Wall w) {
+  if (initialised_) throw InputError("simulation", "wall", w.name, "walls must be added before initialise()");
+  if (w.shape == WallShape::Cylinder && !(w.radius > 0.0))
+    throw InputError("wall '" + w.name + "'", "radius", num(w.radius), "must be > 0 m");
+  if (p_.planar() && w.shape == WallShape::Cylinder)
+    throw InputError("wall '" + w.name + "'", "shape", "cylinder", "2D simulations use plane walls");
+  if (p_.planar() && (w.normal.z != 0.0 || w.target_velocity.z != 0.0))
+    throw InputError("wall '" + w.name + "'", "normal/velocity", "out of plane",
+                     "2D walls have normals and velocities in the x-y plane");
+  walls_.push_back(std::move(w));
+  std::visit([&]<class Law>(std::vector<WallContacts<Law>>& v) { v.emplace_back(); }, wall_contacts_);
+  return walls_.size() - 1;
+}
+
+PairGeometry Simulation::geometry(std::uint32_t i, std::uint32_t j) const noexcept {
+  const PosRad& a = p_.pos_rad[i];
+  const PosRad& b = p_.pos_rad[j];
+  return pair_geometry(a.x, a.r, b.x, b.r, p_.vel[i], p_.angvel[i], p_.vel[j], p_.angvel[j],
+                       p_.mass[i], p_.mass[j], p_.planar(), p_.thickness());
+}
+
+template <class Law>
+void Simulation::install_bonds(BondSet<Law>& set) {
+  const std::size_t n = set.tag.size();
+  // Sort by (first, second) for locality and the gather index; reject duplicates.
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return std::pair(set.pairs.first[a], set.pairs.second[a]) <
+           std::pair(set.pairs.first[b], set.pairs.second[b]);
+  });
+  PairList sorted;
+  std::vector<std::uint64_t> tags(n);
+  sorted.first.resize(n);
+  sorted.second.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    sorted.first[k] = set.pairs.first[order[k]];
+    sorted.second[k] = set.pairs.second[order[k]];
+    tags[k] = set.tag[order[k]];
+    if (k > 0 && sorted.first[k] == sorted.first[k - 1] && sorted.second[k] == sorted.second[k - 1])
+      throw InputError("bond list", "bond",
+                       std::to_string(p_.tag[sorted.first[k]]) + "-" +
+                           std::to_string(p_.tag[sorted.second[k]]),
+                       "each pair may be bonded once per law");
+  }
+  sorted.build_index(p_.size());
+  set.pairs = std::move(sorted);
+  set.tag = std::move(tags);
+  set.state.resize(n);
+  set.intact.assign(n, 1);
+  set.slot.assign(n, PairSlot{});
+  set.broken_since_compaction = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const PairGeometry g = geometry(set.pairs.first[k], set.pairs.second[k]);
+    set.state[k] = Law::install(set.params, g, cfg_.seed, set.tag[k]);
+  }
+}
+
+template <class Law>
+void Simulation::compact_bonds(BondSet<Law>& set) {
+  if (set.broken_since_compaction == 0) return;
+  std::size_t w = 0;
+  for (std::size_t k = 0; k < set.size(); ++k) {
+    if (!set.intact[k]) continue;
+    set.pairs.first[w] = set.pairs.first[k];
+    set.pairs.second[w] = set.pairs.second[k];
+    set.tag[w] = set.tag[k];
+    set.state[w] = set.state[k];
+    ++w;
+  }
+  set.pairs.first.resize(w);
+  set.pairs.second.resize(w);
+  set.tag.resize(w);
+  set.state.resize(w);
+  set.intact.assign(w, 1);
+  set.slot.assign(w, PairSlot{});
+  set.pairs.build_index(p_.size());
+  set.broken_since_compaction = 0;
+}
+
+void Simulation::initialise() {
+  if (initialised_) return;
+  if (p_.size() == 0) throw InputError("simulation", "particles", "0", "at least one particle is needed");
+  if (p_.planar() && p_.planar_body() == PlanarBody::Disk &&
+      std::holds_alternative<ContactSet<HertzMindlin>>(contact_))
+    throw InputError("contact law", "law", "hertz_mindlin",
+                     "Hertz contacts need 3D spheres or 2D planar spheres (physics.md §3.4); "
+                     "use 'linear' for 2D disks");
+  std::apply([&](auto&... set) { (install_bonds(set), ...); }, bonds_);
+  const std::size_t n = p_.size();
+  ext_force_.assign(n, {});
+  ext_torque_.assign(n, {});
+  drive_force_prev_.assign(2 * n, {});
+  double rsum = 0.0;
+  for (const PosRad& q : p_.pos_rad) rsum += q.r;
+  skin_ = cfg_.skin > 0.0 ? cfg_.skin : 0.4 * rsum / static_cast<double>(n);
+  std::visit([&](auto& c) { rebuild(c); }, contact_);
+  estimate_time_step();
+  for (Wall& w : walls_) {
+    w.update_motion(-0.5 * dt_);
+    w.force_prev = {};
+    w.radial_force_prev = 0.0;
+  }
+  initialised_ = true;
+  sample_requested_ = true;  // the first step's sample is the energy baseline
+}
+
+void Simulation::estimate_time_step() {
+  const std::size_t n = p_.size();
+  std::vector<double> k_tr(n, 0.0), k_rot(n, 0.0);
+  // Bonds (§1.5): translational max(K_n, K_s); rotational max(K_b, K_t) + K_s |r|^2.
+  std::apply(
+      [&](auto&... sets) {
+        auto one = [&]<class Law>(BondSet<Law>& s) {
+          for (std::size_t k = 0; k < s.size(); ++k) {
+            const auto i = s.pairs.first[k], j = s.pairs.second[k];
+            const PairGeometry g = geometry(i, j);
+            const auto& st = s.state[k];
+            const double kt = Law::max_stiffness(st), ks = Law::shear_stiffness(st);
+            const double km = Law::max_moment_stiffness(st);
+            k_tr[i] += kt;
+            k_tr[j] += kt;
+            k_rot[i] += km + ks * norm2(g.r1);
+            k_rot[j] += km + ks * norm2(g.r2);
+          }
+        };
+        (one(sets), ...);
+      },
+      bonds_);
+  // Contacts: every neighbour pair that touches or nearly touches (gap < 0.1 R_min) may carry a
+  // contact during loading; so does a particle near a wall. Each particle also gets at least one
+  // contact of its own size, so that free particles have a finite estimate.
+  double dt_rayleigh = std::numeric_limits<double>::infinity();
+  std::visit(
+      [&]<class CL>(ContactSet<CL>& c) {
+        for (std::size_t k = 0; k < c.pairs.size(); ++k) {
+          const auto i = c.pairs.first[k], j = c.pairs.second[k];
+          const PairGeometry g = geometry(i, j);
+          if (-g.delta > 0.1 * std::min(g.R1, g.R2)) continue;
+          double kn = 0.0, ks = 0.0;
+          CL::timestep_stiffness(c.params, g, kn, ks);
+          k_tr[i] += std::max(kn, ks);
+          k_tr[j] += std::max(kn, ks);
+          k_rot[i] += ks * g.R1 * g.R1;
+          k_rot[j] += ks * g.R2 * g.R2;
+        }
+        for (std::size_t i = 0; i < n; ++i) {
+          const PosRad& q = p_.pos_rad[i];
+          PairGeometry g = pair_geometry({}, q.r, {2.0 * q.r, 0, 0}, q.r, {}, {}, {}, {}, 1, 1,
+                                         p_.planar(), p_.thickness());
+          double kn = 0.0, ks = 0.0;
+          CL::timestep_stiffness(c.params, g, kn, ks);
+          k_tr[i] += std::max(kn, ks);
+          k_rot[i] += ks * q.r * q.r;
+          for (const Wall& w : walls_) {
+            Vec3 nrm;
+            const double gap = w.gap(q.x, q.r, nrm);
+            if (gap > 0.1 * q.r) continue;
+            PairGeometry gw = g;
+            gw.wall = true;
+            gw.delta = std::max(-gap, 0.0);
+            CL::timestep_stiffness(c.wall_params, gw, kn, ks);
+            k_tr[i] += std::max(kn, ks);
+            k_rot[i] += ks * q.r * q.r;
+          }
+          if constexpr (requires { CL::rayleigh_time_step(c.params, 1.0, 1.0); })
+            dt_rayleigh = std::min(dt_rayleigh, cfg_.hertz_rayleigh_factor *
+                                                    CL::rayleigh_time_step(c.params, q.r,
+                                                                           p_.density[i]));
+        }
+      },
+      contact_);
+  double crit = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (k_tr[i] > 0.0) crit = std::min(crit, std::sqrt(p_.mass[i] / k_tr[i]));
+    if (k_rot[i] > 0.0) crit = std::min(crit, std::sqrt(p_.inertia[i] / k_rot[i]));
+  }
+  dt_crit_ = crit;
+  const double recommended = std::min(cfg_.safety_factor * crit, dt_rayleigh);
+  if (!std::isfinite(recommended) || !(recommended > 0.0))
+    throw InputError("time step", "estimate", num(recommended),
+                     "could not estimate a stable time step: check stiffnesses and masses");
+  if (cfg_.time_step > 0.0) {
+    dt_ = cfg_.time_step;
+    if (dt_ > recommended)
+      warnings_.push_back("time_step " + num(dt_) + " s is above the stable estimate " +
+                          num(recommended) + " s (critical " + num(crit) +
+                          " s times safety factor); the run may blow up");
+  } else {
+    dt_ = recommended;
+  }
+}
+
+bool Simulation::needs_rebuild() const noexcept {
+  const double d = std::sqrt(max_disp2_);
+  double wall = 0.0;
+  for (const Wall& w : walls_) wall = std::max(wall, w.moved);
+  return 2.0 * d > skin_ || d + wall > skin_;
+}
+
+template <class CL>
+void Simulation::rebuild(ContactSet<CL>& contacts) {
+  std::apply([&](auto&... set) { (compact_bonds(set), ...); }, bonds_);
+  PairList old_pairs = std::move(contacts.pairs);
+  std::vector<typename CL::State> old_state = std::move(contacts.state);
+  contacts.pairs = PairList{};
+  build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs);
+  merge_history(old_pairs, old_state, contacts.pairs, contacts.state);
+  contacts.slot.assign(contacts.pairs.size(), PairSlot{});
+  // Wall candidates: particles within the skin of each wall, history carried by particle index.
+  auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
+  for (std::size_t wi = 0; wi < walls_.size(); ++wi) {
+    WallContacts<CL>& wc = wall_sets[wi];
+    WallContacts<CL> fresh;
+    std::size_t a = 0;
+    for (std::uint32_t i = 0; i < p_.size(); ++i) {
+      Vec3 nrm;
+      if (walls_[wi].gap(p_.pos_rad[i].x, p_.pos_rad[i].r, nrm) >= skin_) continue;
+      fresh.particle.push_back(i);
+      while (a < wc.particle.size() && wc.particle[a] < i) ++a;
+      fresh.state.push_back(a < wc.particle.size() && wc.particle[a] == i ? wc.state[a]
+                                                                           : typename CL::State{});
+    }
+    fresh.force.assign(fresh.particle.size(), {});
+    fresh.torque.assign(fresh.particle.size(), {});
+    fresh.normal_force.assign(fresh.particle.size(), 0.0);
+    wc = std::move(fresh);
+    walls_[wi].moved = 0.0;
+  }
+  x_at_build_.resize(p_.size());
+  for (std::size_t i = 0; i < p_.size(); ++i) x_at_build_[i] = p_.pos_rad[i].x;
+  max_disp2_ = 0.0;
+  ++rebuilds_;
+}
+
+template <class Law>
+void Simulation::compute_bonds(BondSet<Law>& set) {
+  const std::size_t n = set.size();
+  const std::size_t nb = block_count(n);
+  if (block_failures_.size() < nb) block_failures_.resize(nb);
+  const double dt = dt_;
+  for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
+    auto& fails = block_failures_[blk];
+    fails.clear();
+    for (std::size_t k = begin; k < end; ++k) {
+      if (!set.intact[k]) continue;  // slot stays zero until compaction
+      const std::uint32_t i = set.pairs.first[k], j = set.pairs.second[k];
+      const PairGeometry g = geometry(i, j);
+      BondFailure f;
+      const PairForce pf = Law::compute(set.params, set.state[k], g, dt, f);
+      PairSlot& s = set.slot[k];
+      if (f.broken) {
+        s = PairSlot{};
+        fails.push_back({static_cast<std::uint32_t>(k), f});
+        continue;
+      }
+      s.force = pf.force;
+      s.torque1 = cross(g.r1, -pf.force) - pf.couple;
+      s.torque2 = cross(g.r2, pf.force) + pf.couple;
+    }
+  });
+  // Breaks are processed as one batch in bond order (independent of the thread count).
+  for (std::size_t blk = 0; blk < nb; ++blk) {
+    for (const Failure& f : block_failures_[blk]) {
+      set.intact[f.bond] = 0;
+      ++set.broken_since_compaction;
+      const std::uint32_t i = set.pairs.first[f.bond], j = set.pairs.second[f.bond];
+      const PairGeometry g = geometry(i, j);
+      CrackRecord r;
+      r.step = step_;
+      r.time = time_;
+      r.law = Law::name;
+      r.bond_tag = set.tag[f.bond];
+      r.id1 = p_.tag[i];
+      r.id2 = p_.tag[j];
+      r.R1 = g.R1;
+      r.R2 = g.R2;
+      r.position = p_.pos_rad[i].x + g.r1;
+      r.normal = g.n;
+      r.mode = f.info.mode;
+      r.bond_radius = f.info.bond_radius;
+      r.Fn = f.info.Fn;
+      r.Fs = f.info.Fs;
+      r.Mt = f.info.Mt;
+      r.Mb = f.info.Mb;
+      r.sigma = f.info.sigma;
+      r.tau = f.info.tau;
+      r.ratio_t = f.info.ratio_t;
+      r.ratio_s = f.info.ratio_s;
+      r.energy = f.info.energy;
+      released_ += f.info.energy;
+      cracks_.push_back(r);
+    }
+  }
+}
+
+template <class CL>
+void Simulation::compute_contacts(ContactSet<CL>& c) {
+  const std::size_t n = c.pairs.size();
+  const std::size_t nb = block_count(n);
+  block_dis_.assign(nb, PairDissipation{});
+  const double dt = dt_;
+  for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
+    PairDissipation dis;
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
+      const PosRad& a = p_.pos_rad[i];
+      const PosRad& b = p_.pos_rad[j];
+      const double reach = a.r + b.r;
+      PairSlot& s = c.slot[k];
+      if (norm2(b.x - a.x) >= reach * reach && !has_history(c.state[k].n_old)) {
+        s = PairSlot{};
+        continue;
+      }
+      const PairGeometry g = geometry(i, j);
+      const PairForce pf = CL::compute(c.params, c.state[k], g, dt, dis);
+      s.force = pf.force;
+      s.torque1 = cross(g.r1, -pf.force) - pf.couple;
+      s.torque2 = cross(g.r2, pf.force) + pf.couple;
+    }
+    block_dis_[blk] = dis;
+  });
+  d_pairs_ += ordered_sum(block_dis_);
+}
+
+template <class CL>
+void Simulation::compute_walls(ContactSet<CL>& c) {
+  auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
+  const double dt = dt_;
+  for (std::size_t wi = 0; wi < walls_.size(); ++wi) {
+    Wall& w = walls_[wi];
+    WallContacts<CL>& wc = wall_sets[wi];
+    const std::size_t n = wc.particle.size();
+    const std::size_t nb = block_count(n);
+    block_dis_.assign(nb, PairDissipation{});
+    for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
+      PairDissipation dis;
+      for (std::size_t k = begin; k < end; ++k) {
+        const std::uint32_t i = wc.particle[k];
+        const PosRad& q = p_.pos_rad[i];
+        Vec3 nrm;
+        const double gap = w.gap(q.x, q.r, nrm);
+        if (gap >= 0.0 && !has_history(wc.state[k].n_old)) {
+          wc.force[k] = {};
+          wc.torque[k] = {};
+          wc.normal_force[k] = 0.0;
+          continue;
+        }
+        PairGeometry g;
+        g.n = nrm;
+        g.delta = -gap;
+        g.d = q.r - g.delta;
+        g.r2 = nrm * -(q.r - 0.5 * g.delta);
+        g.r1 = {};
+        g.vc = p_.vel[i] + cross(p_.angvel[i], g.r2) - w.surface_velocity(nrm);
+        g.w1 = {};
+        g.w2 = p_.angvel[i];
+        g.R1 = q.r;
+        g.R2 = q.r;
+        g.m_star = p_.mass[i];
+        g.wall = true;
+        g.planar = p_.planar();
+        g.thickness = p_.thickness();
+        const PairForce pf = CL::compute(c.wall_params, wc.state[k], g, dt, dis);
+        wc.force[k] = pf.force;
+        wc.torque[k] = cross(g.r2, pf.force) + pf.couple;
+        wc.normal_force[k] = dot(pf.force, nrm);
+      }
+      block_dis_[blk] = dis;
+    });
+    d_pairs_ += ordered_sum(block_dis_);
+    Vec3 total;
+    double radial = 0.0;
+    std::size_t touching = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t i = wc.particle[k];
+      ext_force_[i] += wc.force[k];
+      ext_torque_[i] += wc.torque[k];
+      total += wc.force[k];
+      radial += wc.normal_force[k];
+      touching += wc.normal_force[k] != 0.0 ? 1 : 0;
+    }
+    // Trapezoidal work over the wall's last displacement (matches the leapfrog kinetic energy).
+    const double dw = w.shape == WallShape::Plane
+                          ? 0.5 * dot(w.force_prev + total, w.velocity) * dt
+                          : 0.5 * (w.radial_force_prev + radial) * w.radial_speed * dt;
+    w.work += dw;
+    w_walls_ += dw;
+    w.force = total;
+    w.radial_force = radial;
+    w.force_prev = total;
+    w.radial_force_prev = radial;
+    w.contacts = touching;
+  }
+}
+
+template <class CL>
+void Simulation::integrate(ContactSet<CL>& c, bool sample) {
+  const std::size_t n = p_.size();
+  const std::size_t nb = block_count(n);
+  block_int_.assign(nb, IntegrateBlock{});
+  const bool has_user_force = !user_force_.empty();
+  const double dt = dt_;
+  const double alpha = cfg_.local_damping;
+  const Vec3 gravity = cfg_.gravity;
+  const bool planar = p_.planar();
+  for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
+    IntegrateBlock acc;
+    for (std::size_t i = begin; i < end; ++i) {
+      Vec3 f = ext_force_[i], t = ext_torque_[i];
+      ext_force_[i] = {};
+      ext_torque_[i] = {};
+      std::apply([&](const auto&... set) { (gather_pairs(set.pairs, set.slot, i, f, t), ...); },
+                 bonds_);
+      gather_pairs(c.pairs, c.slot, i, f, t);
+      Vec3 f_user;
+      if (has_user_force) {
+        f_user = user_force_[i];
+        user_force_[i] = {};
+        f += f_user;
+      }
+      p_.force[i] = f;
+      p_.torque[i] = t;
+      const double m = p_.mass[i], inertia = p_.inertia[i];
+      f += gravity * m;
+      if (planar) {
+        f.z = 0.0;
+        t.x = 0.0;
+        t.y = 0.0;
+      }
+      const Vec3 v_old = p_.vel[i], w_old = p_.angvel[i];
+      Vec3 v_new, w_new;
+      if (p_.motion[i] == Motion::Free) {
+        if (alpha > 0.0) {
+          // Cundall local damping, sign tested with the predicted full-step velocity (§2.1).
+          const Vec3 vp = v_old + f * (0.5 * dt / m);
+          const Vec3 wp = w_old + t * (0.5 * dt / inertia);
+          for (int k = 0; k < 3; ++k) {
+            const double fk = f[k], tk = t[k];
+            acc.local_damping += alpha * dt * (std::abs(fk) * std::abs(vp[k]) +
+                                               std::abs(tk) * std::abs(wp[k]));
+            f[k] -= alpha * std::abs(fk) * ((vp[k] > 0.0) - (vp[k] < 0.0));
+            t[k] -= alpha * std::abs(tk) * ((wp[k] > 0.0) - (wp[k] < 0.0));
+          }
+        }
+        v_new = v_old + f * (dt / m);
+        w_new = w_old + t * (dt / inertia);
+        acc.gravity += m * dot(gravity, v_old) * dt;
+      } else {
+        // Fixed or driven: the driver supplies whatever force keeps the prescribed motion; its
+        // work is booked with the trapezoidal rule like the walls'.
+        const bool fixed = p_.motion[i] == Motion::Fixed;
+        v_new = fixed ? Vec3{} : p_.drive_vel[i];
+        w_new = fixed ? Vec3{} : p_.drive_angvel[i];
+        if (planar) {
+          v_new.z = 0.0;
+          w_new.x = 0.0;
+          w_new.y = 0.0;
+        }
+        const Vec3 fd = (v_new - v_old) * (m / dt) - f;
+        const Vec3 td = (w_new - w_old) * (inertia / dt) - t;
+        Vec3& fd_prev = drive_force_prev_[2 * i];
+        Vec3& td_prev = drive_force_prev_[2 * i + 1];
+        acc.drive += 0.5 * (dot(fd_prev + fd, v_old) + dot(td_prev + td, w_old)) * dt;
+        acc.gravity += m * dot(gravity, v_old) * dt;
+        fd_prev = fd;
+        td_prev = td;
+      }
+      if (has_user_force) acc.external += 0.5 * dot(f_user, v_old + v_new) * dt;
+      p_.vel[i] = v_new;
+      p_.angvel[i] = w_new;
+      const Vec3 dx = v_new * dt;
+      p_.pos_rad[i].x += dx;
+      p_.displacement[i] += dx;
+      if (planar)
+        p_.angle[i] += w_new.z * dt;
+      else
+        p_.orientation[i] = integrate_orientation(p_.orientation[i], w_new, dt);
+      acc.max_disp2 = std::max(acc.max_disp2, norm2(p_.pos_rad[i].x - x_at_build_[i]));
+      if (sample) {
+        // Kinetic energy at t_n as leapfrog conserves it: (1/2) m v^{n-1/2} . v^{n+1/2}. With the
+        // trapezoidal work rule the balance of §2.4 then closes exactly for linear springs (it
+        // differs from (1/2) m v^2 by O(dt^2)).
+        acc.ke_t += 0.5 * m * dot(v_old, v_new);
+        acc.ke_r += 0.5 * inertia * dot(w_old, w_new);
+      }
+    }
+    block_int_[blk] = acc;
+  });
+  IntegrateBlock total;
+  for (const IntegrateBlock& s : block_int_) {
+    total.local_damping += s.local_damping;
+    total.gravity += s.gravity;
+    total.drive += s.drive;
+    total.external += s.external;
+    total.ke_t += s.ke_t;
+    total.ke_r += s.ke_r;
+    total.max_disp2 = std::max(total.max_disp2, s.max_disp2);
+  }
+  d_local_ += total.local_damping;
+  w_gravity_ += total.gravity;
+  w_drive_ += total.drive;
+  w_external_ += total.external;
+  max_disp2_ = std::max(max_disp2_, total.max_disp2);
+  if (sample) {
+    ledger_.kinetic_translational = total.ke_t;
+    ledger_.kinetic_rotational = total.ke_r;
+  }
+}
+
+template <class CL>
+void Simulation::sample_stored_energy(ContactSet<CL>& c) {
+  BondEnergy bond;
+  std::apply(
+      [&](auto&... sets) {
+        auto one = [&]<class Law>(BondSet<Law>& s) {
+          std::vector<BondEnergy> part(block_count(s.size()));
+          for_blocks(s.size(), [&](std::size_t b, std::size_t e, std::size_t blk) {
+            BondEnergy acc;
+            for (std::size_t k = b; k < e; ++k)
+              if (s.intact[k]) acc += Law::energy(s.state[k]);
+            part[blk] = acc;
+          });
+          bond += ordered_sum(part);
+        };
+        (one(sets), ...);
+      },
+      bonds_);
+  std::vector<double> part(block_count(c.pairs.size()));
+  for_blocks(c.pairs.size(), [&](std::size_t b, std::size_t e, std::size_t blk) {
+    double acc = 0.0;
+    for (std::size_t k = b; k < e; ++k) acc += CL::stored_energy(c.params, c.state[k]);
+    part[blk] = acc;
+  });
+  double contact = ordered_sum(part);
+  for (const auto& wc : std::get<std::vector<WallContacts<CL>>>(wall_contacts_))
+    for (const auto& st : wc.state) contact += CL::stored_energy(c.wall_params, st);
+
+  EnergyLedger& L = ledger_;
+  L.step = step_;
+  L.time = time_;
+  L.bond = bond;
+  L.contact = contact;
+  L.boundary_work = w_walls_ + w_drive_;
+  L.body_force_work = w_gravity_;
+  L.external_work = w_external_;
+  L.friction = d_pairs_.slip;
+  L.local_damping = d_local_;
+  L.viscous_damping = d_pairs_.viscous;
+  L.deleted = d_pairs_.deleted;
+  L.released = released_;
+  L.broken_bonds = cracks_.size();
+  if (!baseline_) baseline_ = L;
+  const EnergyLedger& B = *baseline_;
+  const double work = L.work_in() - B.work_in();
+  const double d_stored = L.stored() - B.stored();
+  const double d_dissipated = L.dissipated() - B.dissipated();
+  L.residual = work - d_stored - d_dissipated;
+  const double scale = std::max({std::abs(work), std::abs(d_stored), std::abs(d_dissipated),
+                                 std::numeric_limits<double>::min()});
+  L.residual_relative = L.residual / scale;
+}
+
+template <class CL>
+void Simulation::step_impl(ContactSet<CL>& contacts) {
+  if (needs_rebuild()) rebuild(contacts);
+  const bool sample = sample_requested_ ||
+                      (cfg_.energy_interval > 0 && step_ % cfg_.energy_interval == 0);
+  std::apply([&](auto&... set) { (compute_bonds(set), ...); }, bonds_);
+  compute_contacts(contacts);
+  compute_walls(contacts);
+  integrate(contacts, sample);
+  if (sample) {
+    sample_stored_energy(contacts);
+    sample_requested_ = false;
+  }
+  for (Wall& w : walls_) {
+    w.update_motion(time_ + 0.5 * dt_);
+    w.advance(dt_);
+  }
+  time_ += dt_;
+  ++step_;
+}
+
+void Simulation::step() {
+  if (!initialised_) initialise();
+  std::visit([&](auto& c) { step_impl(c); }, contact_);
+}
+
+void Simulation::run(std::uint64_t steps) {
+  for (std::uint64_t s = 0; s < steps; ++s) step();
+}
+
+std::size_t Simulation::intact_bonds() const noexcept {
+  std::size_t n = 0;
+  std::apply([&](const auto&... set) { ((n += set.intact_count()), ...); }, bonds_);
+  return n;
+}
+
+std::size_t Simulation::active_contacts() const noexcept {
+  std::size_t n = 0;
+  std::visit(
+      [&](const auto& c) {
+        for (const auto& s : c.state) n += has_history(s.n_old) ? 1 : 0;
+      },
+      contact_);
+  return n;
+}
+
+std::size_t Simulation::neighbour_pairs() const noexcept {
+  return std::visit([](const auto& c) { return c.pairs.size(); }, contact_);
+}
+
+}  // namespace breccia

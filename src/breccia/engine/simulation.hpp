@@ -1,0 +1,215 @@
+#pragma once
+// The engine: particles, bonds of every registered law, the contact law, walls, neighbour search
+// and the leapfrog integrator with local damping (physics.md §1-§4, §6.1). It knows nothing about
+// lab tests: protocols drive it through walls, driven particles and external forces, and read it
+// through const views, the crack catalogue and the energy ledger.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <variant>
+#include <vector>
+
+#include "breccia/boundary/wall.hpp"
+#include "breccia/engine/events.hpp"
+#include "breccia/law/registry.hpp"
+#include "breccia/state/bond_set.hpp"
+#include "breccia/state/particle_store.hpp"
+
+namespace breccia {
+
+struct EngineConfig {
+  double time_step = 0.0;      // s; 0 = use the critical estimate times safety_factor
+  double safety_factor = 0.3;  // S of §1.5
+  double hertz_rayleigh_factor = 0.2;  // fraction of the Rayleigh time step for Hertz contacts
+  double local_damping = 0.0;  // Cundall alpha (§2.1)
+  Vec3 gravity;                // m/s^2
+  double skin = 0.0;           // m; 0 = 0.4 x the mean radius
+  std::uint64_t seed = 1;      // strengths and anything else random
+  std::uint64_t energy_interval = 100;  // steps between energy-ledger samples (0 = on demand)
+};
+
+// One sample of the energy budget at time t_n (physics.md §2.4). Cumulative terms count from the
+// start of the run; the balance residual is taken against the first sample (the baseline).
+struct EnergyLedger {
+  std::uint64_t step = 0;
+  double time = 0.0;
+  // Stored at t_n.
+  double kinetic_translational = 0.0;
+  double kinetic_rotational = 0.0;
+  BondEnergy bond;        // intact bonds, by component
+  double contact = 0.0;   // particle-particle and particle-wall contacts
+  // Cumulative.
+  double boundary_work = 0.0;  // walls and driven particles
+  double body_force_work = 0.0;  // gravity
+  double external_work = 0.0;  // external per-particle loads (membranes)
+  double friction = 0.0;       // Coulomb sliding
+  double local_damping = 0.0;
+  double viscous_damping = 0.0;
+  double deleted = 0.0;        // springs lost without work
+  BondEnergy released;         // energy released by broken bonds, by component
+  std::uint64_t broken_bonds = 0;
+  // Balance against the baseline sample: work in minus (change of stored + dissipated).
+  double residual = 0.0;
+  double residual_relative = 0.0;  // residual / max(|work in|, change of stored energy)
+
+  double kinetic() const noexcept { return kinetic_translational + kinetic_rotational; }
+  double stored() const noexcept { return kinetic() + bond.total() + contact; }
+  double work_in() const noexcept { return boundary_work + body_force_work + external_work; }
+  double dissipated() const noexcept {
+    return friction + local_damping + viscous_damping + deleted + released.total();
+  }
+};
+
+// The contact law in use, chosen at run time from the registry.
+template <class List>
+struct ContactVariantOf;
+template <class... Laws>
+struct ContactVariantOf<TypeList<Laws...>> {
+  using type = std::variant<ContactSet<Laws>...>;
+};
+using ContactModel = ContactVariantOf<ContactLaws>::type;
+
+template <class List>
+struct BondTupleOf;
+template <class... Laws>
+struct BondTupleOf<TypeList<Laws...>> {
+  using type = std::tuple<BondSet<Laws>...>;
+};
+using BondSets = BondTupleOf<BondLaws>::type;
+
+template <class List>
+struct WallContactVariantOf;
+template <class... Laws>
+struct WallContactVariantOf<TypeList<Laws...>> {
+  using type = std::variant<std::vector<WallContacts<Laws>>...>;
+};
+
+// Builds the contact model for a law with its particle and wall parameters.
+template <class Law>
+ContactModel make_contact_model(const typename Law::Params& particle,
+                                const typename Law::Params& wall) {
+  ContactSet<Law> c;
+  c.params = particle;
+  c.wall_params = wall;
+  return ContactModel{std::in_place_type<ContactSet<Law>>, std::move(c)};
+}
+
+// Per-block partial sums of the integrator (kept in a member: no allocation per step).
+struct IntegrateBlock {
+  double local_damping = 0.0, gravity = 0.0, drive = 0.0, external = 0.0;
+  double ke_t = 0.0, ke_r = 0.0;
+  double max_disp2 = 0.0;
+};
+
+class Simulation {
+ public:
+  Simulation(ParticleStore particles, EngineConfig config, ContactModel contact);
+
+  // --- set-up (before initialise) ---
+  // Adds a bond of `Law` between two particles by tag; installed (stress-free at the current
+  // geometry) by initialise(). Returns the bond tag.
+  template <class Law>
+  std::uint64_t add_bond(std::uint64_t tag1, std::uint64_t tag2);
+  template <class Law>
+  void set_bond_params(const typename Law::Params& p);
+  // Bonds every pair whose gap is at most gap_tolerance (physics.md §7.6). Returns the count.
+  template <class Law>
+  std::size_t bond_touching_pairs(double gap_tolerance);
+  std::size_t add_wall(Wall w);
+  // Installs bonds, builds neighbour lists and fixes the time step. Throws InputError on an
+  // inconsistent set-up (for example Hertz contacts on 2D disks).
+  void initialise();
+
+  // --- stepping ---
+  void step();
+  void run(std::uint64_t steps);
+  void request_energy_sample() noexcept { sample_requested_ = true; }
+
+  // --- views ---
+  const ParticleStore& particles() const noexcept { return p_; }
+  ParticleStore& particles_mut() noexcept { return p_; }  // protocols: drives and fixities only
+  const EngineConfig& config() const noexcept { return cfg_; }
+  double time_step() const noexcept { return dt_; }
+  double critical_time_step() const noexcept { return dt_crit_; }
+  double time() const noexcept { return time_; }
+  std::uint64_t step_count() const noexcept { return step_; }
+  std::vector<Wall>& walls() noexcept { return walls_; }
+  const std::vector<Wall>& walls() const noexcept { return walls_; }
+  const std::vector<CrackRecord>& cracks() const noexcept { return cracks_; }
+  const std::vector<std::string>& warnings() const noexcept { return warnings_; }
+  const EnergyLedger& ledger() const noexcept { return ledger_; }
+  const BondSets& bonds() const noexcept { return bonds_; }
+  const ContactModel& contact_model() const noexcept { return contact_; }
+  std::size_t intact_bonds() const noexcept;
+  std::size_t active_contacts() const noexcept;
+  std::size_t neighbour_pairs() const noexcept;
+  std::uint64_t neighbour_rebuilds() const noexcept { return rebuilds_; }
+  // External per-particle load for the coming step (membranes, follower loads); its work is
+  // booked as external work. Allocated on first use; cleared after each step.
+  std::vector<Vec3>& external_force() {
+    user_force_.resize(p_.size());
+    return user_force_;
+  }
+
+ private:
+  template <class CL>
+  void step_impl(ContactSet<CL>& contacts);
+  template <class CL>
+  void rebuild(ContactSet<CL>& contacts);
+  template <class Law>
+  void compute_bonds(BondSet<Law>& set);
+  template <class CL>
+  void compute_contacts(ContactSet<CL>& contacts);
+  template <class CL>
+  void compute_walls(ContactSet<CL>& contacts);
+  template <class CL>
+  void integrate(ContactSet<CL>& contacts, bool sample);
+  template <class CL>
+  void sample_stored_energy(ContactSet<CL>& contacts);
+  template <class Law>
+  void install_bonds(BondSet<Law>& set);
+  template <class Law>
+  void compact_bonds(BondSet<Law>& set);
+  void estimate_time_step();
+  bool needs_rebuild() const noexcept;
+  PairGeometry geometry(std::uint32_t i, std::uint32_t j) const noexcept;
+
+  ParticleStore p_;
+  EngineConfig cfg_;
+  ContactModel contact_;
+  BondSets bonds_;
+  std::vector<Wall> walls_;
+  WallContactVariantOf<ContactLaws>::type wall_contacts_;
+
+  double dt_ = 0.0, dt_crit_ = 0.0, time_ = 0.0, skin_ = 0.0;
+  std::uint64_t step_ = 0, rebuilds_ = 0, next_bond_tag_ = 1;
+  bool initialised_ = false, sample_requested_ = false;
+  std::vector<Vec3> x_at_build_;
+  std::vector<Vec3> ext_force_, ext_torque_;  // wall contributions of the step
+  std::vector<Vec3> user_force_;              // external loads (empty when unused)
+  std::vector<Vec3> drive_force_prev_;        // driver force of driven particles, previous step
+  double max_disp2_ = 0.0;
+
+  std::vector<CrackRecord> cracks_;
+  std::vector<std::string> warnings_;
+  EnergyLedger ledger_;
+  std::optional<EnergyLedger> baseline_;
+  // Cumulative accumulators.
+  double w_walls_ = 0.0, w_drive_ = 0.0, w_gravity_ = 0.0, w_external_ = 0.0;
+  double d_local_ = 0.0;
+  PairDissipation d_pairs_;
+  BondEnergy released_;
+  // Per-block scratch (reused every step; no allocation in steady state).
+  std::vector<PairDissipation> block_dis_;
+  std::vector<IntegrateBlock> block_int_;
+  struct Failure {
+    std::uint32_t bond;
+    BondFailure info;
+  };
+  std::vector<std::vector<Failure>> block_failures_;
+};
+
+}  // namespace breccia
+
+#include "breccia/engine/simulation_impl.hpp"

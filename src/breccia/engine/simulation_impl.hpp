@@ -1,0 +1,52 @@
+#pragma once
+// Public template members of Simulation (included at the end of simulation.hpp).
+#include <algorithm>
+
+#include "breccia/core/error.hpp"
+#include "breccia/engine/neighbour_grid.hpp"
+
+namespace breccia {
+
+template <class Law>
+std::uint64_t Simulation::add_bond(std::uint64_t tag1, std::uint64_t tag2) {
+  if (initialised_)
+    throw InputError("simulation", "bond", std::to_string(tag1) + "-" + std::to_string(tag2),
+                     "bonds must be added before initialise()");
+  if (tag1 == tag2)
+    throw InputError("bond list", "bond", std::to_string(tag1) + "-" + std::to_string(tag2),
+                     "a particle cannot be bonded to itself");
+  auto& set = std::get<BondSet<Law>>(bonds_);
+  const std::uint32_t i = static_cast<std::uint32_t>(p_.index_of(std::min(tag1, tag2), "bond list"));
+  const std::uint32_t j = static_cast<std::uint32_t>(p_.index_of(std::max(tag1, tag2), "bond list"));
+  set.pairs.first.push_back(i);
+  set.pairs.second.push_back(j);
+  set.tag.push_back(next_bond_tag_);
+  return next_bond_tag_++;
+}
+
+template <class Law>
+void Simulation::set_bond_params(const typename Law::Params& params) {
+  validate_params<Law>(params, std::string("bond law '") + std::string(Law::name) + "'");
+  std::get<BondSet<Law>>(bonds_).params = params;
+}
+
+template <class Law>
+std::size_t Simulation::bond_touching_pairs(double gap_tolerance) {
+  if (!(gap_tolerance >= 0.0))
+    throw InputError("bonding", "gap_tolerance", std::to_string(gap_tolerance), "must be >= 0 m");
+  PairList near;
+  // A slightly wider search, then the exact test g <= tolerance.
+  build_neighbour_pairs(p_.pos_rad, gap_tolerance * 1.0001 + 1e-300, p_.planar(), near);
+  std::size_t added = 0;
+  for (std::size_t k = 0; k < near.size(); ++k) {
+    const PosRad& a = p_.pos_rad[near.first[k]];
+    const PosRad& b = p_.pos_rad[near.second[k]];
+    if (norm(b.x - a.x) - a.r - b.r <= gap_tolerance) {
+      add_bond<Law>(p_.tag[near.first[k]], p_.tag[near.second[k]]);
+      ++added;
+    }
+  }
+  return added;
+}
+
+}  // namespace breccia

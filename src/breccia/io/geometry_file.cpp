@@ -1,0 +1,211 @@
+#include "breccia/io/geometry_file.hpp"
+
+#include <fmt/format.h>
+#include <fmt/os.h>
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <unordered_set>
+
+#include "breccia/core/error.hpp"
+
+namespace breccia {
+
+namespace {
+
+struct Line {
+  std::size_t number = 0;
+  std::vector<std::string> tokens;
+};
+
+class Reader {
+ public:
+  Reader(const std::string& text, std::string source) : source_(std::move(source)) {
+    std::istringstream in(text);
+    std::string raw;
+    std::size_t n = 0;
+    while (std::getline(in, raw)) {
+      ++n;
+      if (const auto hash = raw.find('#'); hash != std::string::npos) raw.resize(hash);
+      std::istringstream ls(raw);
+      Line line{n, {}};
+      for (std::string tok; ls >> tok;) line.tokens.push_back(tok);
+      if (!line.tokens.empty()) lines_.push_back(std::move(line));
+    }
+  }
+  bool done() const { return pos_ >= lines_.size(); }
+  const Line& peek() const { return lines_[pos_]; }
+  const Line& next() { return lines_[pos_++]; }
+  std::string where(const Line& l) const { return source_ + ":" + std::to_string(l.number); }
+  std::string where_end() const { return source_ + ": end of file"; }
+
+  double real(const Line& l, std::size_t k, const char* key) const {
+    const std::string& t = l.tokens[k];
+    double v = 0.0;
+    const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (r.ec != std::errc() || r.ptr != t.data() + t.size() || !std::isfinite(v))
+      throw InputError(where(l), key, "'" + t + "'", "expected a finite number");
+    return v;
+  }
+  std::uint64_t integer(const Line& l, std::size_t k, const char* key) const {
+    const std::string& t = l.tokens[k];
+    std::uint64_t v = 0;
+    const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (r.ec != std::errc() || r.ptr != t.data() + t.size())
+      throw InputError(where(l), key, "'" + t + "'", "expected a non-negative integer");
+    return v;
+  }
+
+ private:
+  std::string source_;
+  std::vector<Line> lines_;
+  std::size_t pos_ = 0;
+};
+
+}  // namespace
+
+GeometryData parse_geometry(const std::string& text, const std::string& source) {
+  Reader rd(text, source);
+  GeometryData g;
+  if (rd.done())
+    throw InputError(rd.where_end(), "header", "(empty)", "the file must start with 'breccia-geometry 1'");
+  {
+    const Line& h = rd.next();
+    if (h.tokens.size() != 2 || h.tokens[0] != "breccia-geometry")
+      throw InputError(rd.where(h), "header", "'" + h.tokens[0] + "'",
+                       "the file must start with 'breccia-geometry 1'");
+    if (h.tokens[1] != "1")
+      throw InputError(rd.where(h), "version", h.tokens[1], "this Breccia reads version 1");
+  }
+  bool have_dimension = false, have_particles = false, have_bonds = false;
+  while (!rd.done()) {
+    const Line& l = rd.next();
+    const std::string& key = l.tokens[0];
+    auto need_args = [&](std::size_t n, const char* allowed) {
+      if (l.tokens.size() != n + 1)
+        throw InputError(rd.where(l), key, std::to_string(l.tokens.size() - 1) + " values", allowed);
+    };
+    if (key == "dimension") {
+      need_args(1, "expects one value: 2 or 3");
+      const auto d = rd.integer(l, 1, "dimension");
+      if (d != 2 && d != 3) throw InputError(rd.where(l), "dimension", l.tokens[1], "allowed: 2 or 3");
+      g.dimension = d == 2 ? Dimension::Two : Dimension::Three;
+      have_dimension = true;
+    } else if (key == "thickness") {
+      need_args(1, "expects one value in m");
+      g.thickness = rd.real(l, 1, "thickness");
+      if (!(g.thickness > 0.0))
+        throw InputError(rd.where(l), "thickness", l.tokens[1], "must be > 0 m");
+    } else if (key == "particles") {
+      if (have_particles) throw InputError(rd.where(l), key, "", "appears twice; allowed once");
+      need_args(1, "expects the particle count");
+      const auto count = rd.integer(l, 1, "particles");
+      have_particles = true;
+      g.particles.reserve(count);
+      for (std::uint64_t k = 0; k < count; ++k) {
+        if (rd.done())
+          throw InputError(rd.where_end(), "particles", std::to_string(k) + " rows",
+                           "the header announced " + std::to_string(count));
+        const Line& p = rd.next();
+        const std::size_t nt = p.tokens.size();
+        if (nt != 6 && nt != 7 && nt != 10 && nt != 13)
+          throw InputError(rd.where(p), "particle row", std::to_string(nt) + " columns",
+                           "expected: tag x y z radius density [motion [vx vy vz [wx wy wz]]]");
+        ParticleSpec s;
+        s.tag = rd.integer(p, 0, "tag");
+        s.position = {rd.real(p, 1, "x"), rd.real(p, 2, "y"), rd.real(p, 3, "z")};
+        s.radius = rd.real(p, 4, "radius");
+        if (!(s.radius > 0.0)) throw InputError(rd.where(p), "radius", p.tokens[4], "must be > 0 m");
+        s.density = rd.real(p, 5, "density");
+        if (!(s.density > 0.0))
+          throw InputError(rd.where(p), "density", p.tokens[5], "must be > 0 kg/m^3");
+        if (nt >= 7) {
+          const std::string& m = p.tokens[6];
+          if (m == "free") s.motion = Motion::Free;
+          else if (m == "fixed") s.motion = Motion::Fixed;
+          else if (m == "driven") s.motion = Motion::Driven;
+          else throw InputError(rd.where(p), "motion", "'" + m + "'", "allowed: free, fixed, driven");
+        }
+        if (nt >= 10) s.velocity = {rd.real(p, 7, "vx"), rd.real(p, 8, "vy"), rd.real(p, 9, "vz")};
+        if (nt >= 13)
+          s.angular_velocity = {rd.real(p, 10, "wx"), rd.real(p, 11, "wy"), rd.real(p, 12, "wz")};
+        if (g.dimension == Dimension::Two &&
+            (s.position.z != 0.0 || s.velocity.z != 0.0 || s.angular_velocity.x != 0.0 ||
+             s.angular_velocity.y != 0.0))
+          throw InputError(rd.where(p), "z / vz / wx / wy", "non-zero",
+                           "2D particles lie in the x-y plane: these must be 0");
+        g.particles.push_back(s);
+      }
+    } else if (key == "bonds") {
+      if (have_bonds) throw InputError(rd.where(l), key, "", "appears twice; allowed once");
+      if (!have_particles)
+        throw InputError(rd.where(l), key, "", "the particles section must come first");
+      need_args(1, "expects the bond count");
+      const auto count = rd.integer(l, 1, "bonds");
+      have_bonds = true;
+      std::unordered_set<std::uint64_t> tags;
+      for (const auto& p : g.particles) tags.insert(p.tag);
+      for (std::uint64_t k = 0; k < count; ++k) {
+        if (rd.done())
+          throw InputError(rd.where_end(), "bonds", std::to_string(k) + " rows",
+                           "the header announced " + std::to_string(count));
+        const Line& b = rd.next();
+        if (b.tokens.size() != 2)
+          throw InputError(rd.where(b), "bond row", std::to_string(b.tokens.size()) + " columns",
+                           "expected: tag1 tag2");
+        const auto t1 = rd.integer(b, 0, "tag1"), t2 = rd.integer(b, 1, "tag2");
+        for (const auto& [t, col] : {std::pair{t1, "tag1"}, std::pair{t2, "tag2"}})
+          if (!tags.count(t))
+            throw InputError(rd.where(b), col, std::to_string(t), "no particle has this tag");
+        if (t1 == t2)
+          throw InputError(rd.where(b), "tag2", std::to_string(t2), "a particle cannot bond to itself");
+        g.bonds.emplace_back(t1, t2);
+      }
+    } else {
+      throw InputError(rd.where(l), "'" + key + "'", "",
+                       "unknown key; allowed: dimension, thickness, particles, bonds");
+    }
+  }
+  if (!have_particles)
+    throw InputError(source, "particles", "(missing)", "a 'particles N' section is required");
+  (void)have_dimension;
+  std::unordered_set<std::uint64_t> seen;
+  for (const auto& p : g.particles)
+    if (!seen.insert(p.tag).second)
+      throw InputError(source, "tag", std::to_string(p.tag), "particle tags must be unique");
+  return g;
+}
+
+GeometryData read_geometry(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "", "", "cannot open the geometry file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_geometry(ss.str(), path);
+}
+
+ParticleStore GeometryData::make_store(PlanarBody body) const {
+  ParticleStore s(dimension, thickness, body);
+  for (const ParticleSpec& p : particles) s.add(p);
+  return s;
+}
+
+void write_geometry(const std::string& path, const GeometryData& g) {
+  auto out = fmt::output_file(path);
+  out.print("breccia-geometry 1\ndimension {}\n", g.dimension == Dimension::Two ? 2 : 3);
+  if (g.dimension == Dimension::Two) out.print("thickness {:.17g}\n", g.thickness);
+  out.print("particles {}\n# tag x y z radius density motion vx vy vz wx wy wz\n", g.particles.size());
+  for (const ParticleSpec& p : g.particles) {
+    const char* m = p.motion == Motion::Free ? "free" : (p.motion == Motion::Fixed ? "fixed" : "driven");
+    out.print("{} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g}\n",
+              p.tag, p.position.x, p.position.y, p.position.z, p.radius, p.density, m,
+              p.velocity.x, p.velocity.y, p.velocity.z, p.angular_velocity.x,
+              p.angular_velocity.y, p.angular_velocity.z);
+  }
+  out.print("bonds {}\n", g.bonds.size());
+  for (const auto& [a, b] : g.bonds) out.print("{} {}\n", a, b);
+}
+
+}  // namespace breccia

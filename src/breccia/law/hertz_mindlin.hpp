@@ -1,0 +1,143 @@
+#pragma once
+// Hertz normal contact with an incremental Mindlin no-slip tangential spring and Coulomb friction
+// (physics.md §3.3), unloading rescale of the shear force after LAMMPS `mindlin_rescale/force`,
+// Tsuji-type dashpots (§2.2). In 2D it needs planar-sphere bodies (§3.4): disks have no Hertz law.
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#include "breccia/law/pair.hpp"
+#include "breccia/law/param_table.hpp"
+
+namespace breccia {
+
+struct HertzMindlin {
+  static constexpr std::string_view name = "hertz_mindlin";
+  static constexpr std::string_view summary =
+      "Hertz normal force, Mindlin no-slip tangential stiffness, Coulomb friction.";
+
+  struct Params {
+    double shear_modulus = 29e9;  // G of the grain material
+    double poisson_ratio = 0.2;   // nu
+    double friction = 0.5;
+    double normal_damping_ratio = 0;
+    double shear_damping_ratio = 0;
+    bool unloading_rescale = true;
+  };
+  static constexpr std::array<ParamField<Params>, 6> fields() {
+    return {{
+        {"shear_modulus", "Pa", &Params::shear_modulus, 0, kInf, false, true,
+         "grain shear modulus G"},
+        {"poisson_ratio", "-", &Params::poisson_ratio, -1, 0.5, false, false,
+         "grain Poisson ratio nu"},
+        {"friction", "-", &Params::friction, 0, kInf, true, true, "Coulomb friction coefficient mu"},
+        {"normal_damping_ratio", "-", &Params::normal_damping_ratio, 0, 1, true, false,
+         "damping ratio of the Tsuji normal dashpot (0 = none)"},
+        {"shear_damping_ratio", "-", &Params::shear_damping_ratio, 0, 1, true, false,
+         "damping ratio of the tangential dashpot (0 = none)"},
+        {"unloading_rescale", "-", &Params::unloading_rescale, 0, 0, true, true,
+         "scale the stored shear force by a_new/a_old when the contact radius shrinks"},
+    }};
+  }
+  static Params example_params() { return {}; }
+
+  struct State {
+    Vec3 shear_force;
+    Vec3 n_old;
+    double normal_force = 0.0;  // elastic Hertz force
+    double overlap = 0.0;       // delta of the last step
+    double kt = 0.0;            // tangential stiffness of the last step
+  };
+
+  // Effective modulus E* and shear modulus G* for identical grains, or grain on a rigid wall.
+  static double e_star(const Params& p, bool wall) noexcept {
+    const double E = 2.0 * p.shear_modulus * (1.0 + p.poisson_ratio);
+    const double one = (1.0 - p.poisson_ratio * p.poisson_ratio) / E;
+    return 1.0 / (wall ? one : 2.0 * one);
+  }
+  static double g_star(const Params& p, bool wall) noexcept {
+    const double one = (2.0 - p.poisson_ratio) / p.shear_modulus;
+    return 1.0 / (wall ? one : 2.0 * one);
+  }
+  static double r_star(const PairGeometry& g) noexcept {
+    return g.wall ? g.R2 : g.R1 * g.R2 / (g.R1 + g.R2);
+  }
+
+  // Tangent stiffnesses at the current overlap, for the time-step estimate (§1.5); the stiffness
+  // vanishes at first touch, so the engine also applies the Rayleigh limit below.
+  static void timestep_stiffness(const Params& p, const PairGeometry& g, double& kn,
+                                 double& ks) noexcept {
+    const double a = std::sqrt(r_star(g) * std::max(g.delta, 0.0));
+    kn = 2.0 * e_star(p, g.wall) * a;
+    ks = 8.0 * g_star(p, g.wall) * a;
+  }
+  // Rayleigh-wave time of the smallest particle (§1.5, Li, Xu & Thornton 2005).
+  static double rayleigh_time_step(const Params& p, double r_min, double density) noexcept {
+    return std::numbers::pi * r_min * std::sqrt(density / p.shear_modulus) /
+           (0.1631 * p.poisson_ratio + 0.8766);
+  }
+
+  static PairForce compute(const Params& p, State& s, const PairGeometry& g, double dt,
+                           PairDissipation& dis) noexcept {
+    if (g.delta <= 0.0) {
+      if (s.kt > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) / s.kt;
+      s = State{};
+      return {};
+    }
+    const double Rs = r_star(g);
+    const double a = std::sqrt(Rs * g.delta);
+    const double Es = e_star(p, g.wall);
+    const double fn = 4.0 / 3.0 * Es * a * g.delta;  // 4/3 E* sqrt(R*) delta^(3/2)
+    const double kt = 8.0 * g_star(p, g.wall) * a;
+
+    Vec3 fs = s.shear_force;
+    if (s.kt > 0.0) {
+      fs = rotate_between(fs, s.n_old, g.n);
+      fs = spin_about(fs, g.n, 0.5 * dot(g.w1 + g.w2, g.n) * dt);
+      const double e_before = 0.5 * norm2(fs) / s.kt;
+      const double a_old = std::sqrt(Rs * s.overlap);
+      if (p.unloading_rescale && a < a_old) fs *= a / a_old;
+      // Energy the shear spring loses (or gains) when its stiffness changes, not by work (§2.4).
+      dis.deleted += e_before - 0.5 * norm2(fs) / kt;
+    }
+    const double vn = g.vn();
+    const Vec3 vt = g.vc - g.n * vn;
+    Vec3 fs_trial = fs - vt * (kt * dt);
+    const double limit = p.friction * fn;
+    const double ft2 = norm2(fs_trial);
+    bool sliding = false;
+    if (ft2 > limit * limit) {
+      const double ft = std::sqrt(ft2);
+      dis.slip += limit * (ft - limit) / kt;
+      fs_trial *= limit / ft;
+      sliding = true;
+    }
+    s.shear_force = fs_trial;
+    s.n_old = g.n;
+    s.normal_force = fn;
+    s.overlap = g.delta;
+    s.kt = kt;
+
+    Vec3 force = g.n * fn + fs_trial;
+    if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
+      const double sn = 2.0 * Es * a;
+      double fn_visc = -2.0 * std::sqrt(5.0 / 6.0) * p.normal_damping_ratio *
+                       std::sqrt(sn * g.m_star) * vn;
+      if (fn + fn_visc < 0.0) fn_visc = -fn;
+      Vec3 fs_visc{};
+      if (!sliding)
+        fs_visc = vt * (-2.0 * std::sqrt(5.0 / 6.0) * p.shear_damping_ratio *
+                        std::sqrt(kt * g.m_star));
+      dis.viscous -= (fn_visc * vn + dot(fs_visc, vt)) * dt;
+      force += g.n * fn_visc + fs_visc;
+    }
+    return {force, {}};
+  }
+
+  static double stored_energy(const Params&, const State& s) noexcept {
+    if (s.kt == 0.0) return 0.0;
+    return 0.4 * s.normal_force * s.overlap + 0.5 * norm2(s.shear_force) / s.kt;
+  }
+};
+
+}  // namespace breccia

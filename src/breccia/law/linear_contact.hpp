@@ -1,0 +1,117 @@
+#pragma once
+// Linear spring contact with Coulomb friction and optional dashpots (physics.md §3.1, §3.2, §2.2),
+// after Cundall & Strack (1979) with the PFC 5+ "deformability" stiffness k_n = A E_c / L.
+// This is the exemplar every contact law copies: Params with a field table, per-contact State,
+// and noexcept kernels.
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#include "breccia/law/pair.hpp"
+#include "breccia/law/param_table.hpp"
+
+namespace breccia {
+
+struct LinearContact {
+  static constexpr std::string_view name = "linear";
+  static constexpr std::string_view summary =
+      "Linear spring with Coulomb friction; k_n = A E_c / L (PFC 5+ deformability).";
+
+  struct Params {
+    double modulus = 10e9;            // E_c
+    double stiffness_ratio = 2.5;     // kappa = k_n / k_s
+    double friction = 0.5;            // mu
+    double normal_damping_ratio = 0;  // beta_n
+    double shear_damping_ratio = 0;   // beta_s
+  };
+  static constexpr std::array<ParamField<Params>, 5> fields() {
+    return {{
+        {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
+         "effective contact modulus E_c; k_n = A E_c / L with A = pi r^2 (2 r t in 2D), "
+         "r = min(R1, R2), L = R1 + R2 (wall: r = L = R)"},
+        {"stiffness_ratio", "-", &Params::stiffness_ratio, 0, kInf, false, true,
+         "kappa = k_n / k_s"},
+        {"friction", "-", &Params::friction, 0, kInf, true, true, "Coulomb friction coefficient mu"},
+        {"normal_damping_ratio", "-", &Params::normal_damping_ratio, 0, 1, true, false,
+         "critical damping ratio of the normal dashpot (0 = none)"},
+        {"shear_damping_ratio", "-", &Params::shear_damping_ratio, 0, 1, true, false,
+         "critical damping ratio of the shear dashpot (0 = none)"},
+    }};
+  }
+  static Params example_params() { return {}; }
+
+  struct State {
+    Vec3 shear_force;  // F_s, kept in the current contact plane
+    Vec3 n_old;        // normal of the previous step (zero: new contact)
+    double normal_force = 0.0;  // spring part of F_n, kept for energy and output
+    double kn = 0.0;            // normal stiffness of this pair (set at first touch)
+  };
+
+  static double normal_stiffness(const Params& p, const PairGeometry& g) noexcept {
+    const double r = g.wall ? g.R2 : std::min(g.R1, g.R2);
+    const double L = g.wall ? g.R2 : g.R1 + g.R2;
+    const double area = g.planar ? 2.0 * r * g.thickness : std::numbers::pi * r * r;
+    return area * p.modulus / L;
+  }
+  // Normal and shear stiffness for the time-step estimate (§1.5), for a pair that may touch.
+  static void timestep_stiffness(const Params& p, const PairGeometry& g, double& kn,
+                                 double& ks) noexcept {
+    kn = normal_stiffness(p, g);
+    ks = kn / p.stiffness_ratio;
+  }
+
+  // One step of the contact. Returns the force on particle 2; books dissipation into `dis`.
+  static PairForce compute(const Params& p, State& s, const PairGeometry& g, double dt,
+                           PairDissipation& dis) noexcept {
+    if (g.delta <= 0.0) {
+      // Separated: the contact is deleted; its shear spring energy leaves without work.
+      if (s.kn > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) * p.stiffness_ratio / s.kn;
+      s = State{};
+      return {};
+    }
+    if (s.kn == 0.0) s.kn = normal_stiffness(p, g);
+    const double kn = s.kn;
+    const double ks = kn / p.stiffness_ratio;
+    Vec3 fs = s.shear_force;
+    if (s.n_old.x != 0.0 || s.n_old.y != 0.0 || s.n_old.z != 0.0) {
+      fs = rotate_between(fs, s.n_old, g.n);
+      fs = spin_about(fs, g.n, 0.5 * dot(g.w1 + g.w2, g.n) * dt);
+    }
+    const double vn = g.vn();
+    const Vec3 vt = g.vc - g.n * vn;
+    const double fn = kn * g.delta;
+    Vec3 fs_trial = fs - vt * (ks * dt);
+    const double limit = p.friction * fn;
+    const double ft2 = norm2(fs_trial);
+    bool sliding = false;
+    if (ft2 > limit * limit) {
+      const double ft = std::sqrt(ft2);
+      const Vec3 fs_new = fs_trial * (limit / ft);
+      dis.slip += limit * (ft - limit) / ks;
+      fs_trial = fs_new;
+      sliding = true;
+    }
+    s.shear_force = fs_trial;
+    s.n_old = g.n;
+    s.normal_force = fn;
+
+    Vec3 force = g.n * fn + fs_trial;
+    if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
+      double fn_visc = -2.0 * p.normal_damping_ratio * std::sqrt(g.m_star * kn) * vn;
+      if (fn + fn_visc < 0.0) fn_visc = -fn;  // no-tension rule (§2.2)
+      Vec3 fs_visc{};
+      if (!sliding) fs_visc = vt * (-2.0 * p.shear_damping_ratio * std::sqrt(g.m_star * ks));
+      dis.viscous -= (fn_visc * vn + dot(fs_visc, vt)) * dt;
+      force += g.n * fn_visc + fs_visc;
+    }
+    return {force, {}};
+  }
+
+  // Elastic energy stored in the contact (§3.6).
+  static double stored_energy(const Params& p, const State& s) noexcept {
+    if (s.kn == 0.0) return 0.0;
+    return 0.5 * (s.normal_force * s.normal_force + norm2(s.shear_force) * p.stiffness_ratio) / s.kn;
+  }
+};
+
+}  // namespace breccia

@@ -1,0 +1,109 @@
+#pragma once
+// What every pair law (contact or bond) receives and returns. The engine computes the geometry of
+// a pair once (physics.md §0.2); a law turns it into a force on particle 2 and a pure couple on
+// particle 2 (§0.3). Particle 1 receives the opposite force and couple; torques about the centres
+// follow from the lever arms, which conserves linear and angular momentum exactly.
+#include <cmath>
+#include <cstdint>
+
+#include "breccia/core/vec3.hpp"
+
+namespace breccia {
+
+struct PairGeometry {
+  Vec3 n;             // unit normal from body 1 to body 2
+  double d = 0.0;     // centre distance (for a wall: distance from the wall plane)
+  double delta = 0.0; // overlap R1 + R2 - d (> 0 in contact)
+  Vec3 r1, r2;        // lever arms from the centres to the contact point
+  Vec3 vc;            // relative velocity of the contact point, 2 minus 1
+  Vec3 w1, w2;        // angular velocities
+  double R1 = 0.0, R2 = 0.0;
+  double m_star = 0.0;  // reduced mass (the particle's mass against a wall)
+  bool wall = false;    // body 1 is a rigid wall (then R1 is not a radius)
+  bool planar = false;  // 2D slab geometry
+  double thickness = 1.0;
+
+  double vn() const noexcept { return dot(vc, n); }
+  Vec3 vt() const noexcept { return vc - n * vn(); }
+  Vec3 xc_from_1() const noexcept { return r1; }
+};
+
+// Geometry of a particle pair from centres, radii and velocities (§0.2): contact point in the
+// middle of the overlap (or gap).
+inline PairGeometry pair_geometry(const Vec3& x1, double R1, const Vec3& x2, double R2,
+                                  const Vec3& v1, const Vec3& w1, const Vec3& v2, const Vec3& w2,
+                                  double m1, double m2, bool planar, double thickness) noexcept {
+  PairGeometry g;
+  const Vec3 dvec = x2 - x1;
+  g.d = norm(dvec);
+  g.n = dvec / g.d;
+  g.delta = R1 + R2 - g.d;
+  const Vec3 xc_rel = g.n * (R1 - 0.5 * g.delta);  // x_c - x_1
+  g.r1 = xc_rel;
+  g.r2 = xc_rel - dvec;
+  g.vc = (v2 + cross(w2, g.r2)) - (v1 + cross(w1, g.r1));
+  g.w1 = w1;
+  g.w2 = w2;
+  g.R1 = R1;
+  g.R2 = R2;
+  g.m_star = m1 * m2 / (m1 + m2);
+  g.planar = planar;
+  g.thickness = thickness;
+  return g;
+}
+
+// What a law produces for one pair in one step.
+struct PairForce {
+  Vec3 force;   // on particle 2
+  Vec3 couple;  // pure couple on particle 2
+};
+
+// Energy that left the elastic springs of one item in one step (booked by the engine, §2.4).
+struct PairDissipation {
+  double slip = 0.0;     // Coulomb sliding
+  double viscous = 0.0;  // dashpots
+  double deleted = 0.0;  // spring energy lost without work (contact separated with shear load,
+                         // Hertz stiffness change)
+  PairDissipation& operator+=(const PairDissipation& o) noexcept {
+    slip += o.slip;
+    viscous += o.viscous;
+    deleted += o.deleted;
+    return *this;
+  }
+};
+
+// Stored elastic energy of a bond by component (§4.0).
+struct BondEnergy {
+  double tension = 0.0;      // normal part while F_n < 0
+  double compression = 0.0;  // normal part while F_n >= 0
+  double shear = 0.0;
+  double bending = 0.0;
+  double twisting = 0.0;
+  double total() const noexcept { return tension + compression + shear + bending + twisting; }
+  BondEnergy& operator+=(const BondEnergy& o) noexcept {
+    tension += o.tension;
+    compression += o.compression;
+    shear += o.shear;
+    bending += o.bending;
+    twisting += o.twisting;
+    return *this;
+  }
+};
+
+enum class CrackMode : std::uint8_t { Tensile = 0, Shear = 1 };
+
+// Failure decision of a bond law in one step, with the quantities the crack record needs (§4.0).
+struct BondFailure {
+  bool broken = false;
+  CrackMode mode = CrackMode::Tensile;
+  double Fn = 0.0;  // compression-positive
+  double Fs = 0.0;
+  double Mt = 0.0;  // signed twisting moment M . n
+  double Mb = 0.0;  // |bending moment|
+  double sigma = 0.0, tau = 0.0;          // peak stresses, sigma tension-positive
+  double ratio_t = 0.0, ratio_s = 0.0;    // criterion ratios; NaN where undefined
+  double bond_radius = 0.0;
+  BondEnergy energy;                      // released energy by component
+};
+
+}  // namespace breccia

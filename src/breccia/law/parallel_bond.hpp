@@ -1,0 +1,189 @@
+#pragma once
+// Potyondy & Cundall (2004) parallel bond, with the cohesion-friction shear strength of the later
+// linear parallel bond (physics.md §4.1): an incremental elastic beam glued over a disc (3D) or a
+// slab of thickness t (2D) of radius R_bar = lambda min(R1, R2), carrying normal and shear force,
+// twisting and bending moment. Fails in tension when sigma_max >= sigma_c (checked first), else in
+// shear when tau_max >= c - sigma_avg tan(phi); with phi = 0 this is the 2004 model.
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+
+#include "breccia/core/rng.hpp"
+#include "breccia/law/pair.hpp"
+#include "breccia/law/param_table.hpp"
+
+namespace breccia {
+
+struct ParallelBond {
+  static constexpr std::string_view name = "parallel_bond";
+  static constexpr std::string_view summary =
+      "Potyondy-Cundall parallel bond (incremental), tension then Mohr-Coulomb shear failure.";
+
+  struct Params {
+    double radius_multiplier = 1.0;   // lambda_bar
+    double modulus = 10e9;            // E_bar_c
+    double stiffness_ratio = 2.5;     // kappa_bar = k_n / k_s
+    double tensile_strength = 20e6;   // mean sigma_c
+    double tensile_strength_sd = 0;   // standard deviation of sigma_c
+    double cohesion = 20e6;           // mean c (tau_c of the 2004 model)
+    double cohesion_sd = 0;
+    double friction_angle_deg = 0;    // phi_bar; 0 = 2004 model
+    double moment_factor = 1.0;       // beta_bar
+  };
+  static constexpr std::array<ParamField<Params>, 9> fields() {
+    return {{
+        {"radius_multiplier", "-", &Params::radius_multiplier, 0, 1, false, true,
+         "lambda: bond radius R_bar = lambda min(R1, R2)"},
+        {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
+         "bond modulus E_bar; k_n = E_bar / (R1 + R2) per unit area"},
+        {"stiffness_ratio", "-", &Params::stiffness_ratio, 0, kInf, false, true,
+         "kappa_bar = k_n / k_s"},
+        {"tensile_strength", "Pa", &Params::tensile_strength, 0, kInf, false, true,
+         "mean tensile strength sigma_c"},
+        {"tensile_strength_sd", "Pa", &Params::tensile_strength_sd, 0, kInf, true, true,
+         "standard deviation of sigma_c (normal, redrawn when <= 0)"},
+        {"cohesion", "Pa", &Params::cohesion, 0, kInf, false, true,
+         "mean cohesion c (the shear strength tau_c when the friction angle is 0)"},
+        {"cohesion_sd", "Pa", &Params::cohesion_sd, 0, kInf, true, true,
+         "standard deviation of c (normal, redrawn when <= 0)"},
+        {"friction_angle_deg", "deg", &Params::friction_angle_deg, 0, 90, true, false,
+         "bond friction angle phi: tau_c = c - sigma_avg tan(phi), sigma_avg tension-positive"},
+        {"moment_factor", "-", &Params::moment_factor, 0, 1, true, true,
+         "beta: share of the moments in the peak stresses"},
+    }};
+  }
+  static Params example_params() { return {}; }
+
+  struct State {
+    Vec3 shear_force;    // F_s
+    Vec3 bend_moment;    // M_b
+    Vec3 n_old;          // normal of the previous step; zero until the first step after install
+    double normal_force = 0.0;  // F_n, compression-positive
+    double twist_moment = 0.0;  // M_t
+    // Fixed at installation:
+    double kn = 0.0, ks = 0.0;  // force stiffnesses K_n = k_n A, K_s = k_s A
+    double area = 0.0;          // A
+    double bond_radius = 0.0;   // R_bar
+    double i_over_a = 0.0;      // I / A
+    double j_over_a = 0.0;      // J / A (0 in 2D: no twist)
+    double tensile_strength = 0.0;
+    double cohesion = 0.0;
+    double d0 = 0.0;  // centre distance at installation (for output)
+  };
+
+  // Installs a stress-free bond at the current geometry. Strengths are drawn from the counter-based
+  // generator keyed by the bond tag, so they do not depend on creation order.
+  static State install(const Params& p, const PairGeometry& g, std::uint64_t seed,
+                       std::uint64_t bond_tag) noexcept {
+    State s;
+    const double rb = p.radius_multiplier * std::min(g.R1, g.R2);
+    s.bond_radius = rb;
+    if (g.planar) {
+      s.area = 2.0 * rb * g.thickness;
+      s.i_over_a = rb * rb / 3.0;  // I = 2/3 R^3 t
+      s.j_over_a = 0.0;
+    } else {
+      s.area = std::numbers::pi * rb * rb;
+      s.i_over_a = 0.25 * rb * rb;  // I = pi R^4 / 4
+      s.j_over_a = 0.5 * rb * rb;   // J = pi R^4 / 2
+    }
+    const double kn_area = p.modulus / (g.R1 + g.R2);
+    s.kn = kn_area * s.area;
+    s.ks = s.kn / p.stiffness_ratio;
+    s.d0 = g.d;
+    constexpr std::uint64_t kTensileStream = 0x7e51, kCohesionStream = 0xc0e5;
+    s.tensile_strength =
+        positive_normal(p.tensile_strength, p.tensile_strength_sd, seed, kTensileStream, bond_tag);
+    s.cohesion = positive_normal(p.cohesion, p.cohesion_sd, seed, kCohesionStream, bond_tag);
+    return s;
+  }
+
+  static double kb(const State& s) noexcept { return s.kn * s.i_over_a; }
+  static double kt(const State& s) noexcept { return s.ks * s.j_over_a; }
+
+  // Largest translational and rotational stiffness for the time-step estimate (§1.5).
+  static double max_stiffness(const State& s) noexcept { return std::max(s.kn, s.ks); }
+  static double max_moment_stiffness(const State& s) noexcept { return std::max(kb(s), kt(s)); }
+  static double shear_stiffness(const State& s) noexcept { return s.ks; }
+
+  // One step. On failure the bond's force is not applied (§4.0 decision) and `fail` carries the
+  // record; the caller removes the bond.
+  static PairForce compute(const Params& p, State& s, const PairGeometry& g, double dt,
+                           BondFailure& fail) noexcept {
+    // The increments use v^{n-1/2}, the velocity that carried the particles from x^{n-1} to x^n.
+    // A bond installed at x^n has not seen that motion, so its first step adds nothing.
+    const bool fresh = s.n_old.x == 0.0 && s.n_old.y == 0.0 && s.n_old.z == 0.0;
+    if (fresh) dt = 0.0;
+    // 1. Carry the shear force and bending moment into the current contact plane.
+    Vec3 fs = s.shear_force, mb = s.bend_moment;
+    if (!fresh) {
+      fs = rotate_between(fs, s.n_old, g.n);
+      mb = rotate_between(mb, s.n_old, g.n);
+      const double spin = 0.5 * dot(g.w1 + g.w2, g.n) * dt;
+      fs = spin_about(fs, g.n, spin);
+      mb = spin_about(mb, g.n, spin);
+    }
+    // 2. Increments from the relative motion.
+    const double vn = g.vn();
+    const Vec3 vt = g.vc - g.n * vn;
+    const Vec3 wr = g.w2 - g.w1;
+    const double wtw = dot(wr, g.n);
+    const Vec3 wb = wr - g.n * wtw;
+    const double fn = s.normal_force - s.kn * vn * dt;
+    fs -= vt * (s.ks * dt);
+    const double mt = s.twist_moment - kt(s) * wtw * dt;
+    mb -= wb * (kb(s) * dt);
+    s.normal_force = fn;
+    s.shear_force = fs;
+    s.twist_moment = mt;
+    s.bend_moment = mb;
+    s.n_old = g.n;
+
+    // Peak stresses on the bond periphery (tension-positive sigma).
+    const double mb_abs = norm(mb);
+    const double fs_abs = norm(fs);
+    const double rb = s.bond_radius;
+    const double sigma_avg = -fn / s.area;
+    const double sigma_max = sigma_avg + p.moment_factor * mb_abs * rb / (s.area * s.i_over_a);
+    const double tau_max =
+        fs_abs / s.area +
+        (s.j_over_a > 0.0 ? p.moment_factor * std::abs(mt) * rb / (s.area * s.j_over_a) : 0.0);
+    const double tau_c = s.cohesion - sigma_avg * std::tan(p.friction_angle_deg * kDegree);
+    const bool tensile = sigma_max >= s.tensile_strength;
+    const bool shear = !tensile && tau_max >= tau_c;
+    if (tensile || shear) {
+      fail.broken = true;
+      fail.mode = tensile ? CrackMode::Tensile : CrackMode::Shear;
+      fail.Fn = fn;
+      fail.Fs = fs_abs;
+      fail.Mt = mt;
+      fail.Mb = mb_abs;
+      fail.sigma = sigma_max;
+      fail.tau = tau_max;
+      fail.ratio_t = sigma_max / s.tensile_strength;
+      fail.ratio_s = tau_c > 0.0 ? tau_max / tau_c : std::numeric_limits<double>::quiet_NaN();
+      fail.bond_radius = rb;
+      fail.energy = energy(s);
+      return {};
+    }
+    return {g.n * fn + fs, g.n * mt + mb};
+  }
+
+  // Stored elastic energy by component (§4.0).
+  static BondEnergy energy(const State& s) noexcept {
+    BondEnergy e;
+    const double en = 0.5 * s.normal_force * s.normal_force / s.kn;
+    (s.normal_force < 0.0 ? e.tension : e.compression) = en;
+    e.shear = 0.5 * norm2(s.shear_force) / s.ks;
+    e.bending = 0.5 * norm2(s.bend_moment) / kb(s);
+    const double k_t = kt(s);
+    e.twisting = k_t > 0.0 ? 0.5 * s.twist_moment * s.twist_moment / k_t : 0.0;
+    return e;
+  }
+
+  static constexpr double kDegree = std::numbers::pi / 180.0;
+};
+
+}  // namespace breccia

@@ -1,0 +1,76 @@
+#include "breccia/observe/recorders.hpp"
+
+#include <fmt/format.h>
+
+#include "breccia/core/error.hpp"
+
+namespace breccia {
+
+CsvFile::CsvFile(const std::string& path, const std::vector<std::string>& columns) : path_(path) {
+  f_ = std::fopen(path.c_str(), "w");
+  if (!f_) throw InputError(path, "", "", "cannot create the output file");
+  std::string header;
+  for (const auto& c : columns) header += (header.empty() ? "" : ",") + c;
+  write_line(header);
+  flush();
+}
+
+CsvFile::~CsvFile() {
+  if (f_) std::fclose(f_);
+}
+
+void CsvFile::write_line(const std::string& line) {
+  std::fputs(line.c_str(), f_);
+  std::fputc('\n', f_);
+}
+
+void CsvFile::flush() {
+  if (f_) std::fflush(f_);
+}
+
+HistoryRecorder::HistoryRecorder(const std::string& path)
+    : csv_(path, {"step", "time_s", "axial_strain", "axial_stress_pa", "platen_force_bottom_n",
+                  "platen_force_top_n", "broken_bonds", "tensile_cracks", "shear_cracks",
+                  "intact_bonds", "contacts", "kinetic_j", "bond_tension_j", "bond_compression_j",
+                  "bond_shear_j", "bond_bending_j", "bond_twisting_j", "contact_strain_j",
+                  "boundary_work_j", "friction_j", "local_damping_j", "viscous_damping_j",
+                  "deleted_springs_j", "released_by_breaks_j", "energy_residual_j",
+                  "energy_residual_relative"}) {}
+
+void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
+  std::size_t tensile = 0;
+  for (const auto& c : sim.cracks()) tensile += c.mode == CrackMode::Tensile ? 1 : 0;
+  const EnergyLedger& L = sim.ledger();
+  csv_.write_line(fmt::format(
+      "{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
+      "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g}",
+      sim.step_count(), sim.time(), a.strain, a.stress, a.force_bottom, a.force_top,
+      sim.cracks().size(), tensile, sim.cracks().size() - tensile, sim.intact_bonds(),
+      sim.active_contacts(), L.kinetic(), L.bond.tension, L.bond.compression, L.bond.shear,
+      L.bond.bending, L.bond.twisting, L.contact, L.boundary_work, L.friction, L.local_damping,
+      L.viscous_damping, L.deleted, L.released.total(), L.residual, L.residual_relative));
+}
+
+CrackRecorder::CrackRecorder(const std::string& path)
+    : csv_(path, {"step", "time_s", "law", "bond_tag", "id1", "id2", "r1_m", "r2_m", "x_m",
+                  "y_m", "z_m", "nx", "ny", "nz", "mode", "bond_radius_m", "fn_n", "fs_n",
+                  "mt_nm", "mb_nm", "sigma_pa", "tau_pa", "ratio_t", "ratio_s", "energy_j",
+                  "energy_normal_j", "energy_shear_j", "energy_bending_j", "energy_twisting_j"}) {}
+
+void CrackRecorder::record(const Simulation& sim) {
+  const auto& cracks = sim.cracks();
+  for (; written_ < cracks.size(); ++written_) {
+    const CrackRecord& c = cracks[written_];
+    csv_.write_line(fmt::format(
+        "{},{:.12g},{},{},{},{},{:.9g},{:.9g},{:.12g},{:.12g},{:.12g},{:.9g},{:.9g},{:.9g},{},"
+        "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.9g},"
+        "{:.9g},{:.9g}",
+        c.step, c.time, c.law, c.bond_tag, c.id1, c.id2, c.R1, c.R2, c.position.x, c.position.y,
+        c.position.z, c.normal.x, c.normal.y, c.normal.z, to_string(c.mode), c.bond_radius, c.Fn,
+        c.Fs, c.Mt, c.Mb, c.sigma, c.tau, c.ratio_t, c.ratio_s, c.energy.total(),
+        c.energy.tension + c.energy.compression, c.energy.shear, c.energy.bending,
+        c.energy.twisting));
+  }
+}
+
+}  // namespace breccia

@@ -1,0 +1,56 @@
+#pragma once
+// Recorders: they read the simulation (never change it) and write tables that are flushed as they
+// go, so an interrupted run keeps everything recorded up to then.
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "breccia/engine/simulation.hpp"
+#include "breccia/protocol/platen_compression.hpp"
+
+namespace breccia {
+
+// A CSV file written row by row and flushed on request.
+class CsvFile {
+ public:
+  CsvFile() = default;
+  CsvFile(const std::string& path, const std::vector<std::string>& columns);
+  CsvFile(const CsvFile&) = delete;
+  CsvFile& operator=(const CsvFile&) = delete;
+  CsvFile(CsvFile&& o) noexcept : f_(o.f_), path_(std::move(o.path_)) { o.f_ = nullptr; }
+  ~CsvFile();
+  void write_line(const std::string& line);
+  void flush();
+  const std::string& path() const { return path_; }
+
+ private:
+  std::FILE* f_ = nullptr;
+  std::string path_;
+};
+
+// history.csv: one row per sample with the axial state, counts and the energy ledger.
+class HistoryRecorder {
+ public:
+  explicit HistoryRecorder(const std::string& path);
+  void record(const Simulation& sim, const AxialState& axial);
+  void flush() { csv_.flush(); }
+
+ private:
+  CsvFile csv_;
+};
+
+// cracks.csv: one row per broken bond with the fields of physics.md §4.0.
+class CrackRecorder {
+ public:
+  explicit CrackRecorder(const std::string& path);
+  // Writes the cracks recorded since the last call.
+  void record(const Simulation& sim);
+  void flush() { csv_.flush(); }
+  std::size_t written() const noexcept { return written_; }
+
+ private:
+  CsvFile csv_;
+  std::size_t written_ = 0;
+};
+
+}  // namespace breccia

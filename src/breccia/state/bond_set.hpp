@@ -1,0 +1,36 @@
+#pragma once
+// The bonds of one law: contiguous arrays sorted by particle index (design.md). Broken bonds are
+// flagged in the step and compacted at the next neighbour rebuild.
+#include <cstdint>
+#include <vector>
+
+#include "breccia/state/pair_list.hpp"
+
+namespace breccia {
+
+template <class Law>
+struct BondSet {
+  typename Law::Params params;
+  PairList pairs;                       // particle indices, first has the smaller tag
+  std::vector<std::uint64_t> tag;       // stable bond tags
+  std::vector<typename Law::State> state;
+  std::vector<std::uint8_t> intact;
+  std::vector<PairSlot> slot;
+  std::size_t broken_since_compaction = 0;
+
+  std::size_t size() const noexcept { return tag.size(); }
+  std::size_t intact_count() const noexcept { return size() - broken_since_compaction; }
+};
+
+// Contact history of one contact law, one entry per neighbour pair. It survives neighbour-list
+// rebuilds: the engine merges the old entries into the new sorted list.
+template <class Law>
+struct ContactSet {
+  typename Law::Params params;       // particle-particle
+  typename Law::Params wall_params;  // particle-wall (wall friction differs)
+  PairList pairs;
+  std::vector<typename Law::State> state;
+  std::vector<PairSlot> slot;
+};
+
+}  // namespace breccia

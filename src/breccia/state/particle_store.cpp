@@ -1,0 +1,74 @@
+#include "breccia/state/particle_store.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "breccia/core/error.hpp"
+#include "breccia/core/format.hpp"
+
+namespace breccia {
+
+ParticleStore::ParticleStore(Dimension dim, double thickness, PlanarBody body)
+    : dim_(dim), thickness_(thickness), body_(body) {
+  if (!(thickness > 0.0) || !std::isfinite(thickness))
+    throw InputError("particle store", "thickness", num(thickness), "must be a finite value > 0 m");
+}
+
+double ParticleStore::mass_of(double radius, double rho) const noexcept {
+  if (dim_ == Dimension::Two && body_ == PlanarBody::Disk)
+    return rho * std::numbers::pi * radius * radius * thickness_;
+  return rho * 4.0 / 3.0 * std::numbers::pi * radius * radius * radius;
+}
+
+double ParticleStore::inertia_of(double m, double radius) const noexcept {
+  if (dim_ == Dimension::Two && body_ == PlanarBody::Disk) return 0.5 * m * radius * radius;
+  return 0.4 * m * radius * radius;
+}
+
+std::size_t ParticleStore::add(const ParticleSpec& p) {
+  const std::string where = "particle " + std::to_string(p.tag);
+  if (index_.count(p.tag)) throw InputError(where, "tag", std::to_string(p.tag), "tags must be unique");
+  if (!(p.radius > 0.0) || !std::isfinite(p.radius))
+    throw InputError(where, "radius", num(p.radius), "must be a finite value > 0 m");
+  if (!(p.density > 0.0) || !std::isfinite(p.density))
+    throw InputError(where, "density", num(p.density), "must be a finite value > 0 kg/m^3");
+  for (int k = 0; k < 3; ++k) {
+    if (!std::isfinite(p.position[k]) || !std::isfinite(p.velocity[k]) ||
+        !std::isfinite(p.angular_velocity[k]))
+      throw InputError(where, "position/velocity", "non-finite", "must be finite numbers");
+  }
+  Vec3 x = p.position, v = p.velocity, w = p.angular_velocity;
+  if (planar()) {
+    if (x.z != 0.0 || v.z != 0.0 || w.x != 0.0 || w.y != 0.0)
+      throw InputError(where, "z / out-of-plane rotation", num(x.z) + " / " + num(w.x) + "," + num(w.y),
+                       "2D particles lie in the x-y plane: z, vz, wx and wy must be 0");
+  }
+  const std::size_t i = size();
+  index_.emplace(p.tag, i);
+  pos_rad.push_back({x, p.radius});
+  vel.push_back(v);
+  angvel.push_back(w);
+  force.push_back({});
+  torque.push_back({});
+  const double m = mass_of(p.radius, p.density);
+  mass.push_back(m);
+  inertia.push_back(inertia_of(m, p.radius));
+  density.push_back(p.density);
+  orientation.push_back({});
+  angle.push_back(0.0);
+  displacement.push_back({});
+  tag.push_back(p.tag);
+  motion.push_back(p.motion);
+  drive_vel.push_back(p.motion == Motion::Driven ? v : Vec3{});
+  drive_angvel.push_back(p.motion == Motion::Driven ? w : Vec3{});
+  return i;
+}
+
+std::size_t ParticleStore::index_of(std::uint64_t t, const std::string& where) const {
+  const auto it = index_.find(t);
+  if (it == index_.end())
+    throw InputError(where, "particle tag", std::to_string(t), "no particle has this tag");
+  return it->second;
+}
+
+}  // namespace breccia

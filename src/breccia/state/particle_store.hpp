@@ -1,0 +1,84 @@
+#pragma once
+// The particle state: plain arrays grouped by how the hot loops read them (design.md, "Data layout
+// for speed"). Identity is the stable tag; indices are positions in these arrays.
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "breccia/core/quat.hpp"
+#include "breccia/core/vec3.hpp"
+
+namespace breccia {
+
+enum class Dimension : std::uint8_t { Three = 3, Two = 2 };
+
+// How a 2D particle's mass and inertia are computed (physics.md §1.2, §3.4).
+enum class PlanarBody : std::uint8_t {
+  Disk,          // disk of thickness t: m = rho pi R^2 t, I = m R^2 / 2 (default)
+  PlanarSphere,  // sphere confined to the plane (RICEBAL-style; needed by planar Hertz contacts)
+};
+
+// Position and radius packed together: neighbour search and every pair kernel read both.
+struct PosRad {
+  Vec3 x;
+  double r = 0.0;
+};
+static_assert(sizeof(PosRad) == 32);
+
+enum class Motion : std::uint8_t {
+  Free = 0,    // integrated from forces
+  Fixed = 1,   // velocity and angular velocity held at zero
+  Driven = 2,  // velocity and angular velocity prescribed
+};
+
+struct ParticleSpec {
+  std::uint64_t tag = 0;
+  Vec3 position;
+  double radius = 0.0;
+  double density = 0.0;
+  Vec3 velocity;
+  Vec3 angular_velocity;
+  Motion motion = Motion::Free;
+};
+
+class ParticleStore {
+ public:
+  ParticleStore() = default;
+  ParticleStore(Dimension dim, double thickness, PlanarBody body = PlanarBody::Disk);
+
+  Dimension dimension() const noexcept { return dim_; }
+  bool planar() const noexcept { return dim_ == Dimension::Two; }
+  double thickness() const noexcept { return thickness_; }
+  PlanarBody planar_body() const noexcept { return body_; }
+  std::size_t size() const noexcept { return tag.size(); }
+
+  // Adds a particle; throws InputError on a duplicate tag or non-physical values.
+  std::size_t add(const ParticleSpec& p);
+  // Index of a tag, or throws InputError naming `where`.
+  std::size_t index_of(std::uint64_t tag, const std::string& where = "particle store") const;
+  bool contains(std::uint64_t t) const { return index_.count(t) != 0; }
+
+  double mass_of(double radius, double density) const noexcept;
+  double inertia_of(double mass, double radius) const noexcept;
+
+  // Grouped arrays (public: the engine's loops read them directly).
+  std::vector<PosRad> pos_rad;
+  std::vector<Vec3> vel, angvel;    // v^{n-1/2}, omega^{n-1/2} between steps
+  std::vector<Vec3> force, torque;  // total force and moment of the last step (before damping)
+  std::vector<double> mass, inertia, density;
+  std::vector<Quat> orientation;   // 3D orientation; in 2D a rotation about z kept in step
+  std::vector<double> angle;       // 2D orientation angle (never wrapped, §1.4)
+  std::vector<Vec3> displacement;  // accumulated displacement since the start
+  std::vector<std::uint64_t> tag;
+  std::vector<Motion> motion;
+  std::vector<Vec3> drive_vel, drive_angvel;  // used when motion == Driven
+
+ private:
+  Dimension dim_ = Dimension::Three;
+  double thickness_ = 1.0;
+  PlanarBody body_ = PlanarBody::Disk;
+  std::unordered_map<std::uint64_t, std::size_t> index_;
+};
+
+}  // namespace breccia

@@ -1,0 +1,151 @@
+// The `breccia` command end to end: a small run writes a complete run folder; bad experiment files
+// fail with a clear error and no half-written result.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "breccia/analysis/stress_strain.hpp"
+#include "breccia/core/error.hpp"
+#include "breccia/io/experiment.hpp"
+
+namespace fs = std::filesystem;
+using namespace breccia;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out;
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(BRECCIA_CLI) + " " + args + " 2>&1";
+  Result r{0, {}};
+  FILE* p = popen(cmd.c_str(), "r");
+  char buf[4096];
+  while (std::size_t n = fread(buf, 1, sizeof buf, p)) r.out.append(buf, n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string last_line(const std::string& s) {
+  std::string t = s;
+  while (!t.empty() && t.back() == '\n') t.pop_back();
+  const auto nl = t.rfind('\n');
+  return nl == std::string::npos ? t : t.substr(nl + 1);
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void expect_input_error(const std::string& toml, std::initializer_list<const char*> fragments) {
+  try {
+    parse_experiment(toml, "exp.toml", {});
+    ADD_FAILURE() << "no error for:\n" << toml;
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    for (const char* f : fragments) EXPECT_NE(m.find(f), std::string::npos) << m << " lacks " << f;
+  }
+}
+
+}  // namespace
+
+TEST(App, SmallRunWritesACompleteRunFolder) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_test";
+  fs::remove_all(out);
+  const Result r = run("run --quiet --output " + out.string() +
+                       " --set sample.cells=[3,3,6] --set loading.platen_speed=0.5"
+                       " --set output.history_interval=50 --set bond.tensile_strength=5e6"
+                       " --set bond.cohesion=5e6 --set loading.max_strain=0.01");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const fs::path folder = last_line(r.out);
+  ASSERT_TRUE(fs::is_directory(folder)) << r.out;
+  for (const char* f : {"manifest.json", "summary.json", "history.csv", "cracks.csv", "experiment.toml"})
+    EXPECT_TRUE(fs::exists(folder / f)) << f;
+  const auto manifest = nlohmann::json::parse(read(folder / "manifest.json"));
+  EXPECT_EQ(manifest["status"], "complete");
+  EXPECT_EQ(manifest["seed"], 1);
+  EXPECT_FALSE(manifest["machine"].get<std::string>().empty());
+  const auto summary = nlohmann::json::parse(read(folder / "summary.json"));
+  EXPECT_GT(summary["peak_axial_stress_pa"].get<double>(), 0.0);
+  EXPECT_GT(summary["bonds_broken"].get<int>(), 0);
+  // The resolved experiment reads back to the same spec.
+  const ExperimentSpec again = load_experiment((folder / "experiment.toml").string(), {});
+  EXPECT_EQ(again.cells[2], 6);
+  EXPECT_EQ(again.parallel_bond.tensile_strength, 5e6);
+  // history.csv: header plus rows with 26 columns; cracks.csv rows match the count.
+  std::ifstream h(folder / "history.csv");
+  std::string line;
+  std::getline(h, line);
+  EXPECT_EQ(std::count(line.begin(), line.end(), ','), 25);
+  int rows = 0;
+  while (std::getline(h, line)) ++rows;
+  EXPECT_GT(rows, 10);
+  std::ifstream c(folder / "cracks.csv");
+  int cracks = -1;
+  while (std::getline(c, line)) ++cracks;
+  EXPECT_EQ(cracks, summary["bonds_broken"].get<int>());
+  fs::remove_all(out);
+}
+
+TEST(App, BadExperimentFilesFailClearly) {
+  expect_input_error("[loading]\nplaten_sped = 1\n",
+                     {"exp.toml:2", "loading.platen_sped", "unknown key", "platen_speed"});
+  expect_input_error("[loading]\nplaten_speed = \"fast\"\n", {"exp.toml:2", "expected a number"});
+  expect_input_error("[loading]\nplaten_speed = 0\n", {"loading.platen_speed", "value > 0"});
+  expect_input_error("[sample]\nradius = -1e-3\n", {"sample.radius", "-0.001", "value > 0"});
+  expect_input_error("[bond]\nmodulus = -5\n", {"bond.modulus", "value > 0 Pa"});
+  expect_input_error("[bond]\nfriction = 0.5\n", {"bond.friction", "for law \"parallel_bond\""});
+  expect_input_error("[contact]\nlaw = \"spring\"\n", {"contact.law", "\"linear\", \"hertz_mindlin\""});
+  expect_input_error("[engine]\ndimension = 4\n", {"engine.dimension", "2 or 3"});
+  expect_input_error("[engine]\nlocal_damping = 1.5\n", {"engine.local_damping"});
+  expect_input_error("[sample]\ncells = [1, 2]\n", {"sample.cells", "3 integers"});
+  expect_input_error("[sample]\nsource = \"file\"\n", {"sample.file", "required"});
+  expect_input_error("[magic]\nx = 1\n", {"[magic]", "unknown table"});
+  expect_input_error("[engine]\ndimension = 2\n[contact]\nlaw = \"hertz_mindlin\"\n",
+                     {"contact.law", "2D"});
+  expect_input_error("[engine\n", {"exp.toml:1", "TOML syntax"});
+}
+
+TEST(App, BadInputOnTheCommandLineWritesNoRunFolder) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_bad";
+  fs::remove_all(out);
+  const Result r = run("run --quiet --output " + out.string() + " --set loading.max_strain=2");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("loading.max_strain"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(App, DocsListEveryKey) {
+  const std::string d = experiment_docs();
+  for (const char* k : {"platen_speed", "tensile_strength", "stiffness_ratio", "shear_modulus",
+                        "history_interval", "local_damping"})
+    EXPECT_NE(d.find(k), std::string::npos) << k;
+}
+
+TEST(StressStrain, TangentModulusOfASyntheticCurve) {
+  // Linear to 60 % of the peak with E = 20 GPa, then curving to a peak of 100 MPa.
+  std::vector<double> e, s;
+  for (int k = 0; k <= 600; ++k) {
+    const double eps = 5e-6 * k;
+    e.push_back(eps);
+    s.push_back(eps <= 3e-3 ? 20e9 * eps : 60e6 + 40e6 * std::sin((eps - 3e-3) / 2e-3));
+  }
+  const auto peak = analysis::find_peak(e, s);
+  const auto fit = analysis::tangent_modulus(e, s);
+  ASSERT_TRUE(fit.valid);
+  EXPECT_NEAR(fit.slope, 20e9, 1e-3 * 20e9);
+  EXPECT_NEAR(fit.r2, 1.0, 1e-9);
+  EXPECT_NEAR(peak.stress, 100e6, 1e3);
+  EXPECT_FALSE(analysis::tangent_modulus({0.0, 1.0}, {0.0, 1.0}).valid) << "too few points";
+}

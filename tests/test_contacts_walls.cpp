@@ -1,0 +1,116 @@
+// Contact laws and walls against hand formulas (physics.md §3, §6.1, §8 cross-check 3).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "breccia/engine/simulation.hpp"
+#include "pair_harness.hpp"
+
+using namespace breccia;
+using namespace breccia::test;
+
+TEST(LinearContact, NormalForceIsKnTimesOverlap) {
+  PairStepper<LinearContact> s;
+  s.params.modulus = 10e9;
+  s.b.x = {1e-3 - 1e-6, 0, 0};  // overlap 1 um
+  const PairResult r = s.evaluate();
+  // k_n = pi r^2 E_c / (R1 + R2) = 7.854e6 N/m (§8 cross-check 3): F = 7.854 N, repulsive.
+  EXPECT_NEAR(r.f2.x, 7.853981633974483, 1e-9);
+  EXPECT_NEAR(r.f2.y, 0.0, 1e-15);
+  EXPECT_NEAR(LinearContact::stored_energy(s.params, s.state), 0.5 * 7.853981633974483e6 * 1e-12,
+              1e-18);
+}
+
+TEST(LinearContact, CoulombLimitAndSlipDissipation) {
+  PairStepper<LinearContact> s;
+  s.params.friction = 0.3;
+  s.b.x = {1e-3 - 1e-6, 0, 0};
+  s.b.v = {0, 0.05, 0};  // sliding tangentially
+  const double kn = 7.853981633974483e6, ks = kn / 2.5, fn = kn * 1e-6;
+  double slid = 0.0;
+  for (int k = 0; k < 4000; ++k) {
+    const PairResult r = s.evaluate();
+    const double fs = std::hypot(r.f2.y, r.f2.z);
+    EXPECT_LE(fs, 0.3 * fn * (1 + 1e-12));
+    s.b.x.y += s.b.v.y * s.dt;  // keep the overlap: move tangentially only
+    slid += 0.05 * s.dt;
+  }
+  const PairResult r = s.evaluate();
+  EXPECT_NEAR(std::abs(r.f2.y), 0.3 * fn, 1e-9 * fn);
+  EXPECT_LT(r.f2.y, 0.0) << "friction opposes the sliding of particle 2";
+  // Work against friction beyond the elastic part: mu F_n (slip distance), slip = path - F/k_s.
+  const double slip = slid - 0.3 * fn / ks;
+  EXPECT_NEAR(s.dissipation.slip, 0.3 * fn * slip, 2e-3 * 0.3 * fn * slip);
+}
+
+TEST(HertzMindlin, HandValuesOfPhysicsSection8) {
+  PairStepper<HertzMindlin> s;
+  s.params.shear_modulus = 4e9;  // E = 10 GPa, nu = 0.25
+  s.params.poisson_ratio = 0.25;
+  s.b.x = {1e-3 - 1e-6, 0, 0};
+  const PairResult r = s.evaluate();
+  // E* = E / (2 (1 - nu^2)) = 5.333 GPa, R* = 0.25 mm: F = 4/3 E* sqrt(R*) delta^1.5 = 0.112 N.
+  const double es = 10e9 / (2 * (1 - 0.0625));
+  EXPECT_NEAR(r.f2.x, 4.0 / 3.0 * es * std::sqrt(0.25e-3) * 1e-9, 1e-12);
+  EXPECT_NEAR(r.f2.x, 0.1124, 1e-4);
+  double kn = 0, ks = 0;
+  HertzMindlin::timestep_stiffness(s.params, make_geometry(s.a, s.b), kn, ks);
+  EXPECT_NEAR(kn, 1.687e5, 1e2);  // 2 E* a
+  // Energy 2/5 F delta.
+  EXPECT_NEAR(HertzMindlin::stored_energy(s.params, s.state), 0.4 * r.f2.x * 1e-6, 1e-18);
+}
+
+TEST(HertzMindlin, RigidWallUsesGrainModulusOnly) {
+  HertzMindlin::Params p;
+  p.shear_modulus = 4e9;
+  p.poisson_ratio = 0.25;
+  EXPECT_NEAR(HertzMindlin::e_star(p, true), 10e9 / (1 - 0.0625), 1.0);
+  EXPECT_NEAR(HertzMindlin::g_star(p, true), 4e9 / 1.75, 1.0);
+  EXPECT_NEAR(HertzMindlin::e_star(p, false), 10e9 / (2 * (1 - 0.0625)), 1.0);
+}
+
+namespace {
+Simulation single_on_wall(double z0, Vec3 v0, double modulus, double beta, double dt) {
+  ParticleStore ps(Dimension::Three, 1.0);
+  ps.add({.tag = 1, .position = {0, 0, z0}, .radius = 0.5e-3, .density = 2650, .velocity = v0});
+  EngineConfig cfg;
+  cfg.time_step = dt;
+  cfg.energy_interval = 0;
+  LinearContact::Params lp;
+  lp.modulus = modulus;
+  lp.normal_damping_ratio = beta;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  sim.add_wall(Wall::plane("floor", {0, 0, 0}, {0, 0, 1}));
+  sim.initialise();
+  return sim;
+}
+}  // namespace
+
+TEST(Wall, StaticOverlapForceAndResultant) {
+  Simulation sim = single_on_wall(0.5e-3 - 1e-6, {}, 10e9, 0.0, 1e-9);
+  sim.step();
+  // Wall contact: r = L = R, k_n = pi R E_c = 1.5708e7 N/m.
+  const double f = std::numbers::pi * 0.5e-3 * 10e9 * 1e-6;
+  EXPECT_NEAR(sim.particles().force[0].z, f, 1e-9 * f);
+  EXPECT_NEAR(sim.walls()[0].force.z, f, 1e-9 * f);
+  EXPECT_EQ(sim.walls()[0].contacts, 1u);
+}
+
+TEST(Wall, MovingWallWorkEqualsEnergyGiven) {
+  // A wall pushes a free particle away without damping: the ledger closes on the wall's work.
+  Simulation sim = single_on_wall(0.5e-3 + 1e-7, {}, 10e9, 0.0, 0.0);
+  Wall& w = sim.walls()[0];
+  w.target_velocity = {0, 0, 0.2};
+  w.ramp = {0.0, 2e-6};
+  for (int k = 0; k < 20000; ++k) {
+    if (k % 100 == 0) sim.request_energy_sample();
+    sim.step();
+    const EnergyLedger& L = sim.ledger();
+    if (k % 100 == 0) {
+      EXPECT_LE(std::abs(L.residual), 1e-9 * std::max(L.work_in(), 1e-30)) << k;
+    }
+  }
+  EXPECT_GT(sim.ledger().work_in(), 0.0);
+  EXPECT_GT(sim.particles().vel[0].z, 0.2);  // bounced off the moving wall
+}

@@ -1,0 +1,122 @@
+// The explicit geometry loader: a valid file, a round trip, and every kind of bad input giving an
+// error that names the file and line, the key, the value and what is allowed.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "breccia/core/error.hpp"
+#include "breccia/engine/simulation.hpp"
+#include "breccia/io/geometry_file.hpp"
+
+using namespace breccia;
+
+namespace {
+const char* kValid = R"(# two bonded spheres
+breccia-geometry 1
+dimension 3
+particles 3
+# tag x y z radius density
+1 0     0 0 0.0005 2650
+2 0.001 0 0 0.0005 2650 driven 0.001 0 0
+5 0.002 0 0 0.0005 2650 fixed
+bonds 2
+1 2
+2 5
+)";
+
+// Expects parse_geometry to throw an InputError whose message contains every fragment.
+void expect_error(const std::string& text, std::initializer_list<const char*> fragments) {
+  try {
+    parse_geometry(text, "sample.geo");
+    ADD_FAILURE() << "no error for:\n" << text;
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    for (const char* f : fragments) EXPECT_NE(m.find(f), std::string::npos) << m << " lacks " << f;
+  }
+}
+
+std::string with_particles(const std::string& rows, int n, const std::string& head = "dimension 3\n") {
+  return "breccia-geometry 1\n" + head + "particles " + std::to_string(n) + "\n" + rows;
+}
+}  // namespace
+
+TEST(GeometryFile, ParsesParticlesMotionAndBonds) {
+  const GeometryData g = parse_geometry(kValid, "sample.geo");
+  ASSERT_EQ(g.particles.size(), 3u);
+  EXPECT_EQ(g.particles[1].motion, Motion::Driven);
+  EXPECT_EQ(g.particles[1].velocity.x, 0.001);
+  EXPECT_EQ(g.particles[2].motion, Motion::Fixed);
+  EXPECT_EQ(g.particles[2].tag, 5u);
+  ASSERT_EQ(g.bonds.size(), 2u);
+  EXPECT_EQ(g.bonds[1], (std::pair<std::uint64_t, std::uint64_t>{2, 5}));
+  // And it builds a simulation.
+  Simulation sim(g.make_store(), EngineConfig{}, make_contact_model<LinearContact>({}, {}));
+  for (auto [a, b] : g.bonds) sim.add_bond<ParallelBond>(a, b);
+  sim.initialise();
+  EXPECT_EQ(sim.intact_bonds(), 2u);
+}
+
+TEST(GeometryFile, RoundTripIsExact) {
+  GeometryData g = parse_geometry(kValid, "sample.geo");
+  g.particles[0].position.y = 0.1 + 0.2;  // not exactly representable in short decimal
+  const auto path = std::filesystem::temp_directory_path() / "breccia_roundtrip.geo";
+  write_geometry(path.string(), g);
+  const GeometryData h = read_geometry(path.string());
+  std::filesystem::remove(path);
+  ASSERT_EQ(h.particles.size(), g.particles.size());
+  for (std::size_t i = 0; i < g.particles.size(); ++i) {
+    EXPECT_EQ(h.particles[i].position, g.particles[i].position);
+    EXPECT_EQ(h.particles[i].radius, g.particles[i].radius);
+    EXPECT_EQ(h.particles[i].motion, g.particles[i].motion);
+    EXPECT_EQ(h.particles[i].velocity, g.particles[i].velocity);
+  }
+  EXPECT_EQ(h.bonds, g.bonds);
+}
+
+TEST(GeometryFile, MissingFileNamesThePath) {
+  try {
+    read_geometry("/nonexistent/dir/x.geo");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/x.geo"), std::string::npos);
+  }
+}
+
+TEST(GeometryFile, BadInputGivesClearErrors) {
+  expect_error("", {"sample.geo", "breccia-geometry 1"});
+  expect_error("hello 1\n", {"sample.geo:1", "breccia-geometry 1"});
+  expect_error("breccia-geometry 2\n", {"sample.geo:1", "version", "2"});
+  expect_error("breccia-geometry 1\ncolour red\n", {"sample.geo:2", "colour", "allowed: dimension"});
+  expect_error("breccia-geometry 1\ndimension 4\n", {"sample.geo:2", "dimension", "4", "2 or 3"});
+  expect_error("breccia-geometry 1\nthickness -1\n", {"sample.geo:2", "thickness", "> 0"});
+  expect_error(with_particles("1 0 0 0 -0.001 2650\n", 1),
+               {"sample.geo:4", "radius", "-0.001", "> 0 m"});
+  expect_error(with_particles("1 0 0 0 0.001 0\n", 1), {"sample.geo:4", "density", "> 0"});
+  expect_error(with_particles("1 0 0 zero 0.001 2650\n", 1),
+               {"sample.geo:4", "'z'", "'zero'", "finite number"});
+  expect_error(with_particles("1 0 0 nan 0.001 2650\n", 1), {"sample.geo:4", "'z'", "finite"});
+  expect_error(with_particles("1 0 0 0.001 2650\n", 1), {"sample.geo:4", "5 columns", "tag x y z"});
+  expect_error(with_particles("1 0 0 0 0.001 2650 flying\n", 1),
+               {"sample.geo:4", "motion", "flying", "free, fixed, driven"});
+  expect_error(with_particles("1 0 0 0 0.001 2650\n", 2), {"end of file", "announced 2"});
+  expect_error(with_particles("1 0 0 0 0.001 2650\n1 1 0 0 0.001 2650\n", 2),
+               {"tag", "1", "unique"});
+  expect_error(with_particles("1 0 0 0.5 0.001 2650\n", 1, "dimension 2\n"),
+               {"sample.geo:4", "x-y plane"});
+  expect_error(with_particles("1 0 0 0 0.001 2650\nbonds 1\n1 9\n", 1),
+               {"sample.geo:6", "tag2", "9", "no particle"});
+  expect_error(with_particles("1 0 0 0 0.001 2650\nbonds 1\n1 1\n", 1), {"sample.geo:6", "itself"});
+  expect_error(with_particles("1 0 0 0 0.001 2650\nbonds 1\n1\n", 1), {"sample.geo:6", "tag1 tag2"});
+  expect_error("breccia-geometry 1\nbonds 0\n", {"sample.geo:2", "particles section must come first"});
+  expect_error("breccia-geometry 1\ndimension 3\n", {"particles", "required"});
+}
+
+TEST(GeometryFile, DuplicateBondIsRejectedAtInitialise) {
+  const GeometryData g = parse_geometry(kValid, "sample.geo");
+  Simulation sim(g.make_store(), EngineConfig{}, make_contact_model<LinearContact>({}, {}));
+  sim.add_bond<ParallelBond>(1, 2);
+  sim.add_bond<ParallelBond>(2, 1);
+  EXPECT_THROW(sim.initialise(), InputError);
+}

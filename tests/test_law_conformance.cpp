@@ -1,0 +1,180 @@
+// Conformance suite run over every law in the registry (law/registry.hpp): a law added there is
+// checked here without further work. Each check is physics any pair law must obey (physics.md §0.3,
+// design.md "Tests and benchmarks").
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "breccia/core/quat.hpp"
+#include "breccia/core/rng.hpp"
+#include "pair_harness.hpp"
+
+using namespace breccia;
+using namespace breccia::test;
+
+namespace {
+
+// A loaded pair: touching spheres of §8 (R = 0.5 mm), with a slight overlap for contact laws so
+// that they carry force; random but reproducible small velocities.
+template <class Law>
+PairStepper<Law> loaded_pair(std::uint64_t seed, double speed = 1e-3, double spin = 1.0) {
+  PairStepper<Law> s;
+  const double R = 0.5e-3;
+  s.a.x = {0, 0, 0};
+  const Vec3 dir = unit({0.8, 0.35, -0.2});
+  const double overlap = is_bond_law<Law> ? 0.0 : 2e-6;
+  s.b.x = dir * (2 * R - overlap);
+  s.a.R = s.b.R = R;
+  for (int k = 0; k < 3; ++k) {
+    s.a.v[k] = speed * standard_normal(seed, 1, k);
+    s.b.v[k] = speed * standard_normal(seed, 2, k);
+    s.a.w[k] = spin * standard_normal(seed, 3, k);
+    s.b.w[k] = spin * standard_normal(seed, 4, k);
+  }
+  s.install(seed);
+  return s;
+}
+
+double scale_of(const PairResult& r) { return norm(r.f2) + 1e-300; }
+
+}  // namespace
+
+template <class Law>
+class BondLawConformance : public ::testing::Test {};
+TYPED_TEST_SUITE(BondLawConformance, GTypes<BondLaws>::type);
+
+template <class Law>
+class ContactLawConformance : public ::testing::Test {};
+TYPED_TEST_SUITE(ContactLawConformance, GTypes<ContactLaws>::type);
+
+TYPED_TEST(BondLawConformance, ZeroForceAtInstalledGeometry) {
+  auto s = loaded_pair<TypeParam>(3, 0.0, 0.0);
+  for (int k = 0; k < 10; ++k) {
+    const PairResult r = s.evaluate();
+    EXPECT_EQ(norm(r.f2), 0.0);
+    EXPECT_EQ(norm(r.couple), 0.0);
+    s.move();
+  }
+  EXPECT_EQ(s.energy(), 0.0);
+}
+
+TYPED_TEST(ContactLawConformance, ZeroForceWhenNotOverlapping) {
+  PairStepper<TypeParam> s;
+  s.b.x = {1e-3, 0, 0};  // exactly touching
+  s.b.v = {1e-3, 0, 0};  // separating
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_EQ(norm(s.evaluate().f2), 0.0);
+    s.move();
+  }
+}
+
+template <class Law>
+void check_newton_third_law() {
+  auto s = loaded_pair<Law>(11);
+  for (int k = 0; k < 200; ++k) {
+    const PairResult r = s.evaluate();
+    const double f = scale_of(r);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(r.f1[c], -r.f2[c]);
+    // Angular momentum about the origin: sum of torques plus moments of the forces vanishes.
+    const Vec3 L = r.t1 + r.t2 + cross(s.a.x, r.f1) + cross(s.b.x, r.f2);
+    EXPECT_LE(norm(L), 1e-13 * f * 1e-3 + 1e-25) << "step " << k;
+    s.move();
+  }
+}
+TYPED_TEST(BondLawConformance, NewtonsThirdLawForForcesAndMoments) {
+  check_newton_third_law<TypeParam>();
+}
+TYPED_TEST(ContactLawConformance, NewtonsThirdLawForForcesAndMoments) {
+  check_newton_third_law<TypeParam>();
+}
+
+template <class Law>
+void check_rigid_motion_invariance() {
+  // The same motion seen in a rotated and translated frame gives the rotated forces.
+  auto s = loaded_pair<Law>(5);
+  const Quat q = normalized(Quat{0.7, 0.1, -0.4, 0.3});
+  const Vec3 shift{0.31, -2.0, 7.5};
+  PairStepper<Law> t = s;
+  for (Body* b : {&t.a, &t.b}) {
+    b->x = rot(q, b->x) + shift;
+    b->v = rot(q, b->v);
+    b->w = rot(q, b->w);
+  }
+  t.install(5);
+  for (int k = 0; k < 300; ++k) {
+    const PairResult r = s.evaluate(), u = t.evaluate();
+    const Vec3 fr = rot(q, r.f2), mr = rot(q, r.couple);
+    const double f = scale_of(r), m = norm(r.couple) + f * 1e-3;
+    // The translated positions lose digits: |shift| / d0 ~ 8e3 times the round-off of 1e-16.
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(u.f2[c], fr[c], 1e-9 * f) << "step " << k;
+      EXPECT_NEAR(u.couple[c], mr[c], 1e-9 * m) << "step " << k;
+    }
+    s.move();
+    t.move();
+  }
+}
+TYPED_TEST(BondLawConformance, InvariantUnderRigidRotationAndTranslation) {
+  check_rigid_motion_invariance<TypeParam>();
+}
+TYPED_TEST(ContactLawConformance, InvariantUnderRigidRotationAndTranslation) {
+  check_rigid_motion_invariance<TypeParam>();
+}
+
+template <class Law>
+void check_force_is_energy_gradient(double speed, double spin, int steps) {
+  // The work the interaction does on the two particles along a smooth elastic path equals minus
+  // the change of its stored energy. Trapezoidal work over 1e-8 s steps: error O(dt^2) per unit
+  // path, far below the 1e-5 tolerance; a wrong sign or factor in any stiffness fails it.
+  auto s = loaded_pair<Law>(7, speed, spin);
+  if constexpr (requires { s.params.friction; }) s.params.friction = 1e6;  // no Coulomb slip
+  PairResult r0 = s.evaluate();
+  const double e0 = s.energy();
+  double work = 0.0, e_scale = std::abs(e0);
+  for (int k = 0; k < steps; ++k) {
+    // Velocities change smoothly along the path (a curved, non-proportional load path).
+    const double phase = 0.01 * k;
+    s.b.w.x += 1e-3 * std::cos(phase) * spin;
+    s.b.v.y += 1e-3 * std::sin(phase) * speed;
+    const Body a0 = s.a, b0 = s.b;
+    s.move();
+    const PairResult r1 = s.evaluate();
+    const Vec3 dxa = s.a.x - a0.x, dxb = s.b.x - b0.x;
+    const Vec3 dra = a0.w * s.dt, drb = b0.w * s.dt;
+    work += 0.5 * (dot(r0.f1 + r1.f1, dxa) + dot(r0.f2 + r1.f2, dxb) + dot(r0.t1 + r1.t1, dra) +
+                   dot(r0.t2 + r1.t2, drb));
+    r0 = r1;
+    e_scale = std::max(e_scale, std::abs(s.energy()));
+  }
+  const double de = s.energy() - e0;
+  ASSERT_GT(std::abs(de), 0.05 * e_scale) << "the path must load the pair substantially";
+  EXPECT_NEAR(work, -de, 1e-6 * e_scale) << "work " << work << " energy change " << de;
+}
+TYPED_TEST(BondLawConformance, ForceIsMinusEnergyGradient) {
+  check_force_is_energy_gradient<TypeParam>(2e-3, 2.0, 2000);
+}
+TYPED_TEST(ContactLawConformance, ForceIsMinusEnergyGradient) {
+  check_force_is_energy_gradient<TypeParam>(5e-3, 10.0, 2000);
+}
+
+TYPED_TEST(BondLawConformance, StretchToFailureReleasesTheStoredEnergy) {
+  // Pulling apart must end in a tensile crack whose released energy is the energy stored in the
+  // breaking step (§4.0), after which the bond carries nothing.
+  PairStepper<TypeParam> s;
+  s.b.x = {1e-3, 0, 0};
+  s.install();
+  s.b.v = {1e-2, 0, 0};
+  double last_energy = 0.0;
+  int k = 0;
+  for (; k < 1000000 && !s.failure.broken; ++k) {
+    last_energy = s.energy();
+    s.evaluate();
+    s.move();
+  }
+  ASSERT_TRUE(s.failure.broken);
+  EXPECT_EQ(s.failure.mode, CrackMode::Tensile);
+  EXPECT_LT(s.failure.Fn, 0.0);
+  EXPECT_GE(s.failure.ratio_t, 1.0);
+  // One step adds at most 2 dV/V of stored energy; here far below 1e-3.
+  EXPECT_NEAR(s.failure.energy.total(), last_energy, 1e-3 * last_energy);
+}
