@@ -37,8 +37,10 @@ TEST(LinearContact, CoulombLimitAndSlipDissipation) {
     slid += 0.05 * s.dt;
   }
   const PairResult r = s.evaluate();
-  EXPECT_NEAR(std::abs(r.f2.y), 0.3 * fn, 1e-9 * fn);
-  EXPECT_LT(r.f2.y, 0.0) << "friction opposes the sliding of particle 2";
+  // Sliding: the shear force sits on the Coulomb limit of the current normal force and opposes
+  // the motion of particle 2.
+  EXPECT_NEAR(norm(s.state.shear_force), 0.3 * s.state.normal_force, 1e-12 * fn);
+  EXPECT_LT(r.f2.y, 0.0);
   // Work against friction beyond the elastic part: mu F_n (slip distance), slip = path - F/k_s.
   const double slip = slid - 0.3 * fn / ks;
   EXPECT_NEAR(s.dissipation.slip, 0.3 * fn * slip, 2e-3 * 0.3 * fn * slip);
@@ -103,12 +105,16 @@ TEST(Wall, MovingWallWorkEqualsEnergyGiven) {
   Wall& w = sim.walls()[0];
   w.target_velocity = {0, 0, 0.2};
   w.ramp = {0.0, 2e-6};
-  for (int k = 0; k < 20000; ++k) {
-    if (k % 100 == 0) sim.request_energy_sample();
+  // The balance is exact while the contact lasts; its start and end fall inside a step, an
+  // O(dt) error bounded by k (v_rel dt)^2 / 2 each, with v_rel <= 0.2 m/s.
+  const double k = std::numbers::pi * 0.5e-3 * 10e9;
+  const double bound = k * std::pow(0.2 * sim.time_step(), 2);
+  for (int s = 0; s < 20000; ++s) {
+    if (s % 100 == 0) sim.request_energy_sample();
     sim.step();
     const EnergyLedger& L = sim.ledger();
-    if (k % 100 == 0) {
-      EXPECT_LE(std::abs(L.residual), 1e-9 * std::max(L.work_in(), 1e-30)) << k;
+    if (s % 100 == 0) {
+      EXPECT_LE(std::abs(L.residual), bound) << s;
     }
   }
   EXPECT_GT(sim.ledger().work_in(), 0.0);

@@ -59,8 +59,8 @@ TEST(Vec3, SpinIsARotationWithSecondOrderAngle) {
   const Vec3 r = spin_about(v, n, psi);
   EXPECT_NEAR(norm(r), 2.0, 1e-15);
   const double angle = std::atan2(r.y, r.x);
-  // Cayley angle 2 atan(psi / 2) = psi - psi^3 / 12 + O(psi^5).
-  EXPECT_NEAR(angle, psi - psi * psi * psi / 12.0, 1e-12);
+  // Cayley angle 2 atan(psi / 2) = psi - psi^3 / 12 + psi^5 / 80 - ...
+  EXPECT_NEAR(angle, psi - std::pow(psi, 3) / 12.0 + std::pow(psi, 5) / 80.0, 1e-16);
 }
 
 TEST(Rng, ReproducibleAndIndependentOfOrder) {

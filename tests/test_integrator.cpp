@@ -56,7 +56,7 @@ Simulation bonded_block(int n, double speed, double spin) {
 
 TEST(Integrator, BondedLatticeConservesEnergyWithoutDamping) {
   Simulation sim = bonded_block(3, 1e-3, 1.0);
-  ASSERT_GT(sim.intact_bonds(), 500u);
+  ASSERT_GT(sim.intact_bonds(), 400u);
   double e0 = 0.0, worst = 0.0, bond_max = 0.0;
   for (int k = 0; k <= 10000; ++k) {
     if (k % 500 == 0) sim.request_energy_sample();
@@ -79,8 +79,9 @@ TEST(Integrator, BondedLatticeConservesEnergyWithoutDamping) {
 TEST(Integrator, BondedChainConservesEnergyWithoutDamping) {
   ParticleStore ps(Dimension::Three, 1.0);
   const double R = 0.5e-3;
+  // Spaced 0.1 % apart so that no contact engages: a purely bonded chain.
   for (int k = 0; k < 10; ++k)
-    ps.add({.tag = static_cast<std::uint64_t>(k + 1), .position = {2 * R * k, 0, 0}, .radius = R,
+    ps.add({.tag = static_cast<std::uint64_t>(k + 1), .position = {2.002 * R * k, 0, 0}, .radius = R,
             .density = 2650, .velocity = {0, k == 9 ? 1e-3 : 0.0, k == 0 ? -1e-3 : 0.0}});
   EngineConfig cfg;
   cfg.energy_interval = 0;
@@ -173,6 +174,7 @@ TEST(Integrator, LocalDampingRemovesEnergyAndBooksIt) {
   const EnergyLedger& L = sim.ledger();
   EXPECT_LT(L.stored(), 0.01 * e0) << "alpha = 0.7 removes ~97 % per cycle";
   EXPECT_GT(L.local_damping, 0.9 * e0);
-  // Damping is booked with the predicted velocity (§2.1), an O(dt) estimate of the true loss.
-  EXPECT_LT(std::abs(L.residual), 0.02 * e0) << "relative residual " << L.residual / e0;
+  // The loss is booked as the damping force's work with the ledger's trapezoidal rule, so the
+  // balance closes to the geometric non-linearity of the bonds (as without damping).
+  EXPECT_LT(std::abs(L.residual), 1e-6 * e0) << "relative residual " << L.residual / e0;
 }

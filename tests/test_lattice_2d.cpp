@@ -33,6 +33,7 @@ Moduli measure(double rate, double contact_modulus) {
   cfg.energy_interval = 0;
   LinearContact::Params lp;
   lp.modulus = contact_modulus;
+  lp.friction = 10.0;  // the closed form is elastic: no Coulomb sliding of the contacts
   Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
   sim.bond_touching_pairs<ParallelBond>(1e-9);
   sim.initialise();

@@ -500,16 +500,25 @@ void Simulation::integrate(ContactSet<CL>& c, bool sample) {
           // Cundall local damping, sign tested with the predicted full-step velocity (§2.1).
           const Vec3 vp = v_old + f * (0.5 * dt / m);
           const Vec3 wp = w_old + t * (0.5 * dt / inertia);
+          Vec3 fd, td;
           for (int k = 0; k < 3; ++k) {
-            const double fk = f[k], tk = t[k];
-            acc.local_damping += alpha * dt * (std::abs(fk) * std::abs(vp[k]) +
-                                               std::abs(tk) * std::abs(wp[k]));
-            f[k] -= alpha * std::abs(fk) * ((vp[k] > 0.0) - (vp[k] < 0.0));
-            t[k] -= alpha * std::abs(tk) * ((wp[k] > 0.0) - (wp[k] < 0.0));
+            fd[k] = -alpha * std::abs(f[k]) * ((vp[k] > 0.0) - (vp[k] < 0.0));
+            td[k] = -alpha * std::abs(t[k]) * ((wp[k] > 0.0) - (wp[k] < 0.0));
           }
+          f += fd;
+          t += td;
+          v_new = v_old + f * (dt / m);
+          w_new = w_old + t * (dt / inertia);
+          // The loss is booked as minus the work of the damping force with the same trapezoidal
+          // rule as every other term, (1/2) F_d . (v^{n-1/2} + v^{n+1/2}) dt, so the ledger
+          // closes; it equals physics.md's alpha dt sum |F||v~| to O(dt). The half that pairs
+          // with v^{n+1/2} belongs to the next interval and is removed from a sample.
+          acc.local_damping -= 0.5 * (dot(fd, v_old + v_new) + dot(td, w_old + w_new)) * dt;
+          if (sample) acc.damping_boundary -= 0.5 * (dot(fd, v_new) + dot(td, w_new)) * dt;
+        } else {
+          v_new = v_old + f * (dt / m);
+          w_new = w_old + t * (dt / inertia);
         }
-        v_new = v_old + f * (dt / m);
-        w_new = w_old + t * (dt / inertia);
         acc.gravity += m * dot(gravity, v_old) * dt;
       } else {
         // Fixed or driven: the driver supplies whatever force keeps the prescribed motion; its
@@ -531,7 +540,10 @@ void Simulation::integrate(ContactSet<CL>& c, bool sample) {
         fd_prev = fd;
         td_prev = td;
       }
-      if (has_user_force) acc.external += 0.5 * dot(f_user, v_old + v_new) * dt;
+      if (has_user_force) {
+        acc.external += 0.5 * dot(f_user, v_old + v_new) * dt;
+        if (sample) acc.external_boundary += 0.5 * dot(f_user, v_new) * dt;
+      }
       p_.vel[i] = v_new;
       p_.angvel[i] = w_new;
       const Vec3 dx = v_new * dt;
@@ -558,6 +570,8 @@ void Simulation::integrate(ContactSet<CL>& c, bool sample) {
     total.gravity += s.gravity;
     total.drive += s.drive;
     total.external += s.external;
+    total.damping_boundary += s.damping_boundary;
+    total.external_boundary += s.external_boundary;
     total.ke_t += s.ke_t;
     total.ke_r += s.ke_r;
     total.max_disp2 = std::max(total.max_disp2, s.max_disp2);
@@ -570,6 +584,8 @@ void Simulation::integrate(ContactSet<CL>& c, bool sample) {
   if (sample) {
     ledger_.kinetic_translational = total.ke_t;
     ledger_.kinetic_rotational = total.ke_r;
+    d_local_boundary_ = total.damping_boundary;
+    w_external_boundary_ = total.external_boundary;
   }
 }
 
@@ -608,9 +624,9 @@ void Simulation::sample_stored_energy(ContactSet<CL>& c) {
   L.contact = contact;
   L.boundary_work = w_walls_ + w_drive_;
   L.body_force_work = w_gravity_;
-  L.external_work = w_external_;
+  L.external_work = w_external_ - w_external_boundary_;
   L.friction = d_pairs_.slip;
-  L.local_damping = d_local_;
+  L.local_damping = d_local_ - d_local_boundary_;
   L.viscous_damping = d_pairs_.viscous;
   L.deleted = d_pairs_.deleted;
   L.released = released_;

@@ -100,6 +100,8 @@ struct IntegrateBlock {
   double local_damping = 0.0, gravity = 0.0, drive = 0.0, external = 0.0;
   double ke_t = 0.0, ke_r = 0.0;
   double max_disp2 = 0.0;
+  // Half-step terms that belong to the next interval, removed from a sample (see integrate()).
+  double damping_boundary = 0.0, external_boundary = 0.0;
 };
 
 class Simulation {
@@ -198,6 +200,7 @@ class Simulation {
   // Cumulative accumulators.
   double w_walls_ = 0.0, w_drive_ = 0.0, w_gravity_ = 0.0, w_external_ = 0.0;
   double d_local_ = 0.0;
+  double d_local_boundary_ = 0.0, w_external_boundary_ = 0.0;
   PairDissipation d_pairs_;
   BondEnergy released_;
   // Per-block scratch (reused every step; no allocation in steady state).
