@@ -73,4 +73,28 @@ constexpr Vec3 spin_about(const Vec3& v, const Vec3& n, double psi) noexcept {
   return v * c + cross(n, v) * s + n * (dot(n, v) * (1.0 - c));
 }
 
+// The rotation that carries history vectors (shear force, bending moment) from the previous
+// contact plane into the current one: the tilt taking n_old to n followed by a spin about n
+// (physics.md §3.1, decision 19). Built once per pair and step, applied to several vectors.
+struct PlaneCarry {
+  Vec3 axis;  // n_old x n
+  double inv_one_plus_c = 1.0;
+  Vec3 n;
+  double c = 1.0, s = 0.0;  // Cayley cosine and sine of the spin
+
+  PlaneCarry(const Vec3& n_old, const Vec3& n_new, double psi) noexcept
+      : axis(cross(n_old, n_new)), n(n_new) {
+    inv_one_plus_c = 1.0 / (1.0 + dot(n_old, n_new));
+    const double h = 0.5 * psi;
+    const double inv = 1.0 / (1.0 + h * h);
+    c = (1.0 - h * h) * inv;
+    s = 2.0 * h * inv;
+  }
+  Vec3 apply(const Vec3& v) const noexcept {
+    const Vec3 av = cross(axis, v);
+    const Vec3 t = v + av + cross(axis, av) * inv_one_plus_c;
+    return t * c + cross(n, t) * s + n * (dot(n, t) * (1.0 - c));
+  }
+};
+
 }  // namespace breccia

@@ -77,13 +77,6 @@ std::size_t Simulation::add_wall(Wall w) {
   return walls_.size() - 1;
 }
 
-PairGeometry Simulation::geometry(std::uint32_t i, std::uint32_t j) const noexcept {
-  const PosRad& a = p_.pos_rad[i];
-  const PosRad& b = p_.pos_rad[j];
-  return pair_geometry(a.x, a.r, b.x, b.r, p_.vel[i], p_.angvel[i], p_.vel[j], p_.angvel[j],
-                       p_.mass[i], p_.mass[j], p_.planar(), p_.thickness());
-}
-
 template <class Law>
 void Simulation::install_bonds(BondSet<Law>& set) {
   const std::size_t n = set.tag.size();
@@ -422,7 +415,7 @@ void Simulation::compute_walls(ContactSet<CL>& c) {
         g.w2 = p_.angvel[i];
         g.R1 = q.r;
         g.R2 = q.r;
-        g.m_star = p_.mass[i];
+        g.m2 = p_.mass[i];
         g.wall = true;
         g.planar = p_.planar();
         g.thickness = p_.thickness();

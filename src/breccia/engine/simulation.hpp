@@ -107,6 +107,7 @@ struct IntegrateBlock {
 class Simulation {
  public:
   Simulation(ParticleStore particles, EngineConfig config, ContactModel contact);
+  // Bond laws start with their default parameters (prepared).
 
   // --- set-up (before initialise) ---
   // Adds a bond of `Law` between two particles by tag; installed (stress-free at the current
@@ -175,7 +176,13 @@ class Simulation {
   void compact_bonds(BondSet<Law>& set);
   void estimate_time_step();
   bool needs_rebuild() const noexcept;
-  PairGeometry geometry(std::uint32_t i, std::uint32_t j) const noexcept;
+  // Geometry of particle pair (i, j) at the current state (hot path: inline).
+  PairGeometry geometry(std::uint32_t i, std::uint32_t j) const noexcept {
+    const PosRad& a = p_.pos_rad[i];
+    const PosRad& b = p_.pos_rad[j];
+    return pair_geometry(a.x, a.r, b.x, b.r, p_.vel[i], p_.angvel[i], p_.vel[j], p_.angvel[j],
+                         p_.mass[i], p_.mass[j], p_.planar(), p_.thickness());
+  }
 
   ParticleStore p_;
   EngineConfig cfg_;

@@ -27,7 +27,9 @@ std::uint64_t Simulation::add_bond(std::uint64_t tag1, std::uint64_t tag2) {
 template <class Law>
 void Simulation::set_bond_params(const typename Law::Params& params) {
   validate_params<Law>(params, std::string("bond law '") + std::string(Law::name) + "'");
-  std::get<BondSet<Law>>(bonds_).params = params;
+  auto& set = std::get<BondSet<Law>>(bonds_);
+  set.params = params;
+  if constexpr (requires { Law::prepare(set.params); }) Law::prepare(set.params);
 }
 
 template <class Law>

@@ -122,12 +122,12 @@ struct HertzMindlin {
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
       const double sn = 2.0 * Es * a;
       double fn_visc = -2.0 * std::sqrt(5.0 / 6.0) * p.normal_damping_ratio *
-                       std::sqrt(sn * g.m_star) * vn;
+                       std::sqrt(sn * g.m_star()) * vn;
       if (fn + fn_visc < 0.0) fn_visc = -fn;
       Vec3 fs_visc{};
       if (!sliding)
         fs_visc = vt * (-2.0 * std::sqrt(5.0 / 6.0) * p.shear_damping_ratio *
-                        std::sqrt(kt * g.m_star));
+                        std::sqrt(kt * g.m_star()));
       dis.viscous -= (fn_visc * vn + dot(fs_visc, vt)) * dt;
       force += g.n * fn_visc + fs_visc;
     }

@@ -97,10 +97,10 @@ struct LinearContact {
 
     Vec3 force = g.n * fn + fs_trial;
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
-      double fn_visc = -2.0 * p.normal_damping_ratio * std::sqrt(g.m_star * kn) * vn;
+      double fn_visc = -2.0 * p.normal_damping_ratio * std::sqrt(g.m_star() * kn) * vn;
       if (fn + fn_visc < 0.0) fn_visc = -fn;  // no-tension rule (§2.2)
       Vec3 fs_visc{};
-      if (!sliding) fs_visc = vt * (-2.0 * p.shear_damping_ratio * std::sqrt(g.m_star * ks));
+      if (!sliding) fs_visc = vt * (-2.0 * p.shear_damping_ratio * std::sqrt(g.m_star() * ks));
       dis.viscous -= (fn_visc * vn + dot(fs_visc, vt)) * dt;
       force += g.n * fn_visc + fs_visc;
     }

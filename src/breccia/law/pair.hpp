@@ -18,25 +18,26 @@ struct PairGeometry {
   Vec3 vc;            // relative velocity of the contact point, 2 minus 1
   Vec3 w1, w2;        // angular velocities
   double R1 = 0.0, R2 = 0.0;
-  double m_star = 0.0;  // reduced mass (the particle's mass against a wall)
+  double m1 = 0.0, m2 = 0.0;  // masses (m1 unused against a wall)
   bool wall = false;    // body 1 is a rigid wall (then R1 is not a radius)
   bool planar = false;  // 2D slab geometry
   double thickness = 1.0;
 
   double vn() const noexcept { return dot(vc, n); }
   Vec3 vt() const noexcept { return vc - n * vn(); }
-  Vec3 xc_from_1() const noexcept { return r1; }
+  // Reduced mass, for dashpots only (the particle's mass against a wall).
+  double m_star() const noexcept { return wall ? m2 : m1 * m2 / (m1 + m2); }
 };
 
 // Geometry of a particle pair from centres, radii and velocities (§0.2): contact point in the
 // middle of the overlap (or gap).
-inline PairGeometry pair_geometry(const Vec3& x1, double R1, const Vec3& x2, double R2,
+[[gnu::always_inline]] inline PairGeometry pair_geometry(const Vec3& x1, double R1, const Vec3& x2, double R2,
                                   const Vec3& v1, const Vec3& w1, const Vec3& v2, const Vec3& w2,
                                   double m1, double m2, bool planar, double thickness) noexcept {
   PairGeometry g;
   const Vec3 dvec = x2 - x1;
   g.d = norm(dvec);
-  g.n = dvec / g.d;
+  g.n = dvec * (1.0 / g.d);
   g.delta = R1 + R2 - g.d;
   const Vec3 xc_rel = g.n * (R1 - 0.5 * g.delta);  // x_c - x_1
   g.r1 = xc_rel;
@@ -46,7 +47,8 @@ inline PairGeometry pair_geometry(const Vec3& x1, double R1, const Vec3& x2, dou
   g.w2 = w2;
   g.R1 = R1;
   g.R2 = R2;
-  g.m_star = m1 * m2 / (m1 + m2);
+  g.m1 = m1;
+  g.m2 = m2;
   g.planar = planar;
   g.thickness = thickness;
   return g;

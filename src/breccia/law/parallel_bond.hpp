@@ -31,7 +31,10 @@ struct ParallelBond {
     double cohesion_sd = 0;
     double friction_angle_deg = 0;    // phi_bar; 0 = 2004 model
     double moment_factor = 1.0;       // beta_bar
+    // Derived by prepare(), not input: tan(phi), kept out of the per-step kernel.
+    double tan_friction = 0.0;
   };
+  static void prepare(Params& p) noexcept { p.tan_friction = std::tan(p.friction_angle_deg * kDegree); }
   static constexpr std::array<ParamField<Params>, 9> fields() {
     return {{
         {"radius_multiplier", "-", &Params::radius_multiplier, 0, 1, false, true,
@@ -54,7 +57,11 @@ struct ParallelBond {
          "beta: share of the moments in the peak stresses"},
     }};
   }
-  static Params example_params() { return {}; }
+  static Params example_params() {
+    Params p;
+    prepare(p);
+    return p;
+  }
 
   struct State {
     Vec3 shear_force;    // F_s
@@ -62,15 +69,15 @@ struct ParallelBond {
     Vec3 n_old;          // normal of the previous step; zero until the first step after install
     double normal_force = 0.0;  // F_n, compression-positive
     double twist_moment = 0.0;  // M_t
-    // Fixed at installation:
+    // Fixed at installation (the kernel needs them every step, so they are kept, not recomputed):
     double kn = 0.0, ks = 0.0;  // force stiffnesses K_n = k_n A, K_s = k_s A
-    double area = 0.0;          // A
+    double kb = 0.0, kt = 0.0;  // moment stiffnesses K_b = k_n I, K_t = k_s J (0 in 2D)
+    double inv_area = 0.0;      // 1 / A
+    double bend_coeff = 0.0;    // R_bar / I: peak bending stress per unit moment
+    double twist_coeff = 0.0;   // R_bar / J (0 in 2D: no twist)
     double bond_radius = 0.0;   // R_bar
-    double i_over_a = 0.0;      // I / A
-    double j_over_a = 0.0;      // J / A (0 in 2D: no twist)
     double tensile_strength = 0.0;
     double cohesion = 0.0;
-    double d0 = 0.0;  // centre distance at installation (for output)
   };
 
   // Installs a stress-free bond at the current geometry. Strengths are drawn from the counter-based
@@ -80,19 +87,23 @@ struct ParallelBond {
     State s;
     const double rb = p.radius_multiplier * std::min(g.R1, g.R2);
     s.bond_radius = rb;
+    double area = 0.0, inertia = 0.0, polar = 0.0;
     if (g.planar) {
-      s.area = 2.0 * rb * g.thickness;
-      s.i_over_a = rb * rb / 3.0;  // I = 2/3 R^3 t
-      s.j_over_a = 0.0;
+      area = 2.0 * rb * g.thickness;                     // slab of thickness t
+      inertia = 2.0 / 3.0 * rb * rb * rb * g.thickness;  // I = 2/3 R^3 t; no twist in 2D
     } else {
-      s.area = std::numbers::pi * rb * rb;
-      s.i_over_a = 0.25 * rb * rb;  // I = pi R^4 / 4
-      s.j_over_a = 0.5 * rb * rb;   // J = pi R^4 / 2
+      area = std::numbers::pi * rb * rb;  // disc
+      inertia = 0.25 * std::numbers::pi * rb * rb * rb * rb;
+      polar = 2.0 * inertia;
     }
-    const double kn_area = p.modulus / (g.R1 + g.R2);
-    s.kn = kn_area * s.area;
+    const double kn_area = p.modulus / (g.R1 + g.R2);  // k_n = E_bar / L
+    s.kn = kn_area * area;
     s.ks = s.kn / p.stiffness_ratio;
-    s.d0 = g.d;
+    s.kb = kn_area * inertia;
+    s.kt = kn_area / p.stiffness_ratio * polar;
+    s.inv_area = 1.0 / area;
+    s.bend_coeff = rb / inertia;
+    s.twist_coeff = polar > 0.0 ? rb / polar : 0.0;
     constexpr std::uint64_t kTensileStream = 0x7e51, kCohesionStream = 0xc0e5;
     s.tensile_strength =
         positive_normal(p.tensile_strength, p.tensile_strength_sd, seed, kTensileStream, bond_tag);
@@ -100,8 +111,8 @@ struct ParallelBond {
     return s;
   }
 
-  static double kb(const State& s) noexcept { return s.kn * s.i_over_a; }
-  static double kt(const State& s) noexcept { return s.ks * s.j_over_a; }
+  static double kb(const State& s) noexcept { return s.kb; }
+  static double kt(const State& s) noexcept { return s.kt; }
 
   // Largest translational and rotational stiffness for the time-step estimate (§1.5).
   static double max_stiffness(const State& s) noexcept { return std::max(s.kn, s.ks); }
@@ -119,11 +130,9 @@ struct ParallelBond {
     // 1. Carry the shear force and bending moment into the current contact plane.
     Vec3 fs = s.shear_force, mb = s.bend_moment;
     if (!fresh) {
-      fs = rotate_between(fs, s.n_old, g.n);
-      mb = rotate_between(mb, s.n_old, g.n);
-      const double spin = 0.5 * dot(g.w1 + g.w2, g.n) * dt;
-      fs = spin_about(fs, g.n, spin);
-      mb = spin_about(mb, g.n, spin);
+      const PlaneCarry carry(s.n_old, g.n, 0.5 * dot(g.w1 + g.w2, g.n) * dt);
+      fs = carry.apply(fs);
+      mb = carry.apply(mb);
     }
     // 2. Increments from the relative motion.
     const double vn = g.vn();
@@ -133,8 +142,8 @@ struct ParallelBond {
     const Vec3 wb = wr - g.n * wtw;
     const double fn = s.normal_force - s.kn * vn * dt;
     fs -= vt * (s.ks * dt);
-    const double mt = s.twist_moment - kt(s) * wtw * dt;
-    mb -= wb * (kb(s) * dt);
+    const double mt = s.twist_moment - s.kt * wtw * dt;
+    mb -= wb * (s.kb * dt);
     s.normal_force = fn;
     s.shear_force = fs;
     s.twist_moment = mt;
@@ -144,13 +153,10 @@ struct ParallelBond {
     // Peak stresses on the bond periphery (tension-positive sigma).
     const double mb_abs = norm(mb);
     const double fs_abs = norm(fs);
-    const double rb = s.bond_radius;
-    const double sigma_avg = -fn / s.area;
-    const double sigma_max = sigma_avg + p.moment_factor * mb_abs * rb / (s.area * s.i_over_a);
-    const double tau_max =
-        fs_abs / s.area +
-        (s.j_over_a > 0.0 ? p.moment_factor * std::abs(mt) * rb / (s.area * s.j_over_a) : 0.0);
-    const double tau_c = s.cohesion - sigma_avg * std::tan(p.friction_angle_deg * kDegree);
+    const double sigma_avg = -fn * s.inv_area;
+    const double sigma_max = sigma_avg + p.moment_factor * mb_abs * s.bend_coeff;
+    const double tau_max = fs_abs * s.inv_area + p.moment_factor * std::abs(mt) * s.twist_coeff;
+    const double tau_c = s.cohesion - sigma_avg * p.tan_friction;
     const bool tensile = sigma_max >= s.tensile_strength;
     const bool shear = !tensile && tau_max >= tau_c;
     if (tensile || shear) {
@@ -164,7 +170,7 @@ struct ParallelBond {
       fail.tau = tau_max;
       fail.ratio_t = sigma_max / s.tensile_strength;
       fail.ratio_s = tau_c > 0.0 ? tau_max / tau_c : std::numeric_limits<double>::quiet_NaN();
-      fail.bond_radius = rb;
+      fail.bond_radius = s.bond_radius;
       fail.energy = energy(s);
       return {};
     }
@@ -177,9 +183,8 @@ struct ParallelBond {
     const double en = 0.5 * s.normal_force * s.normal_force / s.kn;
     (s.normal_force < 0.0 ? e.tension : e.compression) = en;
     e.shear = 0.5 * norm2(s.shear_force) / s.ks;
-    e.bending = 0.5 * norm2(s.bend_moment) / kb(s);
-    const double k_t = kt(s);
-    e.twisting = k_t > 0.0 ? 0.5 * s.twist_moment * s.twist_moment / k_t : 0.0;
+    e.bending = 0.5 * norm2(s.bend_moment) / s.kb;
+    e.twisting = s.kt > 0.0 ? 0.5 * s.twist_moment * s.twist_moment / s.kt : 0.0;
     return e;
   }
 

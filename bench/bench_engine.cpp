@@ -1,0 +1,141 @@
+// Engine throughput on a bonded lattice block between two platens (bench/run drives it).
+//
+//   bench_engine --dim 3 --particles 100000 --phase elastic --threads 1 --steps 300 --repeats 3
+//
+// Phases: "elastic" loads intact bonds (strong bonds, slow platens); "broken" measures the
+// contact-dominated phase after breakage: weak bonds (10 kPa) are broken by random particle
+// velocities (0.01 m/s) while the platens compress, then the measurement starts. Prints a readable
+// line and one JSON object per case on its own line.
+#include <sys/resource.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "breccia/core/parallel.hpp"
+#include "breccia/core/rng.hpp"
+#include "breccia/engine/simulation.hpp"
+#include "breccia/io/run_folder.hpp"
+#include "breccia/protocol/platen_compression.hpp"
+#include "breccia/sample/lattice.hpp"
+#include "breccia/version.hpp"
+
+using namespace breccia;
+
+namespace {
+
+long peak_rss_bytes() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss * 1024L;
+}
+
+// Lattice dimensions close to `target` particles, roughly twice as tall as wide.
+std::array<int, 3> cells_for(int dim, long target) {
+  if (dim == 3) {
+    const int n = std::max(1, static_cast<int>(std::lround(std::cbrt(static_cast<double>(target) / 8.0))));
+    return {n, n, std::max(1, static_cast<int>(std::lround(static_cast<double>(target) / (4.0 * n * n))))};
+  }
+  const int n = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(target) / 2.0))));
+  return {n, std::max(1, static_cast<int>(std::lround(static_cast<double>(target) / n))), 1};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Breccia engine benchmark"};
+  int dim = 3, threads = 1, steps = 200, repeats = 3, warmup = 200;
+  long particles = 100000;
+  std::string phase = "elastic";
+  app.add_option("--dim", dim)->check(CLI::IsMember({2, 3}));
+  app.add_option("--particles", particles, "approximate particle count");
+  app.add_option("--phase", phase)->check(CLI::IsMember({"elastic", "broken"}));
+  app.add_option("--threads", threads);
+  app.add_option("--steps", steps, "steps per timed repeat");
+  app.add_option("--repeats", repeats, "timed repeats (the median is reported)");
+  app.add_option("--warmup", warmup, "steps before timing");
+  CLI11_PARSE(app, argc, argv);
+  set_threads(threads);
+
+  const double R = 0.5e-3;
+  const auto c = cells_for(dim, particles);
+  ParticleStore ps = dim == 3 ? fcc_block(c[0], c[1], c[2], R, 2650)
+                              : hex_block(c[0], c[1], R, 2650, 2 * R);
+  const bool broken = phase == "broken";
+  if (broken)
+    for (std::size_t i = 0; i < ps.size(); ++i)
+      for (int k = 0; k < dim; ++k) ps.vel[i][k] = 0.01 * standard_normal(99, k, i);
+  EngineConfig cfg;
+  cfg.local_damping = 0.7;
+  cfg.energy_interval = 100;
+  LinearContact::Params lp, wall;
+  wall.friction = 0.0;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, wall));
+  ParallelBond::Params bp;
+  if (broken) bp.tensile_strength = bp.cohesion = 1e4;
+  sim.set_bond_params<ParallelBond>(bp);
+  const auto t_setup = std::chrono::steady_clock::now();
+  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  PlatenCompressionSettings ls;
+  ls.platen_speed = broken ? 0.5 : 0.05;
+  ls.ramp_time = 1e-12;
+  PlatenCompression platens(sim, ls);
+  sim.initialise();
+  const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_setup).count();
+  const std::size_t bonds0 = sim.intact_bonds();
+  sim.run(static_cast<std::uint64_t>(warmup));
+
+  std::vector<double> rates;
+  std::size_t bond_steps_total = 0;
+  std::vector<double> bond_rates;
+  for (int r = 0; r < repeats; ++r) {
+    const std::size_t bonds_before = sim.intact_bonds();
+    const auto t0 = std::chrono::steady_clock::now();
+    sim.run(static_cast<std::uint64_t>(steps));
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    rates.push_back(static_cast<double>(sim.particles().size()) * steps / s);
+    // Bond-steps: intact bonds evaluated per step (mean of the bounds of the repeat).
+    const double mean_bonds = 0.5 * static_cast<double>(bonds_before + sim.intact_bonds());
+    bond_rates.push_back(mean_bonds * steps / s);
+    bond_steps_total += static_cast<std::size_t>(mean_bonds * steps);
+  }
+  std::sort(rates.begin(), rates.end());
+  std::sort(bond_rates.begin(), bond_rates.end());
+  const double rate = rates[rates.size() / 2], bond_rate = bond_rates[bond_rates.size() / 2];
+  const std::string name = fmt::format("{}d-{}k-{}", dim, (sim.particles().size() + 500) / 1000, phase);
+  std::fprintf(stderr,
+               "%-16s threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts; "
+               "%.3g particle-steps/s (%.3g per thread), %.3g bond-steps/s, %.0f B/particle peak\n",
+               name.c_str(), threads, sim.particles().size(), sim.intact_bonds(), bonds0,
+               sim.active_contacts(), rate, rate / threads, bond_rate,
+               static_cast<double>(peak_rss_bytes()) / static_cast<double>(sim.particles().size()));
+  nlohmann::json j{{"case", name},
+                   {"dim", dim},
+                   {"phase", phase},
+                   {"particles", sim.particles().size()},
+                   {"bonds", bonds0},
+                   {"bonds_intact_end", sim.intact_bonds()},
+                   {"contacts_end", sim.active_contacts()},
+                   {"threads", threads},
+                   {"steps", steps},
+                   {"repeats", repeats},
+                   {"particle_steps_per_s", rate},
+                   {"particle_steps_per_s_per_thread", rate / threads},
+                   {"bond_steps_per_s", bond_rate},
+                   {"bond_steps_per_s_per_thread", bond_rate / threads},
+                   {"all_particle_steps_per_s", rates},
+                   {"setup_s", setup_s},
+                   {"peak_rss_bytes", peak_rss_bytes()},
+                   {"peak_rss_bytes_per_particle",
+                    static_cast<double>(peak_rss_bytes()) / static_cast<double>(sim.particles().size())},
+                   {"version", kVersion},
+                   {"machine", machine_description()}};
+  std::printf("%s\n", j.dump().c_str());
+  (void)bond_steps_total;
+  return 0;
+}
