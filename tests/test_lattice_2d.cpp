@@ -41,26 +41,18 @@ Moduli measure(double rate, double contact_modulus) {
   const double x0 = sim.particles().pos_rad[centre + 1].x.x - sim.particles().pos_rad[centre].x.x;
   sim.step();  // forces of this step belong to the configuration measured above
   const double eps = 1.0 - x0 / (2 * R);  // compression-positive strain
-  // Stress of the centre particle: half of its bonds' l (x) F over the cell area 2 sqrt(3) R^2 t.
-  const auto& bonds = std::get<BondSet<ParallelBond>>(sim.bonds());
+  // Stress of the centre particle: half of l (x) F over its pairs (bond and contact of a pair
+  // share one result slot) divided by the cell area 2 sqrt(3) R^2 t.
   double sxx = 0, syy = 0;
-  for (std::size_t k = 0; k < bonds.size(); ++k) {
-    const auto i = bonds.pairs.first[k], j = bonds.pairs.second[k];
-    if (i != centre && j != centre) continue;
-    const Vec3 l = sim.particles().pos_rad[j].x - sim.particles().pos_rad[i].x;
-    const Vec3 f = bonds.slot[k].force;  // on particle j (particle 2)
-    sxx += 0.5 * l.x * f.x;
-    syy += 0.5 * l.y * f.y;
-  }
-  // Contacts in parallel, same rule.
   std::visit(
       [&](const auto& c) {
         for (std::size_t k = 0; k < c.pairs.size(); ++k) {
           const auto i = c.pairs.first[k], j = c.pairs.second[k];
           if (i != centre && j != centre) continue;
           const Vec3 l = sim.particles().pos_rad[j].x - sim.particles().pos_rad[i].x;
-          sxx += 0.5 * l.x * c.slot[k].force.x;
-          syy += 0.5 * l.y * c.slot[k].force.y;
+          const Vec3 f = c.slot[k].force;  // on particle j (particle 2)
+          sxx += 0.5 * l.x * f.x;
+          syy += 0.5 * l.y * f.y;
         }
       },
       sim.contact_model());

@@ -37,6 +37,41 @@ void merge_history(const PairList& old_pairs, const std::vector<State>& old_stat
   }
 }
 
+// Adds the pairs of `bonds` (sorted) that `pairs` (sorted) lacks. Rare: a bond stretched beyond
+// R1 + R2 + skin. The index of `pairs` must be rebuilt afterwards.
+void add_missing_pairs(const PairList& bonds, PairList& pairs) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> missing;
+  std::size_t a = 0;
+  for (std::size_t k = 0; k < bonds.size(); ++k) {
+    const auto key = std::pair(bonds.first[k], bonds.second[k]);
+    while (a < pairs.size() && std::pair(pairs.first[a], pairs.second[a]) < key) ++a;
+    if (a == pairs.size() || std::pair(pairs.first[a], pairs.second[a]) != key) missing.push_back(key);
+  }
+  if (missing.empty()) return;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> all(pairs.size());
+  for (std::size_t k = 0; k < pairs.size(); ++k) all[k] = {pairs.first[k], pairs.second[k]};
+  all.insert(all.end(), missing.begin(), missing.end());
+  std::sort(all.begin(), all.end());
+  pairs.first.resize(all.size());
+  pairs.second.resize(all.size());
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    pairs.first[k] = all[k].first;
+    pairs.second[k] = all[k].second;
+  }
+}
+
+// For each interacting pair, the index of its bond in `set` (or kNoBond). Both lists are sorted.
+template <class Law>
+void map_bonds_to_pairs(BondSet<Law>& set, const PairList& pairs) {
+  set.bond_of_pair.assign(pairs.size(), BondSet<Law>::kNoBond);
+  std::size_t a = 0;
+  for (std::size_t k = 0; k < set.size(); ++k) {
+    const auto key = std::pair(set.pairs.first[k], set.pairs.second[k]);
+    while (std::pair(pairs.first[a], pairs.second[a]) < key) ++a;
+    set.bond_of_pair[a] = static_cast<std::uint32_t>(k);
+  }
+}
+
 }  // namespace
 
 Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactModel contact)
@@ -101,12 +136,10 @@ void Simulation::install_bonds(BondSet<Law>& set) {
                            std::to_string(p_.tag[sorted.second[k]]),
                        "each pair may be bonded once per law");
   }
-  sorted.build_index(p_.size());
   set.pairs = std::move(sorted);
   set.tag = std::move(tags);
   set.state.resize(n);
   set.intact.assign(n, 1);
-  set.slot.assign(n, PairSlot{});
   set.broken_since_compaction = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const PairGeometry g = geometry(set.pairs.first[k], set.pairs.second[k]);
@@ -131,8 +164,6 @@ void Simulation::compact_bonds(BondSet<Law>& set) {
   set.tag.resize(w);
   set.state.resize(w);
   set.intact.assign(w, 1);
-  set.slot.assign(w, PairSlot{});
-  set.pairs.build_index(p_.size());
   set.broken_since_compaction = 0;
 }
 
@@ -263,6 +294,10 @@ void Simulation::rebuild(ContactSet<CL>& contacts) {
   std::vector<typename CL::State> old_state = std::move(contacts.state);
   contacts.pairs = PairList{};
   build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs);
+  // Every intact bond must be an interacting pair even if it stretched beyond the search range.
+  std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, bonds_);
+  contacts.pairs.build_index(p_.size());
+  std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
   merge_history(old_pairs, old_state, contacts.pairs, contacts.state);
   contacts.slot.assign(contacts.pairs.size(), PairSlot{});
   // Wall candidates: particles within the skin of each wall, history carried by particle index.
@@ -291,94 +326,114 @@ void Simulation::rebuild(ContactSet<CL>& contacts) {
   ++rebuilds_;
 }
 
-template <class Law>
-void Simulation::compute_bonds(BondSet<Law>& set) {
-  const std::size_t n = set.size();
-  const std::size_t nb = block_count(n);
-  if (block_failures_.size() < nb) block_failures_.resize(nb);
-  const double dt = dt_;
-  for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
-    auto& fails = block_failures_[blk];
-    fails.clear();
-    for (std::size_t k = begin; k < end; ++k) {
-      if (!set.intact[k]) continue;  // slot stays zero until compaction
-      const std::uint32_t i = set.pairs.first[k], j = set.pairs.second[k];
-      const PairGeometry g = geometry(i, j);
-      BondFailure f;
-      const PairForce pf = Law::compute(set.params, set.state[k], g, dt, f);
-      PairSlot& s = set.slot[k];
-      if (f.broken) {
-        s = PairSlot{};
-        fails.push_back({static_cast<std::uint32_t>(k), f});
-        continue;
-      }
-      s.force = pf.force;
-      s.torque1 = cross(g.r1, -pf.force) - pf.couple;
-      s.torque2 = cross(g.r2, pf.force) + pf.couple;
-    }
-  });
-  // Breaks are processed as one batch in bond order (independent of the thread count).
-  for (std::size_t blk = 0; blk < nb; ++blk) {
-    for (const Failure& f : block_failures_[blk]) {
-      set.intact[f.bond] = 0;
-      ++set.broken_since_compaction;
-      const std::uint32_t i = set.pairs.first[f.bond], j = set.pairs.second[f.bond];
-      const PairGeometry g = geometry(i, j);
-      CrackRecord r;
-      r.step = step_;
-      r.time = time_;
-      r.law = Law::name;
-      r.bond_tag = set.tag[f.bond];
-      r.id1 = p_.tag[i];
-      r.id2 = p_.tag[j];
-      r.R1 = g.R1;
-      r.R2 = g.R2;
-      r.position = p_.pos_rad[i].x + g.r1;
-      r.normal = g.n;
-      r.mode = f.info.mode;
-      r.bond_radius = f.info.bond_radius;
-      r.Fn = f.info.Fn;
-      r.Fs = f.info.Fs;
-      r.Mt = f.info.Mt;
-      r.Mb = f.info.Mb;
-      r.sigma = f.info.sigma;
-      r.tau = f.info.tau;
-      r.ratio_t = f.info.ratio_t;
-      r.ratio_s = f.info.ratio_s;
-      r.energy = f.info.energy;
-      released_ += f.info.energy;
-      cracks_.push_back(r);
-    }
-  }
-}
-
+// One pass over all interacting pairs: the bond(s) of the pair, then its contact, summed into one
+// slot. Each pair's geometry is computed once; bonded pairs that overlap get the contact force in
+// parallel (physics.md §4.0). Breaks are collected per block and processed in pair order.
 template <class CL>
-void Simulation::compute_contacts(ContactSet<CL>& c) {
+void Simulation::compute_pairs(ContactSet<CL>& c) {
   const std::size_t n = c.pairs.size();
   const std::size_t nb = block_count(n);
   block_dis_.assign(nb, PairDissipation{});
+  if (block_failures_.size() < nb) block_failures_.resize(nb);
   const double dt = dt_;
   for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
     PairDissipation dis;
+    auto& fails = block_failures_[blk];
+    fails.clear();
     for (std::size_t k = begin; k < end; ++k) {
       const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
-      const PosRad& a = p_.pos_rad[i];
-      const PosRad& b = p_.pos_rad[j];
-      const double reach = a.r + b.r;
+      PairGeometry g;
+      bool have_geometry = false;
+      Vec3 force, couple;
+      std::uint32_t law_index = 0;
+      auto bond_part = [&]<class Law>(BondSet<Law>& set) {
+        const std::uint32_t b = set.bond_of_pair[k];
+        if (b != BondSet<Law>::kNoBond && set.intact[b]) {
+          if (!have_geometry) g = geometry(i, j);
+          have_geometry = true;
+          BondFailure f;
+          const PairForce pf = Law::compute(set.params, set.state[b], g, dt, f);
+          if (f.broken) {
+            fails.push_back({law_index, b, f});
+          } else {
+            force += pf.force;
+            couple += pf.couple;
+          }
+        }
+        ++law_index;
+      };
+      std::apply([&](auto&... set) { (bond_part(set), ...); }, bonds_);
+      if (!have_geometry) {
+        const PosRad& a = p_.pos_rad[i];
+        const PosRad& b = p_.pos_rad[j];
+        const double reach = a.r + b.r;
+        if (norm2(b.x - a.x) < reach * reach || has_history(c.state[k].n_old)) {
+          g = geometry(i, j);
+          have_geometry = true;
+        }
+      }
       PairSlot& s = c.slot[k];
-      if (norm2(b.x - a.x) >= reach * reach && !has_history(c.state[k].n_old)) {
+      if (!have_geometry) {
         s = PairSlot{};
         continue;
       }
-      const PairGeometry g = geometry(i, j);
-      const PairForce pf = CL::compute(c.params, c.state[k], g, dt, dis);
-      s.force = pf.force;
-      s.torque1 = cross(g.r1, -pf.force) - pf.couple;
-      s.torque2 = cross(g.r2, pf.force) + pf.couple;
+      if (g.delta > 0.0 || has_history(c.state[k].n_old)) {
+        const PairForce pf = CL::compute(c.params, c.state[k], g, dt, dis);
+        force += pf.force;
+        couple += pf.couple;
+      }
+      s.force = force;
+      s.torque1 = cross(g.r1, -force) - couple;
+      s.torque2 = cross(g.r2, force) + couple;
     }
     block_dis_[blk] = dis;
   });
   d_pairs_ += ordered_sum(block_dis_);
+  // Breaks are processed as one batch in pair order (independent of the thread count).
+  for (std::size_t blk = 0; blk < nb; ++blk)
+    for (const Failure& f : block_failures_[blk]) {
+      std::uint32_t law_index = 0;
+      std::apply(
+          [&](auto&... set) {
+            ((law_index++ == f.law ? process_failure(set, f.bond, f.info) : void()), ...);
+          },
+          bonds_);
+    }
+}
+
+template <class Law>
+void Simulation::process_failure(BondSet<Law>& set, std::uint32_t bond, const BondFailure& info) {
+  set.intact[bond] = 0;
+  ++set.broken_since_compaction;
+  const std::uint32_t i = set.pairs.first[bond], j = set.pairs.second[bond];
+  const PairGeometry g = geometry(i, j);
+  // The record names the pair by increasing tag with the normal from the first to the second
+  // (§4.0); F_n, |F_s|, M_t = M . n and |M_b| do not depend on the orientation.
+  const bool swap = p_.tag[i] > p_.tag[j];
+  CrackRecord r;
+  r.step = step_;
+  r.time = time_;
+  r.law = Law::name;
+  r.bond_tag = set.tag[bond];
+  r.id1 = p_.tag[swap ? j : i];
+  r.id2 = p_.tag[swap ? i : j];
+  r.R1 = swap ? g.R2 : g.R1;
+  r.R2 = swap ? g.R1 : g.R2;
+  r.position = p_.pos_rad[i].x + g.r1;
+  r.normal = swap ? -g.n : g.n;
+  r.mode = info.mode;
+  r.bond_radius = info.bond_radius;
+  r.Fn = info.Fn;
+  r.Fs = info.Fs;
+  r.Mt = info.Mt;
+  r.Mb = info.Mb;
+  r.sigma = info.sigma;
+  r.tau = info.tau;
+  r.ratio_t = info.ratio_t;
+  r.ratio_s = info.ratio_s;
+  r.energy = info.energy;
+  released_ += info.energy;
+  cracks_.push_back(r);
 }
 
 template <class CL>
@@ -468,8 +523,6 @@ void Simulation::integrate(ContactSet<CL>& c, bool sample) {
       Vec3 f = ext_force_[i], t = ext_torque_[i];
       ext_force_[i] = {};
       ext_torque_[i] = {};
-      std::apply([&](const auto&... set) { (gather_pairs(set.pairs, set.slot, i, f, t), ...); },
-                 bonds_);
       gather_pairs(c.pairs, c.slot, i, f, t);
       Vec3 f_user;
       if (has_user_force) {
@@ -640,8 +693,7 @@ void Simulation::step_impl(ContactSet<CL>& contacts) {
   if (needs_rebuild()) rebuild(contacts);
   const bool sample = sample_requested_ ||
                       (cfg_.energy_interval > 0 && step_ % cfg_.energy_interval == 0);
-  std::apply([&](auto&... set) { (compute_bonds(set), ...); }, bonds_);
-  compute_contacts(contacts);
+  compute_pairs(contacts);
   compute_walls(contacts);
   integrate(contacts, sample);
   if (sample) {

@@ -160,10 +160,10 @@ class Simulation {
   void step_impl(ContactSet<CL>& contacts);
   template <class CL>
   void rebuild(ContactSet<CL>& contacts);
-  template <class Law>
-  void compute_bonds(BondSet<Law>& set);
   template <class CL>
-  void compute_contacts(ContactSet<CL>& contacts);
+  void compute_pairs(ContactSet<CL>& contacts);
+  template <class Law>
+  void process_failure(BondSet<Law>& set, std::uint32_t bond, const BondFailure& info);
   template <class CL>
   void compute_walls(ContactSet<CL>& contacts);
   template <class CL>
@@ -214,6 +214,7 @@ class Simulation {
   std::vector<PairDissipation> block_dis_;
   std::vector<IntegrateBlock> block_int_;
   struct Failure {
+    std::uint32_t law;  // position of the bond law in BondLaws
     std::uint32_t bond;
     BondFailure info;
   };

@@ -16,10 +16,12 @@ std::uint64_t Simulation::add_bond(std::uint64_t tag1, std::uint64_t tag2) {
     throw InputError("bond list", "bond", std::to_string(tag1) + "-" + std::to_string(tag2),
                      "a particle cannot be bonded to itself");
   auto& set = std::get<BondSet<Law>>(bonds_);
-  const std::uint32_t i = static_cast<std::uint32_t>(p_.index_of(std::min(tag1, tag2), "bond list"));
-  const std::uint32_t j = static_cast<std::uint32_t>(p_.index_of(std::max(tag1, tag2), "bond list"));
-  set.pairs.first.push_back(i);
-  set.pairs.second.push_back(j);
+  // Pairs are oriented by particle index, like contacts, so that a bond and the contact of the
+  // same pair share one geometry; crack records report the tags in increasing order.
+  const auto a = static_cast<std::uint32_t>(p_.index_of(tag1, "bond list"));
+  const auto b = static_cast<std::uint32_t>(p_.index_of(tag2, "bond list"));
+  set.pairs.first.push_back(std::min(a, b));
+  set.pairs.second.push_back(std::max(a, b));
   set.tag.push_back(next_bond_tag_);
   return next_bond_tag_++;
 }

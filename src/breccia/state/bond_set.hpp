@@ -1,6 +1,8 @@
 #pragma once
-// The bonds of one law: contiguous arrays sorted by particle index (design.md). Broken bonds are
-// flagged in the step and compacted at the next neighbour rebuild.
+// The bonds of one law: contiguous arrays sorted by particle index pair (design.md). Broken bonds
+// are flagged in the step and compacted at the next neighbour rebuild. Bonds are evaluated in the
+// engine's single pass over interacting pairs (one geometry, one result slot per pair), through
+// `bond_of_pair`, rebuilt with the neighbour list.
 #include <cstdint>
 #include <vector>
 
@@ -11,12 +13,14 @@ namespace breccia {
 template <class Law>
 struct BondSet {
   typename Law::Params params;
-  PairList pairs;                       // particle indices, first has the smaller tag
+  PairList pairs;                       // particle indices, first < second (index order)
   std::vector<std::uint64_t> tag;       // stable bond tags
   std::vector<typename Law::State> state;
   std::vector<std::uint8_t> intact;
-  std::vector<PairSlot> slot;
+  std::vector<std::uint32_t> bond_of_pair;  // per interacting pair: bond index or kNoBond
   std::size_t broken_since_compaction = 0;
+
+  static constexpr std::uint32_t kNoBond = 0xffffffffu;
 
   std::size_t size() const noexcept { return tag.size(); }
   std::size_t intact_count() const noexcept { return size() - broken_since_compaction; }
