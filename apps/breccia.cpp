@@ -16,7 +16,9 @@
 
 namespace {
 std::atomic<bool> g_interrupt{false};
-extern "C" void on_signal(int) { g_interrupt.store(true); }
+extern "C" void on_signal(int) {
+  g_interrupt.store(true);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -55,9 +57,9 @@ int main(int argc, char** argv) {
     if (*run) {
       if (!output.empty()) overrides.push_back("output.directory=\"" + output + "\"");
       if (threads >= 0) overrides.push_back("engine.threads=" + std::to_string(threads));
-      const breccia::ExperimentSpec spec = file.empty()
-                                               ? breccia::parse_experiment("", "built-in default", overrides)
-                                               : breccia::load_experiment(file, overrides);
+      const breccia::ExperimentSpec spec =
+          file.empty() ? breccia::parse_experiment("", "built-in default", overrides)
+                       : breccia::load_experiment(file, overrides);
       std::signal(SIGINT, on_signal);
       std::signal(SIGTERM, on_signal);
       breccia::RunOptions opt;

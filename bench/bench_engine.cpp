@@ -38,10 +38,14 @@ long peak_rss_bytes() {
 // Lattice dimensions close to `target` particles, roughly twice as tall as wide.
 std::array<int, 3> cells_for(int dim, long target) {
   if (dim == 3) {
-    const int n = std::max(1, static_cast<int>(std::lround(std::cbrt(static_cast<double>(target) / 8.0))));
-    return {n, n, std::max(1, static_cast<int>(std::lround(static_cast<double>(target) / (4.0 * n * n))))};
+    const int n =
+        std::max(1, static_cast<int>(std::lround(std::cbrt(static_cast<double>(target) / 8.0))));
+    return {
+        n, n,
+        std::max(1, static_cast<int>(std::lround(static_cast<double>(target) / (4.0 * n * n))))};
   }
-  const int n = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(target) / 2.0))));
+  const int n =
+      std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(target) / 2.0))));
   return {n, std::max(1, static_cast<int>(std::lround(static_cast<double>(target) / n))), 1};
 }
 
@@ -64,8 +68,8 @@ int main(int argc, char** argv) {
 
   const double R = 0.5e-3;
   const auto c = cells_for(dim, particles);
-  ParticleStore ps = dim == 3 ? fcc_block(c[0], c[1], c[2], R, 2650)
-                              : hex_block(c[0], c[1], R, 2650, 2 * R);
+  ParticleStore ps =
+      dim == 3 ? fcc_block(c[0], c[1], c[2], R, 2650) : hex_block(c[0], c[1], R, 2650, 2 * R);
   const bool broken = phase == "broken";
   if (broken)
     for (std::size_t i = 0; i < ps.size(); ++i)
@@ -86,7 +90,8 @@ int main(int argc, char** argv) {
   ls.ramp_time = 1e-12;
   PlatenCompression platens(sim, ls);
   sim.initialise();
-  const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_setup).count();
+  const double setup_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_setup).count();
   const std::size_t bonds0 = sim.intact_bonds();
   sim.run(static_cast<std::uint64_t>(warmup));
 
@@ -107,7 +112,8 @@ int main(int argc, char** argv) {
   std::sort(rates.begin(), rates.end());
   std::sort(bond_rates.begin(), bond_rates.end());
   const double rate = rates[rates.size() / 2], bond_rate = bond_rates[bond_rates.size() / 2];
-  const std::string name = fmt::format("{}d-{}k-{}", dim, (sim.particles().size() + 500) / 1000, phase);
+  const std::string name =
+      fmt::format("{}d-{}k-{}", dim, (sim.particles().size() + 500) / 1000, phase);
   std::fprintf(stderr,
                "%-16s threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts; "
                "%.3g particle-steps/s (%.3g per thread), %.3g bond-steps/s, %.0f B/particle peak\n",
@@ -131,8 +137,8 @@ int main(int argc, char** argv) {
                    {"all_particle_steps_per_s", rates},
                    {"setup_s", setup_s},
                    {"peak_rss_bytes", peak_rss_bytes()},
-                   {"peak_rss_bytes_per_particle",
-                    static_cast<double>(peak_rss_bytes()) / static_cast<double>(sim.particles().size())},
+                   {"peak_rss_bytes_per_particle", static_cast<double>(peak_rss_bytes()) /
+                                                       static_cast<double>(sim.particles().size())},
                    {"version", kVersion},
                    {"machine", machine_description()}};
   std::printf("%s\n", j.dump().c_str());

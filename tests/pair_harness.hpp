@@ -43,7 +43,9 @@ inline PairResult assemble(const PairGeometry& g, const PairForce& pf) {
 }
 
 template <class Law>
-constexpr bool is_bond_law = requires { Law::install; };
+constexpr bool is_bond_law = requires {
+  Law::install;
+};
 
 // One step of a pair: evaluates the law, then moves both bodies with their velocities.
 template <class Law>
@@ -83,6 +85,8 @@ struct PairStepper {
 };
 
 // Rotation matrix applied through a quaternion.
-inline Vec3 rot(const Quat& q, const Vec3& v) { return rotate(q, v); }
+inline Vec3 rot(const Quat& q, const Vec3& v) {
+  return rotate(q, v);
+}
 
 }  // namespace breccia::test

@@ -23,8 +23,8 @@ struct Result {
   std::string out;
 };
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(BRECCIA_CLI) + " " + args + " 2>&1";
+Result run_with_prefix(const std::string& prefix, const std::string& args) {
+  const std::string cmd = prefix + std::string(BRECCIA_CLI) + " " + args + " 2>&1";
   Result r{0, {}};
   FILE* p = popen(cmd.c_str(), "r");
   char buf[4096];
@@ -32,6 +32,10 @@ Result run(const std::string& args) {
   const int status = pclose(p);
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+Result run(const std::string& args) {
+  return run_with_prefix("", args);
 }
 
 std::string last_line(const std::string& s) {
@@ -70,7 +74,8 @@ TEST(App, SmallRunWritesACompleteRunFolder) {
   ASSERT_EQ(r.code, 0) << r.out;
   const fs::path folder = last_line(r.out);
   ASSERT_TRUE(fs::is_directory(folder)) << r.out;
-  for (const char* f : {"manifest.json", "summary.json", "history.csv", "cracks.csv", "experiment.toml"})
+  for (const char* f :
+       {"manifest.json", "summary.json", "history.csv", "cracks.csv", "experiment.toml"})
     EXPECT_TRUE(fs::exists(folder / f)) << f;
   const auto manifest = nlohmann::json::parse(read(folder / "manifest.json"));
   EXPECT_EQ(manifest["status"], "complete");
@@ -106,7 +111,8 @@ TEST(App, BadExperimentFilesFailClearly) {
   expect_input_error("[sample]\nradius = -1e-3\n", {"sample.radius", "-0.001", "value > 0"});
   expect_input_error("[bond]\nmodulus = -5\n", {"bond.modulus", "value > 0 Pa"});
   expect_input_error("[bond]\nfriction = 0.5\n", {"bond.friction", "for law \"parallel_bond\""});
-  expect_input_error("[contact]\nlaw = \"spring\"\n", {"contact.law", "\"linear\", \"hertz_mindlin\""});
+  expect_input_error("[contact]\nlaw = \"spring\"\n",
+                     {"contact.law", "\"linear\", \"hertz_mindlin\""});
   expect_input_error("[engine]\ndimension = 4\n", {"engine.dimension", "2 <= value <= 3"});
   expect_input_error("[engine]\nlocal_damping = 1.5\n", {"engine.local_damping"});
   expect_input_error("[sample]\ncells = [1, 2]\n", {"sample.cells", "3 integers"});
@@ -148,4 +154,49 @@ TEST(StressStrain, TangentModulusOfASyntheticCurve) {
   EXPECT_NEAR(fit.r2, 1.0, 1e-9);
   EXPECT_NEAR(peak.stress, 100e6, 1e3);
   EXPECT_FALSE(analysis::tangent_modulus({0.0, 1.0}, {0.0, 1.0}).valid) << "too few points";
+}
+
+TEST(App, ExamplesAreValid) {
+  for (const char* name : {"hex-2d.toml", "triangle-from-file.toml"}) {
+    const std::string path = std::string(BRECCIA_SOURCE_DIR) + "/examples/" + name;
+    EXPECT_NO_THROW(load_experiment(path, {})) << path;
+  }
+}
+
+TEST(App, ExperimentReferenceIsUpToDate) {
+  // docs/experiment.md is generated from the validation tables: regenerate it with
+  // `build/breccia docs --output docs/experiment.md` when a key changes.
+  EXPECT_EQ(read(fs::path(BRECCIA_SOURCE_DIR) / "docs" / "experiment.md"), experiment_docs());
+}
+
+TEST(App, GeometryFileExperimentRuns) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_geo";
+  fs::remove_all(out);
+  const Result r = run("run --quiet --output " + out.string() + " " + BRECCIA_SOURCE_DIR +
+                       "/examples/triangle-from-file.toml");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto summary = nlohmann::json::parse(read(fs::path(last_line(r.out)) / "summary.json"));
+  EXPECT_EQ(summary["particles"], 3);
+  EXPECT_EQ(summary["bonds_initial"], 3);
+  fs::remove_all(out);
+}
+
+TEST(App, InterruptedRunKeepsItsRecordsAndSaysSo) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_int";
+  fs::remove_all(out);
+  // SIGINT after 3 s, long before the default experiment ends.
+  const Result r = run_with_prefix("timeout -s INT 3 ", "run --quiet --output " + out.string() +
+                                                            " --set output.history_interval=20");
+  const fs::path folder = last_line(r.out);
+  ASSERT_TRUE(fs::exists(folder / "manifest.json")) << r.out;
+  const auto manifest = nlohmann::json::parse(read(folder / "manifest.json"));
+  EXPECT_EQ(manifest["status"], "interrupted");
+  const auto summary = nlohmann::json::parse(read(folder / "summary.json"));
+  EXPECT_EQ(summary["status"], "interrupted");
+  std::ifstream h(folder / "history.csv");
+  std::string line;
+  int rows = 0;
+  while (std::getline(h, line)) ++rows;
+  EXPECT_GT(rows, 2) << "the rows recorded before the signal are kept";
+  fs::remove_all(out);
 }

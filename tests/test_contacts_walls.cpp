@@ -120,3 +120,46 @@ TEST(Wall, MovingWallWorkEqualsEnergyGiven) {
   EXPECT_GT(sim.ledger().work_in(), 0.0);
   EXPECT_GT(sim.particles().vel[0].z, 0.2);  // bounced off the moving wall
 }
+
+TEST(Wall, ShrinkingCylinderPushesTowardTheAxisAndDoesWork) {
+  // A sphere touching the inside of a cylinder of radius 5 mm; the cylinder shrinks at 0.1 m/s.
+  const double R = 0.5e-3, Rc = 5e-3;
+  ParticleStore ps(Dimension::Three, 1.0);
+  ps.add({.tag = 1, .position = {Rc - R, 0, 0}, .radius = R, .density = 2650});
+  EngineConfig cfg;
+  cfg.energy_interval = 0;
+  LinearContact::Params lp;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  Wall cyl = Wall::cylinder("jacket", {0, 0, 0}, {0, 0, 1}, Rc);
+  cyl.target_radial_speed = 0.1;
+  sim.add_wall(cyl);
+  sim.initialise();
+  sim.request_energy_sample();
+  sim.step();
+  sim.run(10);  // within the contact (it lasts pi sqrt(m / k) ~ 50 steps)
+  const Wall& w = sim.walls()[0];
+  // The force on the particle points to the axis (-x); the radial force is its size.
+  EXPECT_LT(w.force.x, 0.0);
+  EXPECT_NEAR(w.force.y, 0.0, 1e-12);
+  EXPECT_NEAR(w.radial_force, -w.force.x, 1e-12);
+  EXPECT_EQ(w.contacts, 1u);
+  sim.run(500);  // the particle has bounced off toward the axis
+  EXPECT_EQ(w.contacts, 0u);
+  EXPECT_LT(sim.particles().vel[0].x, -0.1);
+  EXPECT_GT(w.work, 0.0);
+  sim.request_energy_sample();
+  sim.step();
+  const EnergyLedger& L = sim.ledger();
+  EXPECT_NEAR(L.boundary_work, w.work, 1e-20);
+  // Contact onset inside a step: O(dt) error bounded by k (V dt)^2.
+  const double k = std::numbers::pi * R * 10e9;
+  EXPECT_LE(std::abs(L.residual), k * std::pow(0.1 * sim.time_step(), 2));
+}
+
+TEST(Wall, RampFollowsTheCosineProfile) {
+  const VelocityRamp r{1.0, 2.0};
+  EXPECT_EQ(r.factor(0.5), 0.0);
+  EXPECT_NEAR(r.factor(2.0), 0.5, 1e-15);
+  EXPECT_NEAR(r.factor(1.5), 0.5 * (1 - std::cos(std::numbers::pi / 4)), 1e-15);
+  EXPECT_EQ(r.factor(3.5), 1.0);
+}

@@ -15,9 +15,10 @@ TEST(Quat, RotateMatchesMatrixOfPhysicsReference) {
   const Quat q = normalized(Quat{0.3, -0.5, 0.7, 0.2});
   const Vec3 v{0.4, -1.2, 2.5};
   const double w = q.w, x = q.x, y = q.y, z = q.z;
-  const Vec3 expect{(1 - 2 * (y * y + z * z)) * v.x + 2 * (x * y - w * z) * v.y + 2 * (x * z + w * y) * v.z,
-                    2 * (x * y + w * z) * v.x + (1 - 2 * (x * x + z * z)) * v.y + 2 * (y * z - w * x) * v.z,
-                    2 * (x * z - w * y) * v.x + 2 * (y * z + w * x) * v.y + (1 - 2 * (x * x + y * y)) * v.z};
+  const Vec3 expect{
+      (1 - 2 * (y * y + z * z)) * v.x + 2 * (x * y - w * z) * v.y + 2 * (x * z + w * y) * v.z,
+      2 * (x * y + w * z) * v.x + (1 - 2 * (x * x + z * z)) * v.y + 2 * (y * z - w * x) * v.z,
+      2 * (x * z - w * y) * v.x + 2 * (y * z + w * x) * v.y + (1 - 2 * (x * x + y * y)) * v.z};
   const Vec3 got = rotate(q, v);
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], expect[k], 1e-14);
 }

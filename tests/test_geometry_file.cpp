@@ -37,7 +37,8 @@ void expect_error(const std::string& text, std::initializer_list<const char*> fr
   }
 }
 
-std::string with_particles(const std::string& rows, int n, const std::string& head = "dimension 3\n") {
+std::string with_particles(const std::string& rows, int n,
+                           const std::string& head = "dimension 3\n") {
   return "breccia-geometry 1\n" + head + "particles " + std::to_string(n) + "\n" + rows;
 }
 }  // namespace
@@ -88,7 +89,8 @@ TEST(GeometryFile, BadInputGivesClearErrors) {
   expect_error("", {"sample.geo", "breccia-geometry 1"});
   expect_error("hello 1\n", {"sample.geo:1", "breccia-geometry 1"});
   expect_error("breccia-geometry 2\n", {"sample.geo:1", "version", "2"});
-  expect_error("breccia-geometry 1\ncolour red\n", {"sample.geo:2", "colour", "allowed: dimension"});
+  expect_error("breccia-geometry 1\ncolour red\n",
+               {"sample.geo:2", "colour", "allowed: dimension"});
   expect_error("breccia-geometry 1\ndimension 4\n", {"sample.geo:2", "dimension", "4", "2 or 3"});
   expect_error("breccia-geometry 1\nthickness -1\n", {"sample.geo:2", "thickness", "> 0"});
   expect_error(with_particles("1 0 0 0 -0.001 2650\n", 1),
@@ -108,8 +110,10 @@ TEST(GeometryFile, BadInputGivesClearErrors) {
   expect_error(with_particles("1 0 0 0 0.001 2650\nbonds 1\n1 9\n", 1),
                {"sample.geo:6", "tag2", "9", "no particle"});
   expect_error(with_particles("1 0 0 0 0.001 2650\nbonds 1\n1 1\n", 1), {"sample.geo:6", "itself"});
-  expect_error(with_particles("1 0 0 0 0.001 2650\nbonds 1\n1\n", 1), {"sample.geo:6", "tag1 tag2"});
-  expect_error("breccia-geometry 1\nbonds 0\n", {"sample.geo:2", "particles section must come first"});
+  expect_error(with_particles("1 0 0 0 0.001 2650\nbonds 1\n1\n", 1),
+               {"sample.geo:6", "tag1 tag2"});
+  expect_error("breccia-geometry 1\nbonds 0\n",
+               {"sample.geo:2", "particles section must come first"});
   expect_error("breccia-geometry 1\ndimension 3\n", {"particles", "required"});
 }
 

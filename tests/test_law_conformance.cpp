@@ -35,7 +35,9 @@ PairStepper<Law> loaded_pair(std::uint64_t seed, double speed = 1e-3, double spi
   return s;
 }
 
-double scale_of(const PairResult& r) { return norm(r.f2) + 1e-300; }
+double scale_of(const PairResult& r) {
+  return norm(r.f2) + 1e-300;
+}
 
 }  // namespace
 

@@ -56,8 +56,12 @@ void check_against_brute_force(bool planar) {
 }
 }  // namespace
 
-TEST(Neighbours, MatchBruteForce3D) { check_against_brute_force(false); }
-TEST(Neighbours, MatchBruteForce2D) { check_against_brute_force(true); }
+TEST(Neighbours, MatchBruteForce3D) {
+  check_against_brute_force(false);
+}
+TEST(Neighbours, MatchBruteForce2D) {
+  check_against_brute_force(true);
+}
 
 TEST(Neighbours, ContactHistorySurvivesRebuild) {
   // Particle 2 is pressed onto fixed particle 1 and dragged sideways (shear spring loads); a far
@@ -65,10 +69,14 @@ TEST(Neighbours, ContactHistorySurvivesRebuild) {
   const double R = 0.5e-3;
   ParticleStore ps(Dimension::Three, 1.0);
   ps.add({.tag = 1, .position = {0, 0, 0}, .radius = R, .density = 2650, .motion = Motion::Fixed});
-  ps.add({.tag = 2, .position = {2 * R - 1e-6, 0, 0}, .radius = R, .density = 2650,
-          .velocity = {0, 1e-3, 0}, .motion = Motion::Driven});
-  ps.add({.tag = 3, .position = {0, 0.01, 0}, .radius = R, .density = 2650,
-          .velocity = {0, 0, 50.0}});
+  ps.add({.tag = 2,
+          .position = {2 * R - 1e-6, 0, 0},
+          .radius = R,
+          .density = 2650,
+          .velocity = {0, 1e-3, 0},
+          .motion = Motion::Driven});
+  ps.add(
+      {.tag = 3, .position = {0, 0.01, 0}, .radius = R, .density = 2650, .velocity = {0, 0, 50.0}});
   EngineConfig cfg;
   cfg.time_step = 1e-8;
   LinearContact::Params lp;

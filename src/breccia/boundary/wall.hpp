@@ -46,13 +46,13 @@ struct Wall {
   double radial_speed = 0.0;
 
   // Results of the last step.
-  Vec3 force;              // resultant force the wall exerts on the particles
+  Vec3 force;  // resultant force the wall exerts on the particles
   std::size_t contacts = 0;
-  double work = 0.0;       // cumulative work done by the wall on the particles
+  double work = 0.0;          // cumulative work done by the wall on the particles
   double radial_force = 0.0;  // cylinder: sum of F . n over its contacts (positive pushes inward)
   Vec3 force_prev;            // previous step's force (and radial force), for the trapezoidal
   double radial_force_prev = 0.0;  // work rule that matches the leapfrog kinetic energy
-  double moved = 0.0;      // distance moved since the last neighbour rebuild
+  double moved = 0.0;              // distance moved since the last neighbour rebuild
 
   static Wall plane(std::string name, Vec3 point, Vec3 inward_normal) {
     Wall w;
@@ -114,8 +114,8 @@ template <class Law>
 struct WallContacts {
   std::vector<std::uint32_t> particle;
   std::vector<typename Law::State> state;
-  std::vector<Vec3> force, torque;  // on the particle, this step
-  std::vector<double> normal_force; // force . wall normal, this step
+  std::vector<Vec3> force, torque;   // on the particle, this step
+  std::vector<double> normal_force;  // force . wall normal, this step
 };
 
 }  // namespace breccia

@@ -5,5 +5,7 @@
 #include <string>
 
 namespace breccia {
-inline std::string num(double v) { return fmt::format("{}", v); }
+inline std::string num(double v) {
+  return fmt::format("{}", v);
+}
 }  // namespace breccia

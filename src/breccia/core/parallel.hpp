@@ -13,7 +13,9 @@ namespace breccia {
 
 inline constexpr std::size_t kBlock = 1024;
 
-inline std::size_t block_count(std::size_t n) noexcept { return (n + kBlock - 1) / kBlock; }
+inline std::size_t block_count(std::size_t n) noexcept {
+  return (n + kBlock - 1) / kBlock;
+}
 
 inline int max_threads() noexcept {
 #ifdef _OPENMP

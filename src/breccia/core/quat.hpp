@@ -12,12 +12,13 @@ struct Quat {
 };
 
 constexpr Quat operator*(const Quat& a, const Quat& b) noexcept {
-  return {a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
-          a.w * b.x + b.w * a.x + a.y * b.z - a.z * b.y,
-          a.w * b.y + b.w * a.y + a.z * b.x - a.x * b.z,
-          a.w * b.z + b.w * a.z + a.x * b.y - a.y * b.x};
+  return {
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + b.w * a.x + a.y * b.z - a.z * b.y,
+      a.w * b.y + b.w * a.y + a.z * b.x - a.x * b.z, a.w * b.z + b.w * a.z + a.x * b.y - a.y * b.x};
 }
-constexpr Quat conj(const Quat& q) noexcept { return {q.w, -q.x, -q.y, -q.z}; }
+constexpr Quat conj(const Quat& q) noexcept {
+  return {q.w, -q.x, -q.y, -q.z};
+}
 constexpr double norm2(const Quat& q) noexcept {
   return q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
 }

@@ -27,6 +27,8 @@ struct CrackRecord {
   BondEnergy energy;  // released elastic energy by component; energy.total() is E_brk
 };
 
-inline std::string_view to_string(CrackMode m) { return m == CrackMode::Tensile ? "tensile" : "shear"; }
+inline std::string_view to_string(CrackMode m) {
+  return m == CrackMode::Tensile ? "tensile" : "shear";
+}
 
 }  // namespace breccia

@@ -63,7 +63,8 @@ Grid make_grid(const std::vector<PosRad>& p, double skin, bool planar) {
   for (std::size_t c = 0; c < ncell; ++c) g.start[c + 1] += g.start[c];
   g.items.resize(p.size());
   std::vector<std::uint32_t> fill(g.start.begin(), g.start.end() - 1);
-  for (std::size_t i = 0; i < p.size(); ++i) g.items[fill[cell[i]]++] = static_cast<std::uint32_t>(i);
+  for (std::size_t i = 0; i < p.size(); ++i)
+    g.items[fill[cell[i]]++] = static_cast<std::uint32_t>(i);
   return g;
 }
 

@@ -45,7 +45,8 @@ void add_missing_pairs(const PairList& bonds, PairList& pairs) {
   for (std::size_t k = 0; k < bonds.size(); ++k) {
     const auto key = std::pair(bonds.first[k], bonds.second[k]);
     while (a < pairs.size() && std::pair(pairs.first[a], pairs.second[a]) < key) ++a;
-    if (a == pairs.size() || std::pair(pairs.first[a], pairs.second[a]) != key) missing.push_back(key);
+    if (a == pairs.size() || std::pair(pairs.first[a], pairs.second[a]) != key)
+      missing.push_back(key);
   }
   if (missing.empty()) return;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> all(pairs.size());
@@ -99,16 +100,19 @@ Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactMode
 }
 
 std::size_t Simulation::add_wall(Wall w) {
-  if (initialised_) throw InputError("simulation", "wall", w.name, "walls must be added before initialise()");
+  if (initialised_)
+    throw InputError("simulation", "wall", w.name, "walls must be added before initialise()");
   if (w.shape == WallShape::Cylinder && !(w.radius > 0.0))
     throw InputError("wall '" + w.name + "'", "radius", num(w.radius), "must be > 0 m");
   if (p_.planar() && w.shape == WallShape::Cylinder)
-    throw InputError("wall '" + w.name + "'", "shape", "cylinder", "2D simulations use plane walls");
+    throw InputError("wall '" + w.name + "'", "shape", "cylinder",
+                     "2D simulations use plane walls");
   if (p_.planar() && (w.normal.z != 0.0 || w.target_velocity.z != 0.0))
     throw InputError("wall '" + w.name + "'", "normal/velocity", "out of plane",
                      "2D walls have normals and velocities in the x-y plane");
   walls_.push_back(std::move(w));
-  std::visit([&]<class Law>(std::vector<WallContacts<Law>>& v) { v.emplace_back(); }, wall_contacts_);
+  std::visit([&]<class Law>(std::vector<WallContacts<Law>>& v) { v.emplace_back(); },
+             wall_contacts_);
   return walls_.size() - 1;
 }
 
@@ -131,10 +135,10 @@ void Simulation::install_bonds(BondSet<Law>& set) {
     sorted.second[k] = set.pairs.second[order[k]];
     tags[k] = set.tag[order[k]];
     if (k > 0 && sorted.first[k] == sorted.first[k - 1] && sorted.second[k] == sorted.second[k - 1])
-      throw InputError("bond list", "bond",
-                       std::to_string(p_.tag[sorted.first[k]]) + "-" +
-                           std::to_string(p_.tag[sorted.second[k]]),
-                       "each pair may be bonded once per law");
+      throw InputError(
+          "bond list", "bond",
+          std::to_string(p_.tag[sorted.first[k]]) + "-" + std::to_string(p_.tag[sorted.second[k]]),
+          "each pair may be bonded once per law");
   }
   set.pairs = std::move(sorted);
   set.tag = std::move(tags);
@@ -169,7 +173,8 @@ void Simulation::compact_bonds(BondSet<Law>& set) {
 
 void Simulation::initialise() {
   if (initialised_) return;
-  if (p_.size() == 0) throw InputError("simulation", "particles", "0", "at least one particle is needed");
+  if (p_.size() == 0)
+    throw InputError("simulation", "particles", "0", "at least one particle is needed");
   if (p_.planar() && p_.planar_body() == PlanarBody::Disk &&
       std::holds_alternative<ContactSet<HertzMindlin>>(contact_))
     throw InputError("contact law", "law", "hertz_mindlin",
@@ -253,9 +258,9 @@ void Simulation::estimate_time_step() {
             k_rot[i] += ks * q.r * q.r;
           }
           if constexpr (requires { CL::rayleigh_time_step(c.params, 1.0, 1.0); })
-            dt_rayleigh = std::min(dt_rayleigh, cfg_.hertz_rayleigh_factor *
-                                                    CL::rayleigh_time_step(c.params, q.r,
-                                                                           p_.density[i]));
+            dt_rayleigh =
+                std::min(dt_rayleigh, cfg_.hertz_rayleigh_factor *
+                                          CL::rayleigh_time_step(c.params, q.r, p_.density[i]));
         }
       },
       contact_);
@@ -312,7 +317,7 @@ void Simulation::rebuild(ContactSet<CL>& contacts) {
       fresh.particle.push_back(i);
       while (a < wc.particle.size() && wc.particle[a] < i) ++a;
       fresh.state.push_back(a < wc.particle.size() && wc.particle[a] == i ? wc.state[a]
-                                                                           : typename CL::State{});
+                                                                          : typename CL::State{});
     }
     fresh.force.assign(fresh.particle.size(), {});
     fresh.torque.assign(fresh.particle.size(), {});
@@ -691,8 +696,8 @@ void Simulation::sample_stored_energy(ContactSet<CL>& c) {
 template <class CL>
 void Simulation::step_impl(ContactSet<CL>& contacts) {
   if (needs_rebuild()) rebuild(contacts);
-  const bool sample = sample_requested_ ||
-                      (cfg_.energy_interval > 0 && step_ % cfg_.energy_interval == 0);
+  const bool sample =
+      sample_requested_ || (cfg_.energy_interval > 0 && step_ % cfg_.energy_interval == 0);
   compute_pairs(contacts);
   compute_walls(contacts);
   integrate(contacts, sample);

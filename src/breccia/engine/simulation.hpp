@@ -19,13 +19,13 @@
 namespace breccia {
 
 struct EngineConfig {
-  double time_step = 0.0;      // s; 0 = use the critical estimate times safety_factor
-  double safety_factor = 0.3;  // S of §1.5
-  double hertz_rayleigh_factor = 0.2;  // fraction of the Rayleigh time step for Hertz contacts
-  double local_damping = 0.0;  // Cundall alpha (§2.1)
-  Vec3 gravity;                // m/s^2
-  double skin = 0.0;           // m; 0 = 0.4 x the mean radius
-  std::uint64_t seed = 1;      // strengths and anything else random
+  double time_step = 0.0;               // s; 0 = use the critical estimate times safety_factor
+  double safety_factor = 0.3;           // S of §1.5
+  double hertz_rayleigh_factor = 0.2;   // fraction of the Rayleigh time step for Hertz contacts
+  double local_damping = 0.0;           // Cundall alpha (§2.1)
+  Vec3 gravity;                         // m/s^2
+  double skin = 0.0;                    // m; 0 = 0.4 x the mean radius
+  std::uint64_t seed = 1;               // strengths and anything else random
   std::uint64_t energy_interval = 100;  // steps between energy-ledger samples (0 = on demand)
 };
 
@@ -37,17 +37,17 @@ struct EnergyLedger {
   // Stored at t_n.
   double kinetic_translational = 0.0;
   double kinetic_rotational = 0.0;
-  BondEnergy bond;        // intact bonds, by component
-  double contact = 0.0;   // particle-particle and particle-wall contacts
+  BondEnergy bond;       // intact bonds, by component
+  double contact = 0.0;  // particle-particle and particle-wall contacts
   // Cumulative.
-  double boundary_work = 0.0;  // walls and driven particles
+  double boundary_work = 0.0;    // walls and driven particles
   double body_force_work = 0.0;  // gravity
-  double external_work = 0.0;  // external per-particle loads (membranes)
-  double friction = 0.0;       // Coulomb sliding
+  double external_work = 0.0;    // external per-particle loads (membranes)
+  double friction = 0.0;         // Coulomb sliding
   double local_damping = 0.0;
   double viscous_damping = 0.0;
-  double deleted = 0.0;        // springs lost without work
-  BondEnergy released;         // energy released by broken bonds, by component
+  double deleted = 0.0;  // springs lost without work
+  BondEnergy released;   // energy released by broken bonds, by component
   std::uint64_t broken_bonds = 0;
   // Balance against the baseline sample: work in minus (change of stored + dissipated).
   double residual = 0.0;

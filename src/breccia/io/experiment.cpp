@@ -1,11 +1,11 @@
 #include "breccia/io/experiment.hpp"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <fstream>
 #include <functional>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
@@ -49,7 +49,8 @@ std::string get_string(const toml::node& n, const std::string& where, const std:
 
 struct Key {
   std::string section, name, unit, type, allowed, doc;
-  std::function<void(ExperimentSpec&, const toml::node&, const std::string&, const std::string&)> set;
+  std::function<void(ExperimentSpec&, const toml::node&, const std::string&, const std::string&)>
+      set;
   std::function<std::string(const ExperimentSpec&)> get;
 };
 
@@ -71,8 +72,8 @@ Key real_key(std::string section, std::string name, std::string unit, double lo,
 template <class Getter>
 Key nested_real(std::string section, std::string name, std::string unit, double lo, double hi,
                 bool lo_open, bool hi_open, std::string doc, Getter ref) {
-  ParamField<ExperimentSpec> f{"", unit == "" ? "-" : unit, &ExperimentSpec::radius, lo, hi,
-                               !lo_open, !hi_open, ""};
+  ParamField<ExperimentSpec> f{
+      "", unit == "" ? "-" : unit, &ExperimentSpec::radius, lo, hi, !lo_open, !hi_open, ""};
   Key k{section, name, unit, "number", f.allowed(), std::move(doc), {}, {}};
   k.set = [f, ref](ExperimentSpec& s, const toml::node& n, const std::string& where,
                    const std::string& key) {
@@ -147,11 +148,11 @@ const std::vector<Key>& key_table() {
     k.back().allowed = "allowed: 2 or 3";
     k.push_back(int_key("engine", "threads", 0, 1024, "OpenMP threads; 0 = all cores",
                         [](ExperimentSpec& s) -> std::int64_t& { return s.threads; }));
-    k.push_back(int_key(
-        "engine", "seed", 0, std::numeric_limits<std::int64_t>::max(),
-        "seed of every random draw (bond strengths)", [](ExperimentSpec& s) -> std::int64_t& {
-          return reinterpret_cast<std::int64_t&>(s.engine.seed);
-        }));
+    k.push_back(int_key("engine", "seed", 0, std::numeric_limits<std::int64_t>::max(),
+                        "seed of every random draw (bond strengths)",
+                        [](ExperimentSpec& s) -> std::int64_t& {
+                          return reinterpret_cast<std::int64_t&>(s.engine.seed);
+                        }));
     k.push_back(nested_real("engine", "time_step", "s", 0, kInf, false, true,
                             "time step; 0 = critical estimate x safety_factor (physics.md §1.5)",
                             [](ExperimentSpec& s) -> double& { return s.engine.time_step; }));
@@ -178,9 +179,14 @@ const std::vector<Key>& key_table() {
                            "bonded where touching; file: a breccia-geometry file",
                            &ExperimentSpec::sample_source));
     {
-      Key c{"sample", "cells", "", "array of 3 integers",
+      Key c{"sample",
+            "cells",
+            "",
+            "array of 3 integers",
             "each >= 1; FCC: 4 spheres per cell, hexagonal: cells[0] x cells[1] disks",
-            "lattice size in cells along x, y, z (z ignored in 2D)", {}, {}};
+            "lattice size in cells along x, y, z (z ignored in 2D)",
+            {},
+            {}};
       c.set = [](ExperimentSpec& s, const toml::node& n, const std::string& where,
                  const std::string& key) {
         const auto* arr = n.as_array();
@@ -205,8 +211,9 @@ const std::vector<Key>& key_table() {
     k.push_back(real_key("sample", "thickness", "m", 0, kInf, true,
                          "2D disk thickness t (forces are for this thickness)",
                          &ExperimentSpec::thickness));
-    k.push_back(string_key("sample", "file", "geometry file when source = \"file\" (relative "
-                                             "paths are taken from the experiment file's folder)",
+    k.push_back(string_key("sample", "file",
+                           "geometry file when source = \"file\" (relative "
+                           "paths are taken from the experiment file's folder)",
                            &ExperimentSpec::geometry_file));
     k.push_back(real_key("sample", "bond_gap_tolerance", "m", 0, kInf, false,
                          "pairs with a gap up to this get a bond when the sample lists no bonds",
@@ -218,8 +225,8 @@ const std::vector<Key>& key_table() {
     k.push_back(real_key("contact", "wall_friction", "", 0, kInf, false,
                          "friction coefficient between particles and walls (0: lubricated)",
                          &ExperimentSpec::wall_friction));
-    k.push_back(choice_key("bond", "law", {"parallel_bond"}, "bond law",
-                           &ExperimentSpec::bond_law));
+    k.push_back(
+        choice_key("bond", "law", {"parallel_bond"}, "bond law", &ExperimentSpec::bond_law));
     // [loading]
     k.push_back(nested_real("loading", "platen_speed", "m/s", 0, kInf, true, true,
                             "speed of each platen toward the other",
@@ -234,14 +241,15 @@ const std::vector<Key>& key_table() {
                             "after the peak, stop once the stress is below this fraction of it",
                             [](ExperimentSpec& s) -> double& { return s.loading.stop_fraction; }));
     // [output]
-    k.push_back(string_key("output", "directory",
-                           "folder that receives the run folder (relative to the working directory)",
-                           &ExperimentSpec::output_directory));
+    k.push_back(
+        string_key("output", "directory",
+                   "folder that receives the run folder (relative to the working directory)",
+                   &ExperimentSpec::output_directory));
     k.push_back(int_key("output", "history_interval", 1, 1000000000,
                         "steps between rows of history.csv",
                         [](ExperimentSpec& s) -> std::int64_t& { return s.history_interval; }));
-    k.push_back(bool_key("output", "progress", "progress bar on a terminal",
-                         &ExperimentSpec::progress));
+    k.push_back(
+        bool_key("output", "progress", "progress bar on a terminal", &ExperimentSpec::progress));
     return k;
   }();
   return keys;
@@ -329,14 +337,13 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
           if (key.section == name) allowed += (allowed.empty() ? "" : ", ") + key.name;
       }
       if (!found)
-        throw InputError(where, full, show(value),
-                         "unknown key" +
-                             (name == "contact" || name == "bond"
-                                  ? " for law \"" + (name == "contact" ? spec.contact_law
-                                                                       : spec.bond_law) +
-                                        "\""
-                                  : std::string()) +
-                             "; allowed: " + allowed);
+        throw InputError(
+            where, full, show(value),
+            "unknown key" +
+                (name == "contact" || name == "bond"
+                     ? " for law \"" + (name == "contact" ? spec.contact_law : spec.bond_law) + "\""
+                     : std::string()) +
+                "; allowed: " + allowed);
     }
   }
 }
@@ -370,7 +377,8 @@ void apply_overrides(toml::table& root, const std::vector<std::string>& override
 
 void check_consistency(const ExperimentSpec& s, const std::string& source) {
   if (s.sample_source == "file" && s.geometry_file.empty())
-    throw InputError(source, "sample.file", "\"\"", "a geometry file is required when source = \"file\"");
+    throw InputError(source, "sample.file", "\"\"",
+                     "a geometry file is required when source = \"file\"");
   if (s.dimension == 2 && s.contact_law == "hertz_mindlin")
     throw InputError(source, "contact.law", "\"hertz_mindlin\"",
                      "2D disks use \"linear\" contacts (Hertz has no disk form, physics.md §3.4)");
@@ -422,7 +430,8 @@ std::string to_toml(const ExperimentSpec& spec) {
     out += k.name + " = " + k.get(spec) + "\n";
     if (k.section == "contact" && k.name == "wall_friction") {
       auto dump = [&]<class Law>(const typename Law::Params& p) {
-        for (const auto& f : Law::fields()) out += std::string(f.key) + " = " + f.default_text(p) + "\n";
+        for (const auto& f : Law::fields())
+          out += std::string(f.key) + " = " + f.default_text(p) + "\n";
       };
       if (spec.contact_law == "linear")
         dump.template operator()<LinearContact>(spec.linear);
@@ -440,7 +449,8 @@ std::string to_toml(const ExperimentSpec& spec) {
 namespace {
 template <class Law>
 std::string law_docs(const std::string& section) {
-  std::string s = fmt::format("\n#### `{}` law `\"{}\"`\n\n{}\n\n", section, Law::name, Law::summary);
+  std::string s =
+      fmt::format("\n#### `{}` law `\"{}\"`\n\n{}\n\n", section, Law::name, Law::summary);
   s += "| key | unit | default | allowed | meaning |\n|---|---|---|---|---|\n";
   static const typename Law::Params d{};
   for (const auto& f : Law::fields())

@@ -70,7 +70,8 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
   Reader rd(text, source);
   GeometryData g;
   if (rd.done())
-    throw InputError(rd.where_end(), "header", "(empty)", "the file must start with 'breccia-geometry 1'");
+    throw InputError(rd.where_end(), "header", "(empty)",
+                     "the file must start with 'breccia-geometry 1'");
   {
     const Line& h = rd.next();
     if (h.tokens.size() != 2 || h.tokens[0] != "breccia-geometry")
@@ -85,12 +86,14 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
     const std::string& key = l.tokens[0];
     auto need_args = [&](std::size_t n, const char* allowed) {
       if (l.tokens.size() != n + 1)
-        throw InputError(rd.where(l), key, std::to_string(l.tokens.size() - 1) + " values", allowed);
+        throw InputError(rd.where(l), key, std::to_string(l.tokens.size() - 1) + " values",
+                         allowed);
     };
     if (key == "dimension") {
       need_args(1, "expects one value: 2 or 3");
       const auto d = rd.integer(l, 1, "dimension");
-      if (d != 2 && d != 3) throw InputError(rd.where(l), "dimension", l.tokens[1], "allowed: 2 or 3");
+      if (d != 2 && d != 3)
+        throw InputError(rd.where(l), "dimension", l.tokens[1], "allowed: 2 or 3");
       g.dimension = d == 2 ? Dimension::Two : Dimension::Three;
       have_dimension = true;
     } else if (key == "thickness") {
@@ -117,16 +120,21 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
         s.tag = rd.integer(p, 0, "tag");
         s.position = {rd.real(p, 1, "x"), rd.real(p, 2, "y"), rd.real(p, 3, "z")};
         s.radius = rd.real(p, 4, "radius");
-        if (!(s.radius > 0.0)) throw InputError(rd.where(p), "radius", p.tokens[4], "must be > 0 m");
+        if (!(s.radius > 0.0))
+          throw InputError(rd.where(p), "radius", p.tokens[4], "must be > 0 m");
         s.density = rd.real(p, 5, "density");
         if (!(s.density > 0.0))
           throw InputError(rd.where(p), "density", p.tokens[5], "must be > 0 kg/m^3");
         if (nt >= 7) {
           const std::string& m = p.tokens[6];
-          if (m == "free") s.motion = Motion::Free;
-          else if (m == "fixed") s.motion = Motion::Fixed;
-          else if (m == "driven") s.motion = Motion::Driven;
-          else throw InputError(rd.where(p), "motion", "'" + m + "'", "allowed: free, fixed, driven");
+          if (m == "free")
+            s.motion = Motion::Free;
+          else if (m == "fixed")
+            s.motion = Motion::Fixed;
+          else if (m == "driven")
+            s.motion = Motion::Driven;
+          else
+            throw InputError(rd.where(p), "motion", "'" + m + "'", "allowed: free, fixed, driven");
         }
         if (nt >= 10) s.velocity = {rd.real(p, 7, "vx"), rd.real(p, 8, "vy"), rd.real(p, 9, "vz")};
         if (nt >= 13)
@@ -160,7 +168,8 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
           if (!tags.count(t))
             throw InputError(rd.where(b), col, std::to_string(t), "no particle has this tag");
         if (t1 == t2)
-          throw InputError(rd.where(b), "tag2", std::to_string(t2), "a particle cannot bond to itself");
+          throw InputError(rd.where(b), "tag2", std::to_string(t2),
+                           "a particle cannot bond to itself");
         g.bonds.emplace_back(t1, t2);
       }
     } else {
@@ -196,13 +205,17 @@ void write_geometry(const std::string& path, const GeometryData& g) {
   auto out = fmt::output_file(path);
   out.print("breccia-geometry 1\ndimension {}\n", g.dimension == Dimension::Two ? 2 : 3);
   if (g.dimension == Dimension::Two) out.print("thickness {:.17g}\n", g.thickness);
-  out.print("particles {}\n# tag x y z radius density motion vx vy vz wx wy wz\n", g.particles.size());
+  out.print("particles {}\n# tag x y z radius density motion vx vy vz wx wy wz\n",
+            g.particles.size());
   for (const ParticleSpec& p : g.particles) {
-    const char* m = p.motion == Motion::Free ? "free" : (p.motion == Motion::Fixed ? "fixed" : "driven");
-    out.print("{} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g}\n",
-              p.tag, p.position.x, p.position.y, p.position.z, p.radius, p.density, m,
-              p.velocity.x, p.velocity.y, p.velocity.z, p.angular_velocity.x,
-              p.angular_velocity.y, p.angular_velocity.z);
+    const char* m =
+        p.motion == Motion::Free ? "free" : (p.motion == Motion::Fixed ? "fixed" : "driven");
+    out.print(
+        "{} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} "
+        "{:.17g}\n",
+        p.tag, p.position.x, p.position.y, p.position.z, p.radius, p.density, m, p.velocity.x,
+        p.velocity.y, p.velocity.z, p.angular_velocity.x, p.angular_velocity.y,
+        p.angular_velocity.z);
   }
   out.print("bonds {}\n", g.bonds.size());
   for (const auto& [a, b] : g.bonds) out.print("{} {}\n", a, b);

@@ -52,16 +52,19 @@ void write_json(const fs::path& p, const json& j) {
 
 fs::path make_folder(const ExperimentSpec& spec) {
   const auto now = std::chrono::system_clock::now();
-  const std::string stamp = fmt::format("{:%Y%m%d-%H%M%S}", fmt::localtime(std::chrono::system_clock::to_time_t(now)));
+  const std::string stamp =
+      fmt::format("{:%Y%m%d-%H%M%S}", fmt::localtime(std::chrono::system_clock::to_time_t(now)));
   std::string safe;
-  for (char c : spec.name) safe += (std::isalnum(static_cast<unsigned char>(c)) || c == '-') ? c : '_';
+  for (char c : spec.name)
+    safe += (std::isalnum(static_cast<unsigned char>(c)) || c == '-') ? c : '_';
   fs::path base = fs::path(spec.output_directory) / (stamp + "-" + safe);
   fs::path p = base;
   for (int k = 2; fs::exists(p); ++k) p = base.string() + "-" + std::to_string(k);
   std::error_code ec;
   fs::create_directories(p, ec);
-  if (ec) throw InputError(p.string(), "output.directory", spec.output_directory,
-                           "cannot create the run folder: " + ec.message());
+  if (ec)
+    throw InputError(p.string(), "output.directory", spec.output_directory,
+                     "cannot create the run folder: " + ec.message());
   return p;
 }
 
@@ -71,11 +74,11 @@ struct Built {
   double bar_wave_speed = 0.0;
 };
 
-ParticleStore make_particles(const ExperimentSpec& s, std::vector<std::pair<std::uint64_t, std::uint64_t>>& bonds) {
+ParticleStore make_particles(const ExperimentSpec& s,
+                             std::vector<std::pair<std::uint64_t, std::uint64_t>>& bonds) {
   if (s.sample_source == "file") {
     fs::path p = s.geometry_file;
-    if (p.is_relative() && s.source != "built-in default")
-      p = fs::path(s.source).parent_path() / p;
+    if (p.is_relative() && s.source != "built-in default") p = fs::path(s.source).parent_path() / p;
     GeometryData g = read_geometry(p.string());
     const Dimension want = s.dimension == 2 ? Dimension::Two : Dimension::Three;
     if (g.dimension != want)
@@ -156,19 +159,18 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   RunResult result;
   result.folder = folder.string();
   const auto t_start = std::chrono::steady_clock::now();
-  json manifest{{"program", "breccia"},
-                {"version", kVersion},
-                {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
-                {"command", opt.command_line},
-                {"experiment_source", spec.source},
-                {"seed", spec.engine.seed},
-                {"threads", max_threads()},
-                {"machine", machine_description()},
-                {"status", "running"},
-                {"resolved_experiment", to_toml(spec)}};
-  {
-    std::ofstream(folder / "experiment.toml") << to_toml(spec);
-  }
+  json manifest{
+      {"program", "breccia"},
+      {"version", kVersion},
+      {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
+      {"command", opt.command_line},
+      {"experiment_source", spec.source},
+      {"seed", spec.engine.seed},
+      {"threads", max_threads()},
+      {"machine", machine_description()},
+      {"status", "running"},
+      {"resolved_experiment", to_toml(spec)}};
+  { std::ofstream(folder / "experiment.toml") << to_toml(spec); }
   write_json(folder / "manifest.json", manifest);
 
   auto finish = [&](const std::string& status, const std::string& reason) {
@@ -228,10 +230,12 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         const double frac = std::clamp(a.strain / spec.loading.max_strain, 1e-9, 1.0);
         const double el = std::chrono::duration<double>(now - t_start).count();
         const int width = 30, fill = static_cast<int>(frac * width);
-        std::fprintf(stderr, "\r[%s%s] strain %.4f  stress %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
-                     std::string(static_cast<std::size_t>(fill), '#').c_str(),
-                     std::string(static_cast<std::size_t>(width - fill), '.').c_str(), a.strain,
-                     a.stress * 1e-6, sim.cracks().size(), el, el * (1 - frac) / frac);
+        std::fprintf(
+            stderr,
+            "\r[%s%s] strain %.4f  stress %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
+            std::string(static_cast<std::size_t>(fill), '#').c_str(),
+            std::string(static_cast<std::size_t>(width - fill), '.').c_str(), a.strain,
+            a.stress * 1e-6, sim.cracks().size(), el, el * (1 - frac) / frac);
         std::fflush(stderr);
       }
     }
@@ -240,7 +244,8 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     cracks.flush();
     history.flush();
 
-    result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    result.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     result.steps = sim.step_count();
     const auto peak = analysis::find_peak(strain, stress);
     const auto fit = analysis::tangent_modulus(strain, stress);
@@ -248,7 +253,8 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     result.strain_at_peak = peak.strain;
     result.youngs_modulus = fit.valid ? fit.slope : std::nan("");
     result.cracks = sim.cracks().size();
-    for (const auto& c : sim.cracks()) (c.mode == CrackMode::Tensile ? result.tensile : result.shear)++;
+    for (const auto& c : sim.cracks())
+      (c.mode == CrackMode::Tensile ? result.tensile : result.shear)++;
     result.energy_residual_relative = sim.ledger().residual_relative;
     json summary{
         {"status", status},
@@ -263,13 +269,12 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         {"simulated_time_s", sim.time()},
         {"time_step_s", sim.time_step()},
         {"wall_seconds", result.wall_seconds},
-        {"particle_steps_per_second",
-         static_cast<double>(result.particles) * static_cast<double>(result.steps) / result.wall_seconds},
+        {"particle_steps_per_second", static_cast<double>(result.particles) *
+                                          static_cast<double>(result.steps) / result.wall_seconds},
         {"peak_axial_stress_pa", peak.stress},
         {"peak_axial_stress_mpa", peak.stress * 1e-6},
         {"axial_strain_at_peak", peak.strain},
-        {"youngs_modulus_pa",
-         fit.valid ? json(fit.slope) : json(nullptr)},
+        {"youngs_modulus_pa", fit.valid ? json(fit.slope) : json(nullptr)},
         {"youngs_modulus_method",
          "least-squares slope of axial stress vs axial strain, pre-peak points at 40-60 % of peak "
          "(ISRM tangent E_t50)"},
@@ -283,7 +288,8 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     manifest["files"] = {"experiment.toml", "history.csv", "cracks.csv", "summary.json"};
     finish(status, stop);
   } catch (const std::exception& e) {
-    result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    result.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     finish("failed", e.what());
     throw;
   }

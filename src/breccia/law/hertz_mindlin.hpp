@@ -30,7 +30,8 @@ struct HertzMindlin {
          "grain shear modulus G"},
         {"poisson_ratio", "-", &Params::poisson_ratio, -1, 0.5, false, false,
          "grain Poisson ratio nu"},
-        {"friction", "-", &Params::friction, 0, kInf, true, true, "Coulomb friction coefficient mu"},
+        {"friction", "-", &Params::friction, 0, kInf, true, true,
+         "Coulomb friction coefficient mu"},
         {"normal_damping_ratio", "-", &Params::normal_damping_ratio, 0, 1, true, false,
          "damping ratio of the Tsuji normal dashpot (0 = none)"},
         {"shear_damping_ratio", "-", &Params::shear_damping_ratio, 0, 1, true, false,
@@ -121,13 +122,13 @@ struct HertzMindlin {
     Vec3 force = g.n * fn + fs_trial;
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
       const double sn = 2.0 * Es * a;
-      double fn_visc = -2.0 * std::sqrt(5.0 / 6.0) * p.normal_damping_ratio *
-                       std::sqrt(sn * g.m_star()) * vn;
+      double fn_visc =
+          -2.0 * std::sqrt(5.0 / 6.0) * p.normal_damping_ratio * std::sqrt(sn * g.m_star()) * vn;
       if (fn + fn_visc < 0.0) fn_visc = -fn;
       Vec3 fs_visc{};
       if (!sliding)
-        fs_visc = vt * (-2.0 * std::sqrt(5.0 / 6.0) * p.shear_damping_ratio *
-                        std::sqrt(kt * g.m_star()));
+        fs_visc =
+            vt * (-2.0 * std::sqrt(5.0 / 6.0) * p.shear_damping_ratio * std::sqrt(kt * g.m_star()));
       dis.viscous -= (fn_visc * vn + dot(fs_visc, vt)) * dt;
       force += g.n * fn_visc + fs_visc;
     }

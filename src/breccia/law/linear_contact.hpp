@@ -31,7 +31,8 @@ struct LinearContact {
          "r = min(R1, R2), L = R1 + R2 (wall: r = L = R)"},
         {"stiffness_ratio", "-", &Params::stiffness_ratio, 0, kInf, false, true,
          "kappa = k_n / k_s"},
-        {"friction", "-", &Params::friction, 0, kInf, true, true, "Coulomb friction coefficient mu"},
+        {"friction", "-", &Params::friction, 0, kInf, true, true,
+         "Coulomb friction coefficient mu"},
         {"normal_damping_ratio", "-", &Params::normal_damping_ratio, 0, 1, true, false,
          "critical damping ratio of the normal dashpot (0 = none)"},
         {"shear_damping_ratio", "-", &Params::shear_damping_ratio, 0, 1, true, false,
@@ -41,8 +42,8 @@ struct LinearContact {
   static Params example_params() { return {}; }
 
   struct State {
-    Vec3 shear_force;  // F_s, kept in the current contact plane
-    Vec3 n_old;        // normal of the previous step (zero: new contact)
+    Vec3 shear_force;           // F_s, kept in the current contact plane
+    Vec3 n_old;                 // normal of the previous step (zero: new contact)
     double normal_force = 0.0;  // spring part of F_n, kept for energy and output
     double kn = 0.0;            // normal stiffness of this pair (set at first touch)
   };
@@ -110,7 +111,8 @@ struct LinearContact {
   // Elastic energy stored in the contact (§3.6).
   static double stored_energy(const Params& p, const State& s) noexcept {
     if (s.kn == 0.0) return 0.0;
-    return 0.5 * (s.normal_force * s.normal_force + norm2(s.shear_force) * p.stiffness_ratio) / s.kn;
+    return 0.5 * (s.normal_force * s.normal_force + norm2(s.shear_force) * p.stiffness_ratio) /
+           s.kn;
   }
 };
 

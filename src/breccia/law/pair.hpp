@@ -11,16 +11,16 @@
 namespace breccia {
 
 struct PairGeometry {
-  Vec3 n;             // unit normal from body 1 to body 2
-  double d = 0.0;     // centre distance (for a wall: distance from the wall plane)
-  double delta = 0.0; // overlap R1 + R2 - d (> 0 in contact)
-  Vec3 r1, r2;        // lever arms from the centres to the contact point
-  Vec3 vc;            // relative velocity of the contact point, 2 minus 1
-  Vec3 w1, w2;        // angular velocities
+  Vec3 n;              // unit normal from body 1 to body 2
+  double d = 0.0;      // centre distance (for a wall: distance from the wall plane)
+  double delta = 0.0;  // overlap R1 + R2 - d (> 0 in contact)
+  Vec3 r1, r2;         // lever arms from the centres to the contact point
+  Vec3 vc;             // relative velocity of the contact point, 2 minus 1
+  Vec3 w1, w2;         // angular velocities
   double R1 = 0.0, R2 = 0.0;
   double m1 = 0.0, m2 = 0.0;  // masses (m1 unused against a wall)
-  bool wall = false;    // body 1 is a rigid wall (then R1 is not a radius)
-  bool planar = false;  // 2D slab geometry
+  bool wall = false;          // body 1 is a rigid wall (then R1 is not a radius)
+  bool planar = false;        // 2D slab geometry
   double thickness = 1.0;
 
   double vn() const noexcept { return dot(vc, n); }
@@ -31,9 +31,11 @@ struct PairGeometry {
 
 // Geometry of a particle pair from centres, radii and velocities (§0.2): contact point in the
 // middle of the overlap (or gap).
-[[gnu::always_inline]] inline PairGeometry pair_geometry(const Vec3& x1, double R1, const Vec3& x2, double R2,
-                                  const Vec3& v1, const Vec3& w1, const Vec3& v2, const Vec3& w2,
-                                  double m1, double m2, bool planar, double thickness) noexcept {
+[[gnu::always_inline]] inline PairGeometry pair_geometry(const Vec3& x1, double R1, const Vec3& x2,
+                                                         double R2, const Vec3& v1, const Vec3& w1,
+                                                         const Vec3& v2, const Vec3& w2, double m1,
+                                                         double m2, bool planar,
+                                                         double thickness) noexcept {
   PairGeometry g;
   const Vec3 dvec = x2 - x1;
   g.d = norm(dvec);
@@ -100,12 +102,12 @@ struct BondFailure {
   CrackMode mode = CrackMode::Tensile;
   double Fn = 0.0;  // compression-positive
   double Fs = 0.0;
-  double Mt = 0.0;  // signed twisting moment M . n
-  double Mb = 0.0;  // |bending moment|
-  double sigma = 0.0, tau = 0.0;          // peak stresses, sigma tension-positive
-  double ratio_t = 0.0, ratio_s = 0.0;    // criterion ratios; NaN where undefined
+  double Mt = 0.0;                      // signed twisting moment M . n
+  double Mb = 0.0;                      // |bending moment|
+  double sigma = 0.0, tau = 0.0;        // peak stresses, sigma tension-positive
+  double ratio_t = 0.0, ratio_s = 0.0;  // criterion ratios; NaN where undefined
   double bond_radius = 0.0;
-  BondEnergy energy;                      // released energy by component
+  BondEnergy energy;  // released energy by component
 };
 
 }  // namespace breccia

@@ -22,19 +22,21 @@ struct ParallelBond {
       "Potyondy-Cundall parallel bond (incremental), tension then Mohr-Coulomb shear failure.";
 
   struct Params {
-    double radius_multiplier = 1.0;   // lambda_bar
-    double modulus = 10e9;            // E_bar_c
-    double stiffness_ratio = 2.5;     // kappa_bar = k_n / k_s
-    double tensile_strength = 20e6;   // mean sigma_c
-    double tensile_strength_sd = 0;   // standard deviation of sigma_c
-    double cohesion = 20e6;           // mean c (tau_c of the 2004 model)
+    double radius_multiplier = 1.0;  // lambda_bar
+    double modulus = 10e9;           // E_bar_c
+    double stiffness_ratio = 2.5;    // kappa_bar = k_n / k_s
+    double tensile_strength = 20e6;  // mean sigma_c
+    double tensile_strength_sd = 0;  // standard deviation of sigma_c
+    double cohesion = 20e6;          // mean c (tau_c of the 2004 model)
     double cohesion_sd = 0;
-    double friction_angle_deg = 0;    // phi_bar; 0 = 2004 model
-    double moment_factor = 1.0;       // beta_bar
+    double friction_angle_deg = 0;  // phi_bar; 0 = 2004 model
+    double moment_factor = 1.0;     // beta_bar
     // Derived by prepare(), not input: tan(phi), kept out of the per-step kernel.
     double tan_friction = 0.0;
   };
-  static void prepare(Params& p) noexcept { p.tan_friction = std::tan(p.friction_angle_deg * kDegree); }
+  static void prepare(Params& p) noexcept {
+    p.tan_friction = std::tan(p.friction_angle_deg * kDegree);
+  }
   static constexpr std::array<ParamField<Params>, 9> fields() {
     return {{
         {"radius_multiplier", "-", &Params::radius_multiplier, 0, 1, false, true,
@@ -64,9 +66,9 @@ struct ParallelBond {
   }
 
   struct State {
-    Vec3 shear_force;    // F_s
-    Vec3 bend_moment;    // M_b
-    Vec3 n_old;          // normal of the previous step; zero until the first step after install
+    Vec3 shear_force;  // F_s
+    Vec3 bend_moment;  // M_b
+    Vec3 n_old;        // normal of the previous step; zero until the first step after install
     double normal_force = 0.0;  // F_n, compression-positive
     double twist_moment = 0.0;  // M_t
     // Fixed at installation (the kernel needs them every step, so they are kept, not recomputed):

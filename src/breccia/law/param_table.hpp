@@ -32,8 +32,8 @@ struct ParamField {
     if (is_flag()) return "must be true or false";
     std::string s = "allowed: ";
     if (min > -kInf && max < kInf)
-      s += num(min) + (min_inclusive ? " <= " : " < ") + "value" + (max_inclusive ? " <= " : " < ") +
-           num(max);
+      s += num(min) + (min_inclusive ? " <= " : " < ") + "value" +
+           (max_inclusive ? " <= " : " < ") + num(max);
     else if (min > -kInf)
       s += "value" + std::string(min_inclusive ? " >= " : " > ") + num(min);
     else if (max < kInf)
@@ -53,8 +53,7 @@ struct ParamField {
 
   // Sets a real parameter, throwing an InputError naming `where` if it is out of range.
   void set(P& p, double v, const std::string& where, const std::string& prefix = "") const {
-    if (is_flag())
-      throw InputError(where, prefix + std::string(key), num(v), allowed());
+    if (is_flag()) throw InputError(where, prefix + std::string(key), num(v), allowed());
     if (!in_range(v)) throw InputError(where, prefix + std::string(key), num(v), allowed());
     p.*std::get<double P::*>(member) = v;
   }

@@ -29,12 +29,31 @@ void CsvFile::flush() {
 }
 
 HistoryRecorder::HistoryRecorder(const std::string& path)
-    : csv_(path, {"step", "time_s", "axial_strain", "axial_stress_pa", "platen_force_bottom_n",
-                  "platen_force_top_n", "broken_bonds", "tensile_cracks", "shear_cracks",
-                  "intact_bonds", "contacts", "kinetic_j", "bond_tension_j", "bond_compression_j",
-                  "bond_shear_j", "bond_bending_j", "bond_twisting_j", "contact_strain_j",
-                  "boundary_work_j", "friction_j", "local_damping_j", "viscous_damping_j",
-                  "deleted_springs_j", "released_by_breaks_j", "energy_residual_j",
+    : csv_(path, {"step",
+                  "time_s",
+                  "axial_strain",
+                  "axial_stress_pa",
+                  "platen_force_bottom_n",
+                  "platen_force_top_n",
+                  "broken_bonds",
+                  "tensile_cracks",
+                  "shear_cracks",
+                  "intact_bonds",
+                  "contacts",
+                  "kinetic_j",
+                  "bond_tension_j",
+                  "bond_compression_j",
+                  "bond_shear_j",
+                  "bond_bending_j",
+                  "bond_twisting_j",
+                  "contact_strain_j",
+                  "boundary_work_j",
+                  "friction_j",
+                  "local_damping_j",
+                  "viscous_damping_j",
+                  "deleted_springs_j",
+                  "released_by_breaks_j",
+                  "energy_residual_j",
                   "energy_residual_relative"}) {}
 
 void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
@@ -52,10 +71,35 @@ void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
 }
 
 CrackRecorder::CrackRecorder(const std::string& path)
-    : csv_(path, {"step", "time_s", "law", "bond_tag", "id1", "id2", "r1_m", "r2_m", "x_m",
-                  "y_m", "z_m", "nx", "ny", "nz", "mode", "bond_radius_m", "fn_n", "fs_n",
-                  "mt_nm", "mb_nm", "sigma_pa", "tau_pa", "ratio_t", "ratio_s", "energy_j",
-                  "energy_normal_j", "energy_shear_j", "energy_bending_j", "energy_twisting_j"}) {}
+    : csv_(path, {"step",
+                  "time_s",
+                  "law",
+                  "bond_tag",
+                  "id1",
+                  "id2",
+                  "r1_m",
+                  "r2_m",
+                  "x_m",
+                  "y_m",
+                  "z_m",
+                  "nx",
+                  "ny",
+                  "nz",
+                  "mode",
+                  "bond_radius_m",
+                  "fn_n",
+                  "fs_n",
+                  "mt_nm",
+                  "mb_nm",
+                  "sigma_pa",
+                  "tau_pa",
+                  "ratio_t",
+                  "ratio_s",
+                  "energy_j",
+                  "energy_normal_j",
+                  "energy_shear_j",
+                  "energy_bending_j",
+                  "energy_twisting_j"}) {}
 
 void CrackRecorder::record(const Simulation& sim) {
   const auto& cracks = sim.cracks();

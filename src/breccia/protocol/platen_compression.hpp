@@ -20,7 +20,7 @@ struct PlatenCompressionSettings {
 
 struct AxialState {
   double strain = 0.0;
-  double stress = 0.0;  // Pa, mean of the two platens over the nominal area
+  double stress = 0.0;                         // Pa, mean of the two platens over the nominal area
   double force_bottom = 0.0, force_top = 0.0;  // N, compression-positive
 };
 

@@ -8,8 +8,8 @@ namespace breccia {
 
 ParticleStore fcc_block(int nx, int ny, int nz, double radius, double density, Vec3 origin) {
   if (nx < 1 || ny < 1 || nz < 1)
-    throw InputError("fcc lattice", "cells", std::to_string(nx) + "x" + std::to_string(ny) + "x" +
-                                                 std::to_string(nz),
+    throw InputError("fcc lattice", "cells",
+                     std::to_string(nx) + "x" + std::to_string(ny) + "x" + std::to_string(nz),
                      "each count must be >= 1");
   ParticleStore s(Dimension::Three, 1.0);
   const double a = 2.0 * std::sqrt(2.0) * radius;

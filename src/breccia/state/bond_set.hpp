@@ -13,8 +13,8 @@ namespace breccia {
 template <class Law>
 struct BondSet {
   typename Law::Params params;
-  PairList pairs;                       // particle indices, first < second (index order)
-  std::vector<std::uint64_t> tag;       // stable bond tags
+  PairList pairs;                  // particle indices, first < second (index order)
+  std::vector<std::uint64_t> tag;  // stable bond tags
   std::vector<typename Law::State> state;
   std::vector<std::uint8_t> intact;
   std::vector<std::uint32_t> bond_of_pair;  // per interacting pair: bond index or kNoBond

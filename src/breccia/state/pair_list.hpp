@@ -17,8 +17,8 @@ struct PairSlot {
 };
 
 struct PairList {
-  std::vector<std::uint32_t> first, second;     // sorted by (first, second)
-  std::vector<std::uint32_t> offsets;           // pairs with first == i: [offsets[i], offsets[i+1])
+  std::vector<std::uint32_t> first, second;  // sorted by (first, second)
+  std::vector<std::uint32_t> offsets;        // pairs with first == i: [offsets[i], offsets[i+1])
   std::vector<std::uint32_t> in_offsets, in_slot;  // pairs with second == i, ascending slot
 
   std::size_t size() const noexcept { return first.size(); }

@@ -27,7 +27,8 @@ double ParticleStore::inertia_of(double m, double radius) const noexcept {
 
 std::size_t ParticleStore::add(const ParticleSpec& p) {
   const std::string where = "particle " + std::to_string(p.tag);
-  if (index_.count(p.tag)) throw InputError(where, "tag", std::to_string(p.tag), "tags must be unique");
+  if (index_.count(p.tag))
+    throw InputError(where, "tag", std::to_string(p.tag), "tags must be unique");
   if (!(p.radius > 0.0) || !std::isfinite(p.radius))
     throw InputError(where, "radius", num(p.radius), "must be a finite value > 0 m");
   if (!(p.density > 0.0) || !std::isfinite(p.density))
@@ -40,7 +41,8 @@ std::size_t ParticleStore::add(const ParticleSpec& p) {
   Vec3 x = p.position, v = p.velocity, w = p.angular_velocity;
   if (planar()) {
     if (x.z != 0.0 || v.z != 0.0 || w.x != 0.0 || w.y != 0.0)
-      throw InputError(where, "z / out-of-plane rotation", num(x.z) + " / " + num(w.x) + "," + num(w.y),
+      throw InputError(where, "z / out-of-plane rotation",
+                       num(x.z) + " / " + num(w.x) + "," + num(w.y),
                        "2D particles lie in the x-y plane: z, vz, wx and wy must be 0");
   }
   const std::size_t i = size();
