@@ -104,7 +104,7 @@ void build_neighbour_pairs(const std::vector<PosRad>& p, double skin, bool plana
   // any thread count and free of atomics.
   std::vector<std::uint32_t> count(n + 1, 0);
   const std::ptrdiff_t sn = static_cast<std::ptrdiff_t>(n);
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(dynamic, 256) if (sn > 4096)
   for (std::ptrdiff_t i = 0; i < sn; ++i) {
     std::uint32_t c = 0;
     visit(static_cast<std::size_t>(i), [&](std::uint32_t) { ++c; });
@@ -113,7 +113,7 @@ void build_neighbour_pairs(const std::vector<PosRad>& p, double skin, bool plana
   for (std::size_t i = 0; i < n; ++i) count[i + 1] += count[i];
   out.first.resize(count[n]);
   out.second.resize(count[n]);
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(dynamic, 256) if (sn > 4096)
   for (std::ptrdiff_t i = 0; i < sn; ++i) {
     const std::size_t ii = static_cast<std::size_t>(i);
     std::uint32_t k = count[ii];

@@ -25,7 +25,7 @@ void merge_history(const PairList& old_pairs, const std::vector<State>& old_stat
   new_state.assign(new_pairs.size(), State{});
   if (old_pairs.offsets.empty()) return;
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(new_pairs.offsets.size()) - 1;
-#pragma omp parallel for schedule(static, 1024)
+#pragma omp parallel for schedule(static, 1024) if (n > 4096)
   for (std::ptrdiff_t si = 0; si < n; ++si) {
     const std::size_t i = static_cast<std::size_t>(si);
     std::uint32_t a = old_pairs.offsets[i];
