@@ -200,3 +200,18 @@ TEST(App, InterruptedRunKeepsItsRecordsAndSaysSo) {
   EXPECT_GT(rows, 2) << "the rows recorded before the signal are kept";
   fs::remove_all(out);
 }
+
+TEST(App, BadGeometryFileFailsBeforeWritingAnything) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_app_badgeo";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "bad.geo") << "breccia-geometry 1\nparticles 1\n1 0 0 0 -1 2650\n";
+  std::ofstream(dir / "exp.toml") << "[sample]\nsource = \"file\"\nfile = \"bad.geo\"\n";
+  const Result r =
+      run("run --quiet --output " + (dir / "runs").string() + " " + (dir / "exp.toml").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("bad.geo:3"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("radius"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "runs")) << "no run folder for a run that never started";
+  fs::remove_all(dir);
+}

@@ -155,10 +155,12 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     if (opt.log) opt.log(m);
   };
   if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
+  const auto t_start = std::chrono::steady_clock::now();
+  // Build first: a bad sample (geometry file, bond list) fails before any file is written.
+  Built b = build(spec);
   const fs::path folder = make_folder(spec);
   RunResult result;
   result.folder = folder.string();
-  const auto t_start = std::chrono::steady_clock::now();
   json manifest{
       {"program", "breccia"},
       {"version", kVersion},
@@ -183,7 +185,6 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   };
 
   try {
-    Built b = build(spec);
     Simulation& sim = b.sim;
     for (const std::string& w : sim.warnings()) log("warning: " + w);
     manifest["time_step_s"] = sim.time_step();
