@@ -57,8 +57,10 @@ HistoryRecorder::HistoryRecorder(const std::string& path)
                   "energy_residual_relative"}) {}
 
 void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
-  std::size_t tensile = 0;
-  for (const auto& c : sim.cracks()) tensile += c.mode == CrackMode::Tensile ? 1 : 0;
+  const auto& cracks = sim.cracks();
+  for (; cracks_seen_ < cracks.size(); ++cracks_seen_)
+    tensile_ += cracks[cracks_seen_].mode == CrackMode::Tensile ? 1 : 0;
+  const std::size_t tensile = tensile_;
   const EnergyLedger& L = sim.ledger();
   csv_.write_line(fmt::format(
       "{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"

@@ -37,6 +37,7 @@ class HistoryRecorder {
 
  private:
   CsvFile csv_;
+  std::size_t cracks_seen_ = 0, tensile_ = 0;  // running count: no rescan of the catalogue
 };
 
 // cracks.csv: one row per broken bond with the fields of physics.md §4.0.
