@@ -33,13 +33,14 @@ inline void set_threads(int n) noexcept {
 #endif
 }
 
-// Calls body(begin, end, block) for each block of [0, n) in parallel. A single block runs on the
-// calling thread: small systems pay no fork-join cost (and none of the spin-waiting of an
-// oversubscribed machine).
+// Calls body(begin, end, block) for each block of [0, n) in parallel. Blocks are handed out
+// dynamically (a thread slowed by the machine does not hold the others at the barrier); results
+// stay bitwise reproducible because each block's output depends only on the block. A single
+// block runs on the calling thread: small systems pay no fork-join cost.
 template <class Body>
 void for_blocks(std::size_t n, Body&& body) {
   const std::ptrdiff_t nb = static_cast<std::ptrdiff_t>(block_count(n));
-#pragma omp parallel for schedule(static) if (nb > 1)
+#pragma omp parallel for schedule(dynamic, 4) if (nb > 1)
   for (std::ptrdiff_t b = 0; b < nb; ++b) {
     const std::size_t begin = static_cast<std::size_t>(b) * kBlock;
     const std::size_t end = begin + kBlock < n ? begin + kBlock : n;
