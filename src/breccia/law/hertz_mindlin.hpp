@@ -6,7 +6,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "breccia/law/pair.hpp"
+#include "breccia/law/frictional.hpp"
 #include "breccia/law/param_table.hpp"
 
 namespace breccia {
@@ -91,10 +91,9 @@ struct HertzMindlin {
     const double fn = 4.0 / 3.0 * Es * a * g.delta;  // 4/3 E* sqrt(R*) delta^(3/2)
     const double kt = 8.0 * g_star(p, g.wall) * a;
 
-    Vec3 fs = s.shear_force;
+    Vec3 fs;
     if (s.kt > 0.0) {
-      fs = rotate_between(fs, s.n_old, g.n);
-      fs = spin_about(fs, g.n, 0.5 * dot(g.w1 + g.w2, g.n) * dt);
+      fs = carry_shear(s.shear_force, s.n_old, g, dt);
       const double e_before = 0.5 * norm2(fs) / s.kt;
       const double a_old = std::sqrt(Rs * s.overlap);
       if (p.unloading_rescale && a < a_old) fs *= a / a_old;
@@ -103,34 +102,20 @@ struct HertzMindlin {
     }
     const double vn = g.vn();
     const Vec3 vt = g.vc - g.n * vn;
-    Vec3 fs_trial = fs - vt * (kt * dt);
-    const double limit = p.friction * fn;
-    const double ft2 = norm2(fs_trial);
-    bool sliding = false;
-    if (ft2 > limit * limit) {
-      const double ft = std::sqrt(ft2);
-      dis.slip += limit * (ft - limit) / kt;
-      fs_trial *= limit / ft;
-      sliding = true;
-    }
-    s.shear_force = fs_trial;
+    const ShearResult shear = coulomb_shear(fs, vt, kt, dt, p.friction * fn, dis);
+    s.shear_force = shear.force;
     s.n_old = g.n;
     s.normal_force = fn;
     s.overlap = g.delta;
     s.kt = kt;
 
-    Vec3 force = g.n * fn + fs_trial;
+    Vec3 force = g.n * fn + shear.force;
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
-      const double sn = 2.0 * Es * a;
-      double fn_visc =
-          -2.0 * std::sqrt(5.0 / 6.0) * p.normal_damping_ratio * std::sqrt(sn * g.m_star()) * vn;
-      if (fn + fn_visc < 0.0) fn_visc = -fn;
-      Vec3 fs_visc{};
-      if (!sliding)
-        fs_visc =
-            vt * (-2.0 * std::sqrt(5.0 / 6.0) * p.shear_damping_ratio * std::sqrt(kt * g.m_star()));
-      dis.viscous -= (fn_visc * vn + dot(fs_visc, vt)) * dt;
-      force += g.n * fn_visc + fs_visc;
+      // Tsuji form with the tangent stiffnesses (§2.2).
+      const double c = 2.0 * std::sqrt(5.0 / 6.0), m = g.m_star();
+      force +=
+          dashpot_force(g, fn, vn, vt, c * p.normal_damping_ratio * std::sqrt(2.0 * Es * a * m),
+                        c * p.shear_damping_ratio * std::sqrt(kt * m), shear.sliding, dt, dis);
     }
     return {force, {}};
   }

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "breccia/law/pair.hpp"
+#include "breccia/law/frictional.hpp"
 #include "breccia/law/param_table.hpp"
 
 namespace breccia {
@@ -70,40 +70,25 @@ struct LinearContact {
       s = State{};
       return {};
     }
-    if (s.kn == 0.0) s.kn = normal_stiffness(p, g);
+    const bool has_history = s.kn != 0.0;
+    if (!has_history) s.kn = normal_stiffness(p, g);
     const double kn = s.kn;
     const double ks = kn / p.stiffness_ratio;
-    Vec3 fs = s.shear_force;
-    if (s.n_old.x != 0.0 || s.n_old.y != 0.0 || s.n_old.z != 0.0) {
-      fs = rotate_between(fs, s.n_old, g.n);
-      fs = spin_about(fs, g.n, 0.5 * dot(g.w1 + g.w2, g.n) * dt);
-    }
+    const Vec3 fs = has_history ? carry_shear(s.shear_force, s.n_old, g, dt) : Vec3{};
     const double vn = g.vn();
     const Vec3 vt = g.vc - g.n * vn;
     const double fn = kn * g.delta;
-    Vec3 fs_trial = fs - vt * (ks * dt);
-    const double limit = p.friction * fn;
-    const double ft2 = norm2(fs_trial);
-    bool sliding = false;
-    if (ft2 > limit * limit) {
-      const double ft = std::sqrt(ft2);
-      const Vec3 fs_new = fs_trial * (limit / ft);
-      dis.slip += limit * (ft - limit) / ks;
-      fs_trial = fs_new;
-      sliding = true;
-    }
-    s.shear_force = fs_trial;
+    const ShearResult shear = coulomb_shear(fs, vt, ks, dt, p.friction * fn, dis);
+    s.shear_force = shear.force;
     s.n_old = g.n;
     s.normal_force = fn;
 
-    Vec3 force = g.n * fn + fs_trial;
+    Vec3 force = g.n * fn + shear.force;
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
-      double fn_visc = -2.0 * p.normal_damping_ratio * std::sqrt(g.m_star() * kn) * vn;
-      if (fn + fn_visc < 0.0) fn_visc = -fn;  // no-tension rule (§2.2)
-      Vec3 fs_visc{};
-      if (!sliding) fs_visc = vt * (-2.0 * p.shear_damping_ratio * std::sqrt(g.m_star() * ks));
-      dis.viscous -= (fn_visc * vn + dot(fs_visc, vt)) * dt;
-      force += g.n * fn_visc + fs_visc;
+      const double m = g.m_star();
+      force +=
+          dashpot_force(g, fn, vn, vt, 2.0 * p.normal_damping_ratio * std::sqrt(m * kn),
+                        2.0 * p.shear_damping_ratio * std::sqrt(m * ks), shear.sliding, dt, dis);
     }
     return {force, {}};
   }
