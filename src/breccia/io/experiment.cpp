@@ -56,13 +56,13 @@ struct Key {
 
 Key real_key(std::string section, std::string name, std::string unit, double lo, double hi,
              bool lo_open, std::string doc, double ExperimentSpec::*member) {
-  ParamField<ExperimentSpec> f{"", unit == "" ? "-" : unit, member, lo, hi, !lo_open, true, ""};
-  Key k{section, name, unit, "number", f.allowed(), std::move(doc), {}, {}};
+  const Range range{lo, hi, !lo_open, true, unit.empty() ? "-" : unit};
+  Key k{section, name, unit, "number", range.allowed(), std::move(doc), {}, {}};
   k.get = [member](const ExperimentSpec& s) { return fmt::format("{}", s.*member); };
-  k.set = [f, member](ExperimentSpec& s, const toml::node& n, const std::string& where,
-                      const std::string& key) {
+  k.set = [range, member](ExperimentSpec& s, const toml::node& n, const std::string& where,
+                          const std::string& key) {
     const double v = get_real(n, where, key);
-    if (!f.in_range(v)) throw InputError(where, key, num(v), f.allowed());
+    if (!range.contains(v)) throw InputError(where, key, num(v), range.allowed());
     s.*member = v;
   };
   return k;
@@ -72,13 +72,12 @@ Key real_key(std::string section, std::string name, std::string unit, double lo,
 template <class Getter>
 Key nested_real(std::string section, std::string name, std::string unit, double lo, double hi,
                 bool lo_open, bool hi_open, std::string doc, Getter ref) {
-  ParamField<ExperimentSpec> f{
-      "", unit == "" ? "-" : unit, &ExperimentSpec::radius, lo, hi, !lo_open, !hi_open, ""};
-  Key k{section, name, unit, "number", f.allowed(), std::move(doc), {}, {}};
-  k.set = [f, ref](ExperimentSpec& s, const toml::node& n, const std::string& where,
-                   const std::string& key) {
+  const Range range{lo, hi, !lo_open, !hi_open, unit.empty() ? "-" : unit};
+  Key k{section, name, unit, "number", range.allowed(), std::move(doc), {}, {}};
+  k.set = [range, ref](ExperimentSpec& s, const toml::node& n, const std::string& where,
+                       const std::string& key) {
     const double v = get_real(n, where, key);
-    if (!f.in_range(v)) throw InputError(where, key, num(v), f.allowed());
+    if (!range.contains(v)) throw InputError(where, key, num(v), range.allowed());
     ref(s) = v;
   };
   k.get = [ref](const ExperimentSpec& s) {

@@ -15,6 +15,34 @@ namespace breccia {
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// An allowed interval of a real value, with the text that error messages and docs show.
+struct Range {
+  double min = -kInf, max = kInf;
+  bool min_inclusive = true, max_inclusive = true;
+  std::string unit = "-";  // "-" for dimensionless
+
+  bool contains(double v) const noexcept {
+    if (!std::isfinite(v)) return false;
+    if (min_inclusive ? v < min : v <= min) return false;
+    if (max_inclusive ? v > max : v >= max) return false;
+    return true;
+  }
+  std::string allowed() const {
+    std::string s = "allowed: ";
+    if (min > -kInf && max < kInf)
+      s += num(min) + (min_inclusive ? " <= " : " < ") + "value" +
+           (max_inclusive ? " <= " : " < ") + num(max);
+    else if (min > -kInf)
+      s += "value" + std::string(min_inclusive ? " >= " : " > ") + num(min);
+    else if (max < kInf)
+      s += "value" + std::string(max_inclusive ? " <= " : " < ") + num(max);
+    else
+      s += "any finite value";
+    if (unit != "-" && !unit.empty()) s += " " + unit;
+    return s;
+  }
+};
+
 template <class P>
 struct ParamField {
   std::string_view key;
@@ -28,28 +56,9 @@ struct ParamField {
 
   bool is_flag() const noexcept { return std::holds_alternative<bool P::*>(member); }
 
-  std::string allowed() const {
-    if (is_flag()) return "must be true or false";
-    std::string s = "allowed: ";
-    if (min > -kInf && max < kInf)
-      s += num(min) + (min_inclusive ? " <= " : " < ") + "value" +
-           (max_inclusive ? " <= " : " < ") + num(max);
-    else if (min > -kInf)
-      s += "value" + std::string(min_inclusive ? " >= " : " > ") + num(min);
-    else if (max < kInf)
-      s += "value" + std::string(max_inclusive ? " <= " : " < ") + num(max);
-    else
-      s += "any finite value";
-    if (unit != "-") s += " " + std::string(unit);
-    return s;
-  }
-
-  bool in_range(double v) const noexcept {
-    if (!std::isfinite(v)) return false;
-    if (min_inclusive ? v < min : v <= min) return false;
-    if (max_inclusive ? v > max : v >= max) return false;
-    return true;
-  }
+  Range range() const { return {min, max, min_inclusive, max_inclusive, std::string(unit)}; }
+  std::string allowed() const { return is_flag() ? "must be true or false" : range().allowed(); }
+  bool in_range(double v) const noexcept { return range().contains(v); }
 
   // Sets a real parameter, throwing an InputError naming `where` if it is out of range.
   void set(P& p, double v, const std::string& where, const std::string& prefix = "") const {
