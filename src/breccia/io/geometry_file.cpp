@@ -80,7 +80,7 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
     if (h.tokens[1] != "1")
       throw InputError(rd.where(h), "version", h.tokens[1], "this Breccia reads version 1");
   }
-  bool have_dimension = false, have_particles = false, have_bonds = false;
+  bool have_particles = false, have_bonds = false;
   while (!rd.done()) {
     const Line& l = rd.next();
     const std::string& key = l.tokens[0];
@@ -95,7 +95,6 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
       if (d != 2 && d != 3)
         throw InputError(rd.where(l), "dimension", l.tokens[1], "allowed: 2 or 3");
       g.dimension = d == 2 ? Dimension::Two : Dimension::Three;
-      have_dimension = true;
     } else if (key == "thickness") {
       need_args(1, "expects one value in m");
       g.thickness = rd.real(l, 1, "thickness");
@@ -179,7 +178,6 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
   }
   if (!have_particles)
     throw InputError(source, "particles", "(missing)", "a 'particles N' section is required");
-  (void)have_dimension;
   std::unordered_set<std::uint64_t> seen;
   for (const auto& p : g.particles)
     if (!seen.insert(p.tag).second)

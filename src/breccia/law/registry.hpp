@@ -1,7 +1,7 @@
 #pragma once
 // The one list of laws. Adding a law is one new header and one entry here; the conformance tests
 // (tests/test_law_conformance.cpp) run over every entry automatically.
-#include <tuple>
+#include <cstddef>
 
 #include "breccia/law/hertz_mindlin.hpp"
 #include "breccia/law/linear_contact.hpp"
@@ -11,7 +11,6 @@ namespace breccia {
 
 template <class... Ts>
 struct TypeList {
-  using Tuple = std::tuple<Ts...>;
   static constexpr std::size_t size = sizeof...(Ts);
 };
 
