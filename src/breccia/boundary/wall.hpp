@@ -48,7 +48,8 @@ struct Wall {
   // Results of the last step.
   Vec3 force;  // resultant force the wall exerts on the particles
   std::size_t contacts = 0;
-  double work = 0.0;          // cumulative work done by the wall on the particles
+  double contact_stiffness = 0.0;  // sum of the normal stiffnesses of its contacts (servo gain)
+  double work = 0.0;               // cumulative work done by the wall on the particles
   double radial_force = 0.0;  // cylinder: sum of F . n over its contacts (positive pushes inward)
   Vec3 force_prev;            // previous step's force (and radial force), for the trapezoidal
   double radial_force_prev = 0.0;  // work rule that matches the leapfrog kinetic energy
@@ -116,6 +117,7 @@ struct WallContacts {
   std::vector<typename Law::State> state;
   std::vector<Vec3> force, torque;   // on the particle, this step
   std::vector<double> normal_force;  // force . wall normal, this step
+  std::vector<double> stiffness;     // normal (tangent) stiffness of the contact, this step
 };
 
 }  // namespace breccia

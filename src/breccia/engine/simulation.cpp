@@ -322,6 +322,7 @@ void Simulation::rebuild(ContactSet<CL>& contacts) {
     fresh.force.assign(fresh.particle.size(), {});
     fresh.torque.assign(fresh.particle.size(), {});
     fresh.normal_force.assign(fresh.particle.size(), 0.0);
+    fresh.stiffness.assign(fresh.particle.size(), 0.0);
     wc = std::move(fresh);
     walls_[wi].moved = 0.0;
   }
@@ -462,6 +463,7 @@ void Simulation::compute_walls(ContactSet<CL>& c) {
           wc.force[k] = {};
           wc.torque[k] = {};
           wc.normal_force[k] = 0.0;
+          wc.stiffness[k] = 0.0;
           continue;
         }
         PairGeometry g;
@@ -483,12 +485,15 @@ void Simulation::compute_walls(ContactSet<CL>& c) {
         wc.force[k] = pf.force;
         wc.torque[k] = cross(g.r2, pf.force) + pf.couple;
         wc.normal_force[k] = dot(pf.force, nrm);
+        double kn = 0.0, ks = 0.0;
+        if (g.delta > 0.0) CL::timestep_stiffness(c.wall_params, g, kn, ks);
+        wc.stiffness[k] = kn;
       }
       block_dis_[blk] = dis;
     });
     d_pairs_ += ordered_sum(block_dis_);
     Vec3 total;
-    double radial = 0.0;
+    double radial = 0.0, stiffness = 0.0;
     std::size_t touching = 0;
     for (std::size_t k = 0; k < n; ++k) {
       const std::uint32_t i = wc.particle[k];
@@ -497,6 +502,7 @@ void Simulation::compute_walls(ContactSet<CL>& c) {
       total += wc.force[k];
       radial += wc.normal_force[k];
       touching += wc.normal_force[k] != 0.0 ? 1 : 0;
+      stiffness += wc.stiffness[k];
     }
     // Trapezoidal work over the wall's last displacement (matches the leapfrog kinetic energy).
     const double dw = w.shape == WallShape::Plane
@@ -509,6 +515,7 @@ void Simulation::compute_walls(ContactSet<CL>& c) {
     w.force_prev = total;
     w.radial_force_prev = radial;
     w.contacts = touching;
+    w.contact_stiffness = stiffness;
   }
 }
 

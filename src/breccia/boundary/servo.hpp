@@ -1,0 +1,36 @@
+#pragma once
+// Servo control of a wall to a target normal stress (physics.md §6.2, after the PFC servo):
+// V = G (sigma_target - sigma_measured), G = alpha A / (k_sum dt), where k_sum is the summed normal
+// stiffness of the wall's contacts, so that one step corrects the fraction alpha of the error.
+// Positive V moves the wall into the sample. Stresses are compression-positive.
+#include <algorithm>
+#include <cmath>
+
+#include "breccia/boundary/wall.hpp"
+
+namespace breccia {
+
+struct StressServo {
+  double target_stress = 0.0;  // Pa
+  double relaxation = 0.5;     // alpha_s, 0 < alpha_s <= 1
+  double max_speed = 1.0;      // m/s, |V| is clamped to this
+
+  // Velocity into the sample for a wall of loaded area `area` whose contacts push back with
+  // `measured_stress` and have summed stiffness `contact_stiffness` (a free wall, with no
+  // contacts, approaches at the capped speed). `min_stiffness` stands in for k_sum then.
+  double speed(double measured_stress, double area, double contact_stiffness, double dt,
+               double min_stiffness) const noexcept {
+    const double k = std::max(contact_stiffness, min_stiffness);
+    const double v = relaxation * area / (k * dt) * (target_stress - measured_stress);
+    return std::clamp(v, -max_speed, max_speed);
+  }
+
+  // Drives a plane wall: its stress is the normal force it exerts over `area`.
+  void drive(Wall& w, double area, double dt, double min_stiffness) const noexcept {
+    const double stress = dot(w.force, w.normal) / area;
+    w.controlled = true;
+    w.velocity = w.normal * speed(stress, area, w.contact_stiffness, dt, min_stiffness);
+  }
+};
+
+}  // namespace breccia
