@@ -182,3 +182,28 @@ TYPED_TEST(BondLawConformance, StretchToFailureReleasesTheStoredEnergy) {
   // One step adds at most 2 dV/V of stored energy; here far below 1e-3.
   EXPECT_NEAR(s.failure.energy.total(), last_energy, 1e-3 * last_energy);
 }
+
+TYPED_TEST(BondLawConformance, RigidBodyMotionLeavesTheBondUnloaded) {
+  // The pair turns and translates as one rigid body (every velocity set from omega x r each
+  // step): the bond must stay unloaded. For incremental laws the relative contact velocity is
+  // exactly zero; the straight-line drift of each step moves the centres off the circle by
+  // (omega dt)^2 d / 2, 5e-18 m here, so even a total law would see at most
+  // 1000 x 5e-18 m x K (~1e7 N/m) = 5e-8 N. Hence 1e-6 N.
+  PairStepper<TypeParam> s;
+  s.b.x = unit({0.3, -0.8, 0.5}) * 1e-3;
+  s.install();
+  const Vec3 omega{4.0, -7.0, 5.0}, drift{1e-3, 2e-3, -1e-3};
+  double worst = 0.0;
+  for (int k = 0; k < 1000; ++k) {
+    const Vec3 c = (s.a.x + s.b.x) * 0.5;
+    for (Body* b : {&s.a, &s.b}) {
+      b->v = drift + cross(omega, b->x - c);
+      b->w = omega;
+    }
+    const PairResult r = s.evaluate();
+    worst = std::max({worst, norm(r.f2), norm(r.couple) / 1e-3});
+    s.move();
+  }
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_FALSE(s.failure.broken);
+}
