@@ -5,6 +5,7 @@
 // Positive V moves the wall into the sample. Stresses are compression-positive.
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "breccia/boundary/wall.hpp"
 
@@ -30,6 +31,14 @@ struct StressServo {
     const double stress = dot(w.force, w.normal) / area;
     w.controlled = true;
     w.velocity = w.normal * speed(stress, area, w.contact_stiffness, dt, min_stiffness);
+  }
+
+  // Drives a cylinder wall of length `height` through its radius (positive speed shrinks it);
+  // its stress is the summed radial contact force over the lateral area 2 pi R H (§6.3).
+  void drive_cylinder(Wall& w, double height, double dt, double min_stiffness) const noexcept {
+    const double area = 2.0 * std::numbers::pi * w.radius * height;
+    w.controlled = true;
+    w.radial_speed = speed(w.radial_force / area, area, w.contact_stiffness, dt, min_stiffness);
   }
 };
 

@@ -289,7 +289,7 @@ bool Simulation::needs_rebuild() const noexcept {
   const double d = std::sqrt(max_disp2_);
   double wall = 0.0;
   for (const Wall& w : walls_) wall = std::max(wall, w.moved);
-  return 2.0 * d > skin_ || d + wall > skin_;
+  return 2.0 * (d + radius_growth_) > skin_ || d + radius_growth_ + wall > skin_;
 }
 
 template <class CL>
@@ -329,6 +329,7 @@ void Simulation::rebuild(ContactSet<CL>& contacts) {
   x_at_build_.resize(p_.size());
   for (std::size_t i = 0; i < p_.size(); ++i) x_at_build_[i] = p_.pos_rad[i].x;
   max_disp2_ = 0.0;
+  radius_growth_ = 0.0;
   ++rebuilds_;
 }
 
@@ -743,6 +744,52 @@ std::size_t Simulation::active_contacts() const noexcept {
       },
       contact_);
   return n;
+}
+
+void Simulation::scale_radii(double factor) {
+  if (!(factor > 0.0) || !std::isfinite(factor))
+    throw InputError("radius scaling", "factor", num(factor), "must be a finite number > 0");
+  if (intact_bonds() > 0)
+    throw InputError("radius scaling", "bonds", std::to_string(intact_bonds()),
+                     "radii can only be scaled before bonds are installed");
+  double grow = 0.0;
+  for (std::size_t i = 0; i < p_.size(); ++i) {
+    double& r = p_.pos_rad[i].r;
+    grow = std::max(grow, (factor - 1.0) * r);
+    r *= factor;
+    p_.mass[i] = p_.mass_of(r, p_.density[i]);
+    p_.inertia[i] = p_.inertia_of(p_.mass[i], r);
+  }
+  radius_growth_ += std::max(grow, 0.0);
+  baseline_.reset();
+  sample_requested_ = true;
+}
+
+PairStress Simulation::pair_stress() const {
+  PairStress out;
+  out.coordination.assign(p_.size(), 0);
+  std::visit(
+      [&]<class CL>(const ContactSet<CL>& c) {
+        for (std::size_t k = 0; k < c.pairs.size(); ++k) {
+          const PairSlot& s = c.slot[k];
+          const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
+          const Vec3 l = p_.pos_rad[j].x - p_.pos_rad[i].x;
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+              out.lf[static_cast<std::size_t>(3 * a + b)] += l[a] * s.force[b];
+          const double reach = p_.pos_rad[i].r + p_.pos_rad[j].r;
+          if (norm2(l) >= reach * reach) continue;
+          const PairGeometry g = geometry(i, j);
+          double kn = 0.0, ks = 0.0;
+          CL::timestep_stiffness(c.params, g, kn, ks);
+          out.radius_stiffness += kn * (g.R1 + g.R2) * g.d;
+          ++out.touching;
+          ++out.coordination[i];
+          ++out.coordination[j];
+        }
+      },
+      contact_);
+  return out;
 }
 
 std::size_t Simulation::neighbour_pairs() const noexcept {

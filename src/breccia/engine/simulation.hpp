@@ -3,6 +3,7 @@
 // and the leapfrog integrator with local damping (physics.md §1-§4, §6.1). It knows nothing about
 // lab tests: protocols drive it through walls, driven particles and external forces, and read it
 // through const views, the crack catalogue and the energy ledger.
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -104,6 +105,22 @@ struct IntegrateBlock {
   double damping_boundary = 0.0, external_boundary = 0.0;
 };
 
+// Stress carried by the pair forces (physics.md §6.5): the sum over interacting pairs of l (x) F,
+// with l = x2 - x1 and F the force on particle 2, so a repulsion counts compression-positive.
+// Divide by the sample volume for the average stress tensor.
+struct PairStress {
+  std::array<double, 9> lf{};     // row-major sum of l_i F_j, N m
+  double radius_stiffness = 0.0;  // sum over touching pairs of k_n (R1 + R2) d (physics.md §7.2)
+  std::size_t touching = 0;       // pairs in contact (overlapping), bonded or not
+  std::vector<std::uint32_t> coordination;  // touching pairs per particle
+
+  double mean(int dimension, double volume) const noexcept {
+    double tr = 0.0;
+    for (int k = 0; k < dimension; ++k) tr += lf[static_cast<std::size_t>(4 * k)];
+    return tr / (dimension * volume);
+  }
+};
+
 class Simulation {
  public:
   Simulation(ParticleStore particles, EngineConfig config, ContactModel contact);
@@ -128,6 +145,14 @@ class Simulation {
   void step();
   void run(std::uint64_t steps);
   void request_energy_sample() noexcept { sample_requested_ = true; }
+  // Multiplies every radius by `factor` at constant density (masses follow). For packing by
+  // radius expansion (physics.md §7.2) only: it is refused once bonds exist, and the energy ledger
+  // restarts its baseline because stored energy changes without work.
+  void scale_radii(double factor);
+  // Changes the particle-particle friction coefficient of the contact law (packing stages).
+  void set_contact_friction(double mu) {
+    std::visit([&](auto& c) { c.params.friction = mu; }, contact_);
+  }
 
   // --- views ---
   const ParticleStore& particles() const noexcept { return p_; }
@@ -147,6 +172,8 @@ class Simulation {
   std::size_t intact_bonds() const noexcept;
   std::size_t active_contacts() const noexcept;
   std::size_t neighbour_pairs() const noexcept;
+  // Pair forces of the last step as a stress sum and contact counts (physics.md §6.5, §7.2).
+  PairStress pair_stress() const;
   std::uint64_t neighbour_rebuilds() const noexcept { return rebuilds_; }
   // External per-particle load for the coming step (membranes, follower loads); its work is
   // booked as external work. Allocated on first use; cleared after each step.
@@ -199,6 +226,7 @@ class Simulation {
   std::vector<Vec3> user_force_;              // external loads (empty when unused)
   std::vector<Vec3> drive_force_prev_;        // driver force of driven particles, previous step
   double max_disp2_ = 0.0;
+  double radius_growth_ = 0.0;  // largest radius increase since the last neighbour rebuild
 
   std::vector<CrackRecord> cracks_;
   std::vector<std::string> warnings_;
