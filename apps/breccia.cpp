@@ -39,6 +39,35 @@ int main(int argc, char** argv) {
   run->add_option("--threads", threads, "OpenMP threads (engine.threads)");
   run->add_flag("--quiet", quiet, "no progress bar or messages; only the run folder is printed");
 
+  auto* gen = app.add_subcommand("generate",
+                                  "pack and bond a sample ([sample] keys) and save it to a file");
+  std::string gen_file, gen_out;
+  std::vector<std::string> gen_overrides;
+  gen->add_option("experiment", gen_file, "experiment file (TOML); omit for the default");
+  gen->add_option("--set", gen_overrides, "override a key: section.key=value")->take_all();
+  gen->add_option("--output", gen_out, "sample file to write (breccia-geometry)")->required();
+
+  auto* sweep = app.add_subcommand(
+      "sweep", "run the experiment at several confining stresses; fit Mohr-Coulomb, Hoek-Brown");
+  std::string sweep_file;
+  std::vector<std::string> sweep_overrides;
+  std::vector<double> sweep_mpa;
+  std::string sweep_output;
+  sweep->add_option("experiment", sweep_file, "experiment file (TOML); omit for the default");
+  sweep->add_option("--set", sweep_overrides, "override a key: section.key=value")->take_all();
+  sweep->add_option("--confining-mpa", sweep_mpa, "confining stresses in MPa, e.g. 0 5 10")
+      ->required()
+      ->expected(1, 100);
+  sweep->add_option("--output", sweep_output, "folder that receives the sweep folder");
+
+  auto* summ = app.add_subcommand("summarise", "print the headline results of a run or sweep folder");
+  std::string summ_dir;
+  summ->add_option("folder", summ_dir, "run folder or sweep folder")->required();
+
+  auto* report = app.add_subcommand("report", "(re)draw stress_strain.png of a run folder");
+  std::string report_dir;
+  report->add_option("folder", report_dir, "run folder")->required();
+
   auto* check = app.add_subcommand("check", "validate an experiment file and print it resolved");
   std::string check_file;
   std::vector<std::string> check_overrides;
@@ -70,16 +99,47 @@ int main(int argc, char** argv) {
       const breccia::RunResult r = breccia::run_experiment(spec, opt);
       if (!quiet) {
         std::cerr << "status: " << r.status << " (" << r.stop_reason << ")\n";
-        std::fprintf(stderr,
-                     "peak axial stress %.3f MPa at strain %.5f; Young's modulus %.3f GPa; "
-                     "%zu cracks (%zu tensile, %zu shear); %llu steps in %.1f s; energy "
-                     "residual %.2g of the work\n",
-                     r.peak_stress * 1e-6, r.strain_at_peak, r.youngs_modulus * 1e-9, r.cracks,
-                     r.tensile, r.shear, static_cast<unsigned long long>(r.steps), r.wall_seconds,
-                     r.energy_residual_relative);
+        std::cerr << breccia::summarise_folder(r.folder);
       }
       std::cout << r.folder << std::endl;
       return r.status == "complete" ? 0 : 130;
+    }
+    auto load = [](const std::string& f, const std::vector<std::string>& o) {
+      return f.empty() ? breccia::parse_experiment("", "built-in default", o)
+                       : breccia::load_experiment(f, o);
+    };
+    if (*gen) {
+      const breccia::ExperimentSpec spec = load(gen_file, gen_overrides);
+      breccia::generate_sample(spec, gen_out, [](const std::string& m) { std::cerr << m << "\n"; });
+      std::cout << gen_out << std::endl;
+      return 0;
+    }
+    if (*sweep) {
+      if (!sweep_output.empty())
+        sweep_overrides.push_back("output.directory=\"" + sweep_output + "\"");
+      const breccia::ExperimentSpec spec = load(sweep_file, sweep_overrides);
+      std::signal(SIGINT, on_signal);
+      std::signal(SIGTERM, on_signal);
+      breccia::RunOptions opt;
+      opt.command_line = command_line;
+      opt.interrupt = &g_interrupt;
+      opt.show_progress = spec.progress && isatty(fileno(stderr));
+      opt.log = [](const std::string& m) { std::cerr << m << "\n"; };
+      std::vector<double> pa;
+      for (double m : sweep_mpa) pa.push_back(m * 1e6);
+      const breccia::SweepResult r = breccia::run_sweep(spec, pa, opt);
+      std::cerr << breccia::summarise_folder(r.folder);
+      std::cout << r.folder << std::endl;
+      return r.status == "complete" ? 0 : 130;
+    }
+    if (*summ) {
+      std::cout << breccia::summarise_folder(summ_dir);
+      return 0;
+    }
+    if (*report) {
+      if (!breccia::plot_run(report_dir)) return 1;
+      std::cout << report_dir << "/stress_strain.png" << std::endl;
+      return 0;
     }
     if (*check) {
       const breccia::ExperimentSpec spec =

@@ -21,7 +21,7 @@
 #include "breccia/core/rng.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/io/run_folder.hpp"
-#include "breccia/protocol/platen_compression.hpp"
+#include "breccia/protocol/compression_test.hpp"
 #include "breccia/sample/lattice.hpp"
 #include "breccia/version.hpp"
 

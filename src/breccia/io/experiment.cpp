@@ -136,6 +136,30 @@ Key bool_key(std::string section, std::string name, std::string doc, bool Experi
   return k;
 }
 
+Key real_list_key(std::string section, std::string name, std::string unit, std::string doc,
+                  std::vector<double> ExperimentSpec::*member) {
+  Key k{section, name, unit, "array of numbers", "each >= 0", std::move(doc), {}, {}};
+  k.set = [member](ExperimentSpec& s, const toml::node& n, const std::string& where,
+                   const std::string& key) {
+    const auto* arr = n.as_array();
+    if (!arr) throw InputError(where, key, show(n), "expected an array of numbers, e.g. [1, 2]");
+    std::vector<double> v;
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const double x = get_real(*arr->get(i), where, key);
+      if (!(x >= 0.0)) throw InputError(where, key, show(n), "every value must be >= 0");
+      v.push_back(x);
+    }
+    s.*member = v;
+  };
+  k.get = [member](const ExperimentSpec& s) {
+    std::string out = "[";
+    for (std::size_t i = 0; i < (s.*member).size(); ++i)
+      out += (i ? ", " : "") + fmt::format("{}", (s.*member)[i]);
+    return out + "]";
+  };
+  return k;
+}
+
 const std::vector<Key>& key_table() {
   static const std::vector<Key> keys = [] {
     std::vector<Key> k;
@@ -167,16 +191,88 @@ const std::vector<Key>& key_table() {
     k.push_back(real_key("engine", "gravity", "m/s^2", 0, kInf, false,
                          "magnitude of gravity along -z (3D) or -y (2D); 0 = off",
                          &ExperimentSpec::gravity));
+    k.push_back(real_key("engine", "density_scaling", "", 1, kInf, false,
+                         "multiplies every particle's mass and inertia (quasi-static runs "
+                         "only): the time step grows by its square root, wave speeds fall by "
+                         "it; recorded in the manifest and used by every analysis of time",
+                         &ExperimentSpec::density_scaling));
+    k.back().allowed = "allowed: value >= 1";
     k.push_back(int_key("engine", "energy_interval", 1, 1000000000,
                         "steps between energy-ledger samples",
                         [](ExperimentSpec& s) -> std::int64_t& {
                           return reinterpret_cast<std::int64_t&>(s.engine.energy_interval);
                         }));
+    // [material]
+    {
+      std::vector<std::string> names;
+      std::string doc = "micro-parameter set applied before the other keys, which override it: ";
+      for (const auto& [n, d] : material_presets()) {
+        names.push_back(n);
+        doc += "`" + n + "`: " + d + " ";
+      }
+      k.push_back(choice_key("material", "preset", names, doc, &ExperimentSpec::preset));
+    }
     // [sample]
-    k.push_back(choice_key("sample", "source", {"lattice", "file"},
-                           "lattice: FCC block (3D) or hexagonal block (2D) of equal particles, "
-                           "bonded where touching; file: a breccia-geometry file",
+    k.push_back(choice_key("sample", "source", {"generate", "file", "table", "gengeo", "lattice"},
+                           "generate: dense random packing (physics.md §7.2); file: a "
+                           "breccia-geometry file (what `breccia generate` writes); table: "
+                           "whitespace- or comma-separated x y z radius rows (YADE/PFC exports); "
+                           "gengeo: an ESyS-Particle GenGeo LSMGeometry 1.2 file; lattice: FCC "
+                           "(3D) or hexagonal (2D) block of equal particles",
                            &ExperimentSpec::sample_source));
+    k.push_back(choice_key("sample", "shape", {"prism", "cylinder", "rectangle"},
+                           "generated sample shape: prism or cylinder (axis z) in 3D, rectangle "
+                           "in 2D; also chooses the confining boundary of triaxial tests",
+                           &ExperimentSpec::shape));
+    k.push_back(real_key("sample", "width", "m", 0, kInf, true, "prism/rectangle size along x",
+                         &ExperimentSpec::width));
+    k.push_back(real_key("sample", "depth", "m", 0, kInf, true, "prism size along y",
+                         &ExperimentSpec::depth));
+    k.push_back(real_key("sample", "height", "m", 0, kInf, true,
+                         "size along the loading axis (z in 3D, y in 2D)",
+                         &ExperimentSpec::height));
+    k.push_back(real_key("sample", "diameter", "m", 0, kInf, true, "cylinder diameter",
+                         &ExperimentSpec::diameter));
+    k.push_back(choice_key("sample", "distribution", {"uniform", "lognormal", "classes"},
+                           "radius distribution (physics.md §7.1): uniform on [radius_min, "
+                           "radius_max]; lognormal with radius_mean and radius_sd truncated to "
+                           "[radius_min, radius_max]; classes: class_radii with "
+                           "class_mass_fractions",
+                           &ExperimentSpec::distribution));
+    k.push_back(real_key("sample", "radius_min", "m", 0, kInf, true, "smallest radius",
+                         &ExperimentSpec::radius_min));
+    k.push_back(real_key("sample", "radius_max", "m", 0, kInf, true,
+                         "largest radius (>= radius_min)", &ExperimentSpec::radius_max));
+    k.push_back(real_key("sample", "radius_mean", "m", 0, kInf, true,
+                         "lognormal: mean radius", &ExperimentSpec::radius_mean));
+    k.push_back(real_key("sample", "radius_sd", "m", 0, kInf, false,
+                         "lognormal: standard deviation of the radius",
+                         &ExperimentSpec::radius_sd));
+    k.push_back(real_list_key("sample", "class_radii", "m", "classes: radius of each class",
+                              &ExperimentSpec::class_radii));
+    k.push_back(real_list_key("sample", "class_mass_fractions", "",
+                              "classes: solid-mass fraction of each class (sum 1)",
+                              &ExperimentSpec::class_mass_fractions));
+    k.push_back(real_key("sample", "porosity", "", 0, 1, true,
+                         "target porosity: fixes the particle count; with packing_target = "
+                         "\"porosity\" also the final state",
+                         &ExperimentSpec::porosity));
+    k.back().allowed = "allowed: 0 < value < 1";
+    k.push_back(choice_key("sample", "packing_target", {"stress", "porosity"},
+                           "stress: radii servo to isotropic_stress after packing (low locked-in "
+                           "stress, P&C 2004); porosity: packed at the target porosity, "
+                           "whatever stress results",
+                           &ExperimentSpec::packing_target));
+    k.push_back(real_key("sample", "isotropic_stress", "Pa", 0, kInf, true,
+                         "installation stress p0 of the packing (about 1 % of the UCS or less)",
+                         &ExperimentSpec::isotropic_stress));
+    k.push_back(int_key("sample", "max_particles", 1, 100000000,
+                        "refuse to generate samples with more particles than this",
+                        [](ExperimentSpec& s) -> std::int64_t& { return s.max_particles; }));
+    k.push_back(bool_key("sample", "cache",
+                         "reuse a generated sample with identical settings from "
+                         "<output.directory>/samples instead of packing again",
+                         &ExperimentSpec::cache));
     {
       Key c{"sample",
             "cells",
@@ -203,7 +299,7 @@ const std::vector<Key>& key_table() {
       };
       k.push_back(c);
     }
-    k.push_back(real_key("sample", "radius", "m", 0, kInf, true, "lattice particle radius",
+    k.push_back(real_key("sample", "radius", "m", 0, kInf, true, "lattice: particle radius",
                          &ExperimentSpec::radius));
     k.push_back(real_key("sample", "density", "kg/m^3", 0, kInf, true,
                          "grain density (not bulk density)", &ExperimentSpec::density));
@@ -215,7 +311,8 @@ const std::vector<Key>& key_table() {
                            "paths are taken from the experiment file's folder)",
                            &ExperimentSpec::geometry_file));
     k.push_back(real_key("sample", "bond_gap_tolerance", "m", 0, kInf, false,
-                         "pairs with a gap up to this get a bond when the sample lists no bonds",
+                         "pairs with a gap up to this get a bond (generated samples, and files "
+                         "that list no bonds); a calibration parameter (physics.md §7.6)",
                          &ExperimentSpec::bond_gap_tolerance));
     // [contact] and [bond]: the law keys come from the law tables (see make_law_keys).
     k.push_back(choice_key("contact", "law", {"linear", "hertz_mindlin"},
@@ -237,8 +334,18 @@ const std::vector<Key>& key_table() {
                             "stop at this axial strain",
                             [](ExperimentSpec& s) -> double& { return s.loading.max_strain; }));
     k.push_back(nested_real("loading", "stop_fraction", "", 0, 1, false, true,
-                            "after the peak, stop once the stress is below this fraction of it",
+                            "after the peak, stop once the deviatoric stress is below this "
+                            "fraction of it",
                             [](ExperimentSpec& s) -> double& { return s.loading.stop_fraction; }));
+    k.push_back(nested_real(
+        "loading", "confining_stress", "Pa", 0, kInf, false, true,
+        "0: uniaxial (UCS); > 0: triaxial (3D) or biaxial (2D) with servo-controlled lateral "
+        "walls (a cylindrical wall for cylinders) held at this stress",
+        [](ExperimentSpec& s) -> double& { return s.loading.confining_stress; }));
+    k.push_back(nested_real(
+        "loading", "servo_relaxation", "", 0, 1, true, false,
+        "alpha_s of the wall servo (physics.md §6.2)",
+        [](ExperimentSpec& s) -> double& { return s.loading.servo_relaxation; }));
     // [output]
     k.push_back(
         string_key("output", "directory",
@@ -247,6 +354,13 @@ const std::vector<Key>& key_table() {
     k.push_back(int_key("output", "history_interval", 1, 1000000000,
                         "steps between rows of history.csv",
                         [](ExperimentSpec& s) -> std::int64_t& { return s.history_interval; }));
+    k.push_back(real_key("output", "snapshot_strain_interval", "", 0, 1, false,
+                         "axial strain between ParaView snapshots (VTK, snapshots/); 0 = only "
+                         "the first and last",
+                         &ExperimentSpec::snapshot_strain_interval));
+    k.push_back(bool_key("output", "plot",
+                         "write stress_strain.png at the end (python3 with matplotlib)",
+                         &ExperimentSpec::plot));
     k.push_back(
         bool_key("output", "progress", "progress bar on a terminal", &ExperimentSpec::progress));
     return k;
@@ -284,7 +398,13 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
       if (k.section == section && k.name == name) return &k;
     return nullptr;
   };
-  // Laws first: the other keys of [contact] and [bond] depend on them.
+  // The material preset first (explicit keys override it), then the laws: the other keys of
+  // [contact] and [bond] depend on them.
+  if (const auto* t = root["material"].as_table())
+    if (const auto* pr = t->get("preset")) {
+      find_key("material", "preset")->set(spec, *pr, where_of(source, *pr), "material.preset");
+      apply_preset(spec, spec.preset, where_of(source, *pr));
+    }
   for (const char* sec : {"contact", "bond"}) {
     if (const auto* t = root[sec].as_table())
       if (const auto* law = t->get("law"))
@@ -297,7 +417,7 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
       if (!key)
         throw InputError(where_of(source, node), name, show(node),
                          "unknown top-level key; allowed: name, and the tables [engine], "
-                         "[sample], [contact], [bond], [loading], [output]");
+                         "[material], [sample], [contact], [bond], [loading], [output]");
       key->set(spec, node, where_of(source, node), name);
       continue;
     }
@@ -306,13 +426,14 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
     for (const Key& key : keys) section_known |= key.section == name;
     if (!section_known)
       throw InputError(where_of(source, node), "[" + name + "]", "",
-                       "unknown table; allowed: [engine], [sample], [contact], [bond], "
-                       "[loading], [output]");
+                       "unknown table; allowed: [engine], [material], [sample], [contact], "
+                       "[bond], [loading], [output]");
     for (const auto& [kk, value] : tbl) {
       const std::string item(kk.str());
       const std::string full = name + "." + item;
       const std::string where = where_of(source, value);
       if (item == "law" && (name == "contact" || name == "bond")) continue;
+      if (item == "preset" && name == "material") continue;
       if (const Key* key = find_key(name, item)) {
         key->set(spec, value, where, full);
         continue;
@@ -375,20 +496,105 @@ void apply_overrides(toml::table& root, const std::vector<std::string>& override
 }
 
 void check_consistency(const ExperimentSpec& s, const std::string& source) {
-  if (s.sample_source == "file" && s.geometry_file.empty())
+  if ((s.sample_source == "file" || s.sample_source == "table" || s.sample_source == "gengeo") &&
+      s.geometry_file.empty())
     throw InputError(source, "sample.file", "\"\"",
-                     "a geometry file is required when source = \"file\"");
+                     "a file is required when source = \"" + s.sample_source + "\"");
   if (s.dimension == 2 && s.contact_law == "hertz_mindlin")
     throw InputError(source, "contact.law", "\"hertz_mindlin\"",
                      "2D disks use \"linear\" contacts (Hertz has no disk form, physics.md §3.4)");
+  if (s.sample_source == "generate") {
+    if (s.dimension == 2 && s.shape != "rectangle")
+      throw InputError(source, "sample.shape", "\"" + s.shape + "\"",
+                       "2D samples are generated as \"rectangle\"");
+    if (s.dimension == 3 && s.shape == "rectangle")
+      throw InputError(source, "sample.shape", "\"rectangle\"",
+                       "3D samples are \"prism\" or \"cylinder\"");
+    if (s.distribution != "classes" && s.radius_min > s.radius_max)
+      throw InputError(source, "sample.radius_max", num(s.radius_max),
+                       "must be >= sample.radius_min = " + num(s.radius_min) + " m");
+    if (s.distribution == "lognormal" &&
+        (s.radius_mean < s.radius_min || s.radius_mean > s.radius_max))
+      throw InputError(source, "sample.radius_mean", num(s.radius_mean),
+                       "must lie within [radius_min, radius_max] = [" + num(s.radius_min) + ", " +
+                           num(s.radius_max) + "] m");
+    if (s.distribution == "classes" &&
+        (s.class_radii.empty() || s.class_radii.size() != s.class_mass_fractions.size()))
+      throw InputError(source, "sample.class_radii", std::to_string(s.class_radii.size()) +
+                                                         " radii",
+                       "classes need one sample.class_mass_fractions entry per radius");
+  }
+  if (s.density_scaling > 1.0 && s.gravity > 0.0)
+    throw InputError(source, "engine.density_scaling", num(s.density_scaling),
+                     "must be 1 when gravity is on: scaled masses would scale the weight");
 }
 
 }  // namespace
 
+std::vector<std::pair<std::string, std::string>> material_presets() {
+  return {
+      {"custom", "no preset; every value comes from the keys and their defaults."},
+      {"berea_analog",
+       "Berea sandstone analog, UNCALIBRATED: Hertz-Mindlin grains G = 29 GPa, nu = 0.33, "
+       "mu = 0.4 and bond strengths T = 30 MPa, c = 300 MPa from the RICEBAL calibration "
+       "(Vora & Morgan); this parallel bond's modulus (8 GPa, the lab E) and stiffness ratio "
+       "(2.5) are not from the paper; grain density 2650 kg/m^3."},
+      {"lac_du_bonnet_analog",
+       "Lac du Bonnet granite analog, UNCALIBRATED: Potyondy & Cundall (2004) values as "
+       "restated in physics.md §4.1 (E_c = E_bar = 62 GPa, kappa = 2.5, mu = 0.5, lambda = 1, "
+       "sigma_c = tau_c = 175 +/- 40 MPa), linear contacts; grain density 2630 kg/m^3."},
+  };
+}
+
+void apply_preset(ExperimentSpec& s, const std::string& name, const std::string& where) {
+  if (name == "custom") return;
+  if (name == "berea_analog") {
+    s.density = 2650.0;
+    s.contact_law = "hertz_mindlin";
+    s.hertz = HertzMindlin::Params{};
+    s.hertz.shear_modulus = 29e9;
+    s.hertz.poisson_ratio = 0.33;
+    s.hertz.friction = 0.4;
+    s.parallel_bond = ParallelBond::Params{};
+    s.parallel_bond.modulus = 8e9;
+    s.parallel_bond.stiffness_ratio = 2.5;
+    s.parallel_bond.tensile_strength = 30e6;
+    s.parallel_bond.cohesion = 300e6;
+    return;
+  }
+  if (name == "lac_du_bonnet_analog") {
+    s.density = 2630.0;
+    s.contact_law = "linear";
+    s.linear = LinearContact::Params{};
+    s.linear.modulus = 62e9;
+    s.linear.stiffness_ratio = 2.5;
+    s.linear.friction = 0.5;
+    s.parallel_bond = ParallelBond::Params{};
+    s.parallel_bond.modulus = 62e9;
+    s.parallel_bond.stiffness_ratio = 2.5;
+    s.parallel_bond.radius_multiplier = 1.0;
+    s.parallel_bond.tensile_strength = 175e6;
+    s.parallel_bond.tensile_strength_sd = 40e6;
+    s.parallel_bond.cohesion = 175e6;
+    s.parallel_bond.cohesion_sd = 40e6;
+    return;
+  }
+  std::string allowed = "allowed: ";
+  for (const auto& [n, d] : material_presets()) allowed += "\"" + n + "\" ";
+  throw InputError(where, "material.preset", "\"" + name + "\"", allowed);
+}
+
+// The built-in default: a UCS test on a small Berea-analog prism (about 2,300 grains).
 ExperimentSpec default_experiment() {
   ExperimentSpec s;
   s.engine.local_damping = 0.7;
   s.engine.energy_interval = 100;
+  s.preset = "berea_analog";
+  apply_preset(s, s.preset, "built-in default");
+  s.density_scaling = 10.0;
+  s.loading.platen_speed = 0.05;
+  s.loading.max_strain = 0.03;
+  s.loading.stop_fraction = 0.6;
   s.source = "built-in default";
   return s;
 }

@@ -8,25 +8,42 @@
 #include <vector>
 
 #include "breccia/engine/simulation.hpp"
-#include "breccia/protocol/platen_compression.hpp"
+#include "breccia/protocol/compression_test.hpp"
 
 namespace breccia {
 
 struct ExperimentSpec {
-  std::string name = "demo-compression";
+  std::string name = "ucs-berea-analog";
   // [engine]
   std::int64_t dimension = 3;
   std::int64_t threads = 0;  // 0 = all cores
   double gravity = 0.0;      // m/s^2 along -z (3D) or -y (2D)
   EngineConfig engine;       // gravity is filled from `gravity` when the simulation is built
+  double density_scaling = 1.0;  // mass and inertia factor for quasi-static runs (>= 1)
+  // [material]
+  std::string preset = "custom";
   // [sample]
-  std::string sample_source = "lattice";  // "lattice" (FCC in 3D, hexagonal in 2D) or "file"
-  std::array<std::int64_t, 3> cells{6, 6, 12};
-  double radius = 0.5e-3;
+  // "generate" (random packing), "file" (breccia-geometry), "table" (x y z r), "gengeo"
+  // (LSMGeometry 1.2), "lattice" (FCC in 3D, hexagonal in 2D)
+  std::string sample_source = "generate";
+  std::string shape = "prism";  // generate: prism or cylinder (3D), rectangle (2D)
+  double width = 8e-3, depth = 8e-3, height = 16e-3, diameter = 8e-3;
+  std::string distribution = "uniform";
+  double radius_min = 0.3e-3, radius_max = 0.5e-3, radius_mean = 0.4e-3, radius_sd = 0.05e-3;
+  std::vector<double> class_radii, class_mass_fractions;
+  double porosity = 0.37;
+  std::string packing_target = "stress";  // "stress" (servo to isotropic_stress) or "porosity"
+  double isotropic_stress = 0.1e6;
+  std::int64_t max_particles = 2'000'000;
+  bool cache = true;  // reuse a generated sample with the same settings
+  std::array<std::int64_t, 3> cells{6, 6, 12};  // lattice
+  double radius = 0.5e-3;  // lattice
   double density = 2650.0;
   double thickness = 1e-3;  // 2D only
-  std::string geometry_file;
-  double bond_gap_tolerance = 1e-9;  // bonds between pairs with gap <= this when none are listed
+  std::string geometry_file;  // file, table, gengeo
+  // Bonds between pairs with gap <= this when the sample lists none (generated samples: at
+  // generation).
+  double bond_gap_tolerance = 5e-6;
   // [contact]
   std::string contact_law = "linear";
   LinearContact::Params linear;
@@ -40,12 +57,19 @@ struct ExperimentSpec {
   // [output]
   std::string output_directory = "runs";
   std::int64_t history_interval = 200;  // steps
+  double snapshot_strain_interval = 0.002;  // axial strain between ParaView snapshots; 0 = none
+  bool plot = true;                         // stress-strain PNG at the end (needs matplotlib)
   bool progress = true;
 
   std::string source;  // file the spec came from ("built-in default" otherwise)
 };
 
 ExperimentSpec default_experiment();
+
+// Material presets: names, and a one-line description of each (with its provenance).
+std::vector<std::pair<std::string, std::string>> material_presets();
+// Sets the micro-parameters of a preset (density, contact and bond laws); throws InputError.
+void apply_preset(ExperimentSpec& spec, const std::string& name, const std::string& where);
 
 // Reads a TOML experiment file and applies `overrides` ("section.key=value", value in TOML
 // syntax). Throws InputError naming the file, the key, the value and what is allowed.

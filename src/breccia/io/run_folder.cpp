@@ -6,16 +6,22 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <limits>
+#include <memory>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "breccia/analysis/compression.hpp"
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/io/geometry_file.hpp"
 #include "breccia/observe/recorders.hpp"
+#include "breccia/observe/snapshots.hpp"
+#include "breccia/io/sample_import.hpp"
 #include "breccia/sample/lattice.hpp"
 #include "breccia/version.hpp"
 
@@ -72,31 +78,169 @@ struct Built {
   Simulation sim;
   PlatenCompression protocol;
   double bar_wave_speed = 0.0;
+  json sample_report;
+  std::uint64_t consolidation_steps = 0;
 };
 
-ParticleStore make_particles(const ExperimentSpec& s,
-                             std::vector<std::pair<std::uint64_t, std::uint64_t>>& bonds) {
-  if (s.sample_source == "file") {
-    fs::path p = s.geometry_file;
-    if (p.is_relative() && s.source != "built-in default") p = fs::path(s.source).parent_path() / p;
-    GeometryData g = read_geometry(p.string());
-    const Dimension want = s.dimension == 2 ? Dimension::Two : Dimension::Three;
-    if (g.dimension != want)
-      throw InputError(p.string(), "dimension", g.dimension == Dimension::Two ? "2" : "3",
-                       "must match engine.dimension = " + std::to_string(s.dimension));
-    bonds = g.bonds;
-    return g.make_store();
-  }
-  if (s.dimension == 2)
-    return hex_block(static_cast<int>(s.cells[0]), static_cast<int>(s.cells[1]), s.radius,
-                     s.density, s.thickness);
-  return fcc_block(static_cast<int>(s.cells[0]), static_cast<int>(s.cells[1]),
-                   static_cast<int>(s.cells[2]), s.radius, s.density);
+std::string resolve(const ExperimentSpec& s, const std::string& file) {
+  fs::path p = file;
+  if (p.is_relative() && s.source != "built-in default") p = fs::path(s.source).parent_path() / p;
+  return p.string();
 }
 
-Built build(const ExperimentSpec& s) {
-  std::vector<std::pair<std::uint64_t, std::uint64_t>> listed;
-  ParticleStore ps = make_particles(s, listed);
+json packing_json(const PackingReport& r) {
+  return json{{"particles", r.particles},
+              {"bonds", r.bonds},
+              {"porosity", r.porosity},
+              {"mean_coordination", r.mean_coordination},
+              {"bonds_per_interior_particle", r.bond_coordination_interior},
+              {"locked_in_mean_stress_pa", r.locked_in_mean_stress},
+              {"locked_in_stress_diagonal_pa", {r.locked_in_xx, r.locked_in_yy, r.locked_in_zz}},
+              {"radius_mean_m", r.radius_mean},
+              {"radius_sd_m", r.radius_sd},
+              {"radius_min_m", r.radius_min},
+              {"radius_max_m", r.radius_max},
+              {"floaters_fewer_than_3_contacts", r.floaters},
+              {"packing_steps", r.steps},
+              {"converged", r.converged},
+              {"size_m", {r.width, r.depth, r.height}},
+              {"packing_seconds", r.wall_seconds}};
+}
+
+// A short stable hash of the settings that define a generated sample (the cache key).
+std::string sample_key(const ExperimentSpec& s) {
+  const std::string text = to_toml(s);
+  std::string sample_part;
+  bool in = false;
+  for (std::size_t pos = 0; pos < text.size();) {
+    const std::size_t e = text.find('\n', pos);
+    const std::string line = text.substr(pos, e - pos);
+    pos = e == std::string::npos ? text.size() : e + 1;
+    if (!line.empty() && line[0] == '[') in = line == "[sample]";
+    if (in || line.rfind("seed", 0) == 0 || line.rfind("dimension", 0) == 0) sample_part += line;
+  }
+  sample_part += fmt::format("|{}", s.parallel_bond.modulus);
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : sample_part) h = (h ^ c) * 1099511628211ull;
+  return fmt::format("{:016x}", h);
+}
+
+}  // namespace
+
+PackingSettings packing_settings(const ExperimentSpec& s) {
+  PackingSettings p;
+  p.shape = s.shape == "cylinder"    ? SampleShape::Cylinder
+            : s.shape == "rectangle" ? SampleShape::Rectangle
+                                     : SampleShape::Prism;
+  p.width = s.width;
+  p.depth = s.depth;
+  p.height = s.height;
+  p.diameter = s.diameter;
+  p.thickness = s.thickness;
+  p.radii.kind = RadiusDistribution::kind_from(s.distribution, s.source);
+  p.radii.r_min = s.radius_min;
+  p.radii.r_max = s.radius_max;
+  p.radii.mean = s.radius_mean;
+  p.radii.sd = s.radius_sd;
+  p.radii.class_radius = s.class_radii;
+  p.radii.class_mass_fraction = s.class_mass_fractions;
+  p.density = s.density;
+  p.porosity = s.porosity;
+  p.servo_to_stress = s.packing_target == "stress";
+  p.isotropic_stress = s.isotropic_stress;
+  // Packing contacts get the bond modulus: what matters is the stress-overlap scale of the
+  // sample that the bonds will hold.
+  p.contact_modulus = s.parallel_bond.modulus;
+  p.bond_gap_tolerance = s.bond_gap_tolerance;
+  p.seed = s.engine.seed;
+  p.max_particles = static_cast<std::size_t>(s.max_particles);
+  return p;
+}
+
+GeneratedSample generate_sample(const ExperimentSpec& s, const std::string& path,
+                                const std::function<void(const std::string&)>& log) {
+  PackedSample packed = pack_sample(packing_settings(s), log);
+  GeneratedSample out{std::move(packed.geometry), packing_json(packed.report)};
+  out.report["generator"] = fmt::format("breccia {}", kVersion);
+  out.report["settings"] = to_toml(s);
+  if (!path.empty()) {
+    const fs::path p(path);
+    if (p.has_parent_path()) fs::create_directories(p.parent_path());
+    write_geometry(p.string() + ".tmp", out.geometry);
+    fs::rename(p.string() + ".tmp", p);
+    write_json(p.string() + ".json", out.report);
+  }
+  return out;
+}
+
+namespace {
+
+GeometryData load_sample(const ExperimentSpec& s, json& report, LateralBoundary& lateral,
+                         const std::function<void(const std::string&)>& log) {
+  const Dimension want = s.dimension == 2 ? Dimension::Two : Dimension::Three;
+  lateral = LateralBoundary::Prism;
+  GeometryData g;
+  if (s.sample_source == "generate") {
+    lateral = s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism;
+    const fs::path cache = fs::path(s.output_directory) / "samples" /
+                           fmt::format("{}-{}.geom", s.shape, sample_key(s));
+    if (s.cache && fs::exists(cache) && fs::exists(cache.string() + ".json")) {
+      log("sample: reusing " + cache.string());
+      g = read_geometry(cache.string());
+      std::ifstream in(cache.string() + ".json");
+      report = json::parse(in, nullptr, false);
+      report["cached_file"] = cache.string();
+    } else {
+      log("sample: generating (cached afterwards in " + cache.string() + ")");
+      GeneratedSample gs = generate_sample(s, s.cache ? cache.string() : std::string(), log);
+      g = std::move(gs.geometry);
+      report = gs.report;
+      if (s.cache) report["cached_file"] = cache.string();
+    }
+  } else if (s.sample_source == "file") {
+    const std::string p = resolve(s, s.geometry_file);
+    g = read_geometry(p);
+    if (fs::exists(p + ".json")) {
+      std::ifstream in(p + ".json");
+      report = json::parse(in, nullptr, false);
+      if (report.contains("settings") && report["settings"].is_string() &&
+          report["settings"].get<std::string>().find("shape = \"cylinder\"") != std::string::npos)
+        lateral = LateralBoundary::Cylinder;
+    }
+    report["file"] = p;
+  } else if (s.sample_source == "table") {
+    g = read_xyzr_table(resolve(s, s.geometry_file), want, s.density, s.thickness);
+    report["file"] = resolve(s, s.geometry_file);
+  } else if (s.sample_source == "gengeo") {
+    g = read_gengeo(resolve(s, s.geometry_file), s.density, s.thickness);
+    report["file"] = resolve(s, s.geometry_file);
+  } else {
+    const ParticleStore ps =
+        s.dimension == 2 ? hex_block(static_cast<int>(s.cells[0]), static_cast<int>(s.cells[1]),
+                                     s.radius, s.density, s.thickness)
+                         : fcc_block(static_cast<int>(s.cells[0]), static_cast<int>(s.cells[1]),
+                                     static_cast<int>(s.cells[2]), s.radius, s.density);
+    g.dimension = ps.dimension();
+    g.thickness = ps.thickness();
+    for (std::size_t i = 0; i < ps.size(); ++i)
+      g.particles.push_back(
+          {.tag = ps.tag[i], .position = ps.pos_rad[i].x, .radius = ps.pos_rad[i].r,
+           .density = ps.density[i]});
+    report["lattice"] = s.dimension == 2 ? "hexagonal" : "fcc";
+  }
+  if (g.dimension != want)
+    throw InputError(s.source, "engine.dimension", std::to_string(s.dimension),
+                     std::string("the sample is ") + (g.dimension == Dimension::Two ? "2D" : "3D"));
+  return g;
+}
+
+Built build(const ExperimentSpec& s, const std::function<void(const std::string&)>& log) {
+  json report;
+  LateralBoundary lateral;
+  GeometryData g = load_sample(s, report, lateral, log);
+  // Density scaling (physics.md §1.5): masses and inertias grow, so does the stable time step.
+  for (ParticleSpec& q : g.particles) q.density *= s.density_scaling;
+  ParticleStore ps = g.make_store();
   EngineConfig cfg = s.engine;
   cfg.gravity = s.dimension == 2 ? Vec3{0, -s.gravity, 0} : Vec3{0, 0, -s.gravity};
   ContactModel contact;
@@ -111,21 +255,32 @@ Built build(const ExperimentSpec& s) {
   }
   Simulation sim(std::move(ps), cfg, std::move(contact));
   sim.set_bond_params<ParallelBond>(s.parallel_bond);
-  if (!listed.empty())
-    for (auto [a, b] : listed) sim.add_bond<ParallelBond>(a, b);
+  if (!g.bonds.empty())
+    for (auto [a, b] : g.bonds) sim.add_bond<ParallelBond>(a, b);
   else
     sim.bond_touching_pairs<ParallelBond>(s.bond_gap_tolerance);
-  PlatenCompression protocol(sim, s.loading);
+  PlatenCompression protocol(sim, s.loading, lateral);
   sim.initialise();
   // Bar-wave speed for the ramp (§2.3, §6.1): E estimated by the bond modulus, bulk density from
-  // the particle mass in the sample's bounding box.
+  // the (scaled) particle mass in the sample's bounding box.
   double mass = 0.0;
   for (double m : sim.particles().mass) mass += m;
-  const double volume = protocol.area() * protocol.height0();
-  const double e_est = s.parallel_bond.modulus;
-  const double v_bar = std::sqrt(e_est / (mass / volume));
-  protocol.start(sim, v_bar);
-  return Built{std::move(sim), std::move(protocol), v_bar};
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  const int axis = s.dimension == 2 ? 1 : 2;
+  double footprint_lo[2] = {lo, lo}, footprint_hi[2] = {hi, hi};
+  for (const PosRad& q : sim.particles().pos_rad) {
+    lo = std::min(lo, q.x[axis] - q.r);
+    hi = std::max(hi, q.x[axis] + q.r);
+    for (int k = 0; k < 2; ++k) {
+      footprint_lo[k] = std::min(footprint_lo[k], q.x[k] - q.r);
+      footprint_hi[k] = std::max(footprint_hi[k], q.x[k] + q.r);
+    }
+  }
+  const double volume = (hi - lo) * (footprint_hi[0] - footprint_lo[0]) *
+                        (s.dimension == 2 ? s.thickness : footprint_hi[1] - footprint_lo[1]);
+  const double v_bar = std::sqrt(s.parallel_bond.modulus / (mass / volume));
+  const std::uint64_t consolidation = protocol.start(sim, v_bar);
+  return Built{std::move(sim), std::move(protocol), v_bar, report, consolidation};
 }
 
 json ledger_json(const EnergyLedger& L) {
@@ -150,6 +305,110 @@ json ledger_json(const EnergyLedger& L) {
 
 }  // namespace
 
+namespace {
+
+json nan_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+void make_plot(const fs::path& folder, const std::function<void(const std::string&)>& log) {
+  if (!plot_run(folder.string()))
+    log("warning: no stress_strain.png (see " + (folder / "plot.log").string() + ")");
+}
+
+std::string mpa(const json& j, const char* key) {
+  return j.contains(key) && j[key].is_number() ? fmt::format("{:.2f} MPa", j[key].get<double>() * 1e-6)
+                                               : "n/a";
+}
+std::string gpa(const json& j, const char* key) {
+  return j.contains(key) && j[key].is_number() ? fmt::format("{:.2f} GPa", j[key].get<double>() * 1e-9)
+                                               : "n/a";
+}
+std::string plain(const json& j, const char* key, const char* f = "{:.3g}") {
+  return j.contains(key) && j[key].is_number() ? fmt::format(fmt::runtime(f), j[key].get<double>())
+                                               : "n/a";
+}
+
+}  // namespace
+
+// The plot script ships beside the sources and is installed nowhere: look in the source tree.
+bool plot_run(const std::string& folder) {
+  const fs::path script = fs::path(BRECCIA_SOURCE_DIR) / "scripts" / "plot_run.py";
+  const fs::path logf = fs::path(folder) / "plot.log";
+  const std::string cmd = fmt::format("/usr/bin/python3 '{}' '{}' > '{}' 2>&1", script.string(),
+                                      folder, logf.string());
+  if (std::system(cmd.c_str()) != 0) return false;
+  fs::remove(logf);
+  return true;
+}
+
+std::string summarise_folder(const std::string& folder) {
+  const fs::path f(folder);
+  if (fs::exists(f / "sweep.json")) {
+    std::ifstream in(f / "sweep.json");
+    const json j = json::parse(in, nullptr, false);
+    if (j.is_discarded()) throw InputError((f / "sweep.json").string(), "", "", "not valid JSON");
+    std::string s = fmt::format("sweep {} ({})\n", j.value("experiment", ""), j.value("status", ""));
+    s += "  sigma3 (MPa)   peak q (MPa)   sigma1 (MPa)   E_t50 (GPa)   cracks\n";
+    for (const json& r : j["runs"])
+      s += fmt::format("  {:>12.2f}   {:>12.2f}   {:>12.2f}   {:>11}   {:>6}\n",
+                       r.value("confining_stress_pa", 0.0) * 1e-6,
+                       r.value("peak_deviatoric_stress_pa", 0.0) * 1e-6,
+                       r.value("sigma1_at_peak_pa", 0.0) * 1e-6,
+                       r["youngs_modulus_pa"].is_number()
+                           ? fmt::format("{:.2f}", r["youngs_modulus_pa"].get<double>() * 1e-9)
+                           : "n/a",
+                       r.value("cracks", 0));
+    const json& mc = j["mohr_coulomb"];
+    s += mc.value("valid", false)
+             ? fmt::format("Mohr-Coulomb: cohesion {}, friction angle {} deg, UCS {} (R^2 {})\n",
+                           mpa(mc, "cohesion_pa"), plain(mc, "friction_angle_deg", "{:.1f}"),
+                           mpa(mc, "ucs_intercept_pa"), plain(mc, "r2"))
+             : "Mohr-Coulomb: no fit (" + mc.value("flag", std::string()) + ")\n";
+    const json& hb = j["hoek_brown"];
+    s += hb.value("valid", false)
+             ? fmt::format("Hoek-Brown: sigma_ci {}, m_i {} (rms {})\n", mpa(hb, "sigma_ci_pa"),
+                           plain(hb, "m_i"), mpa(hb, "rms_residual_pa"))
+             : "Hoek-Brown: no fit (" + hb.value("flag", std::string()) + ")\n";
+    return s;
+  }
+  if (!fs::exists(f / "summary.json")) {
+    std::string status = "unknown";
+    if (fs::exists(f / "manifest.json")) {
+      std::ifstream in(f / "manifest.json");
+      const json m = json::parse(in, nullptr, false);
+      if (!m.is_discarded()) status = m.value("status", "unknown");
+    }
+    throw InputError(folder, "summary.json", "(missing)",
+                     "not a finished run folder (manifest status: " + status + ")");
+  }
+  std::ifstream in(f / "summary.json");
+  const json j = json::parse(in, nullptr, false);
+  if (j.is_discarded()) throw InputError((f / "summary.json").string(), "", "", "not valid JSON");
+  std::string s = fmt::format("{}: {}, sigma3 = {} ({}; {})\n", j.value("experiment", ""),
+                              j.value("test", ""), mpa(j, "confining_stress_pa"),
+                              j.value("status", ""), j.value("stop_reason", ""));
+  s += fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
+                   mpa(j, "peak_deviatoric_stress_pa"), plain(j, "axial_strain_at_peak", "{:.5f}"),
+                   gpa(j, "youngs_modulus_pa"), plain(j, "poisson_ratio"));
+  s += fmt::format("  crack initiation {}, crack damage {}, residual {}\n",
+                   mpa(j, "crack_initiation_stress_pa"), mpa(j, "crack_damage_stress_pa"),
+                   mpa(j, "residual_strength_pa"));
+  s += fmt::format("  {} particles, {} bonds; {} cracks ({} tensile, {} shear)\n",
+                   j.value("particles", 0), j.value("bonds_initial", 0), j.value("bonds_broken", 0),
+                   j.value("cracks_tensile", 0), j.value("cracks_shear", 0));
+  const json& qs = j["quasi_static"];
+  s += fmt::format("  quasi-static: {} (platen imbalance {}, kinetic/strain {})",
+                   qs.value("ok", false) ? "yes" : "NO",
+                   plain(qs, "max_platen_force_imbalance_before_peak"),
+                   plain(qs, "max_kinetic_to_strain_energy_before_peak"));
+  if (j.value("confining_stress_pa", 0.0) > 0.0)
+    s += fmt::format("; confining error before peak {:.2f} %",
+                     100 * j["confining_stress_error"].value("max_relative_before_peak", 0.0));
+  s += fmt::format("\n  {} steps in {:.1f} s ({:.3g} particle-steps/s)\n", j.value("steps", 0),
+                   j.value("wall_seconds", 0.0), j.value("particle_steps_per_second", 0.0));
+  for (const json& w : j["warnings"]) s += "  warning: " + w.get<std::string>() + "\n";
+  return s;
+}
+
 RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   auto log = [&](const std::string& m) {
     if (opt.log) opt.log(m);
@@ -157,7 +416,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
   const auto t_start = std::chrono::steady_clock::now();
   // Build first: a bad sample (geometry file, bond list) fails before any file is written.
-  Built b = build(spec);
+  Built b = build(spec, log);
   const fs::path folder = make_folder(spec);
   RunResult result;
   result.folder = folder.string();
@@ -171,6 +430,11 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
       {"threads", max_threads()},
       {"machine", machine_description()},
       {"status", "running"},
+      {"density_scaling", spec.density_scaling},
+      {"grain_density_kg_m3", spec.density},
+      {"simulated_density_kg_m3", spec.density * spec.density_scaling},
+      {"bar_wave_speed_m_s", b.bar_wave_speed},
+      {"sample", b.sample_report},
       {"resolved_experiment", to_toml(spec)}};
   { std::ofstream(folder / "experiment.toml") << to_toml(spec); }
   write_json(folder / "manifest.json", manifest);
@@ -186,25 +450,46 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
 
   try {
     Simulation& sim = b.sim;
-    for (const std::string& w : sim.warnings()) log("warning: " + w);
+    PlatenCompression& test = b.protocol;
+    std::vector<std::string> warnings = sim.warnings();
+    if (test.confined() && !test.consolidated())
+      warnings.push_back(fmt::format(
+          "consolidation to {} MPa did not settle within {} steps; loading started anyway",
+          spec.loading.confining_stress * 1e-6, b.consolidation_steps));
+    for (const std::string& w : warnings) log("warning: " + w);
     manifest["time_step_s"] = sim.time_step();
     manifest["critical_time_step_s"] = sim.critical_time_step();
     manifest["particles"] = sim.particles().size();
     manifest["bonds"] = sim.intact_bonds();
-    manifest["warnings"] = sim.warnings();
+    manifest["consolidation_steps"] = b.consolidation_steps;
+    manifest["strain_rate_per_s"] = 2.0 * spec.loading.platen_speed / test.height0();
     write_json(folder / "manifest.json", manifest);
     result.particles = sim.particles().size();
     result.bonds = sim.intact_bonds();
-    log(fmt::format("sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s)",
-                    result.particles, result.bonds, sim.time_step(), sim.critical_time_step()));
+    result.confining_stress = spec.loading.confining_stress;
+    log(fmt::format("sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s){}",
+                    result.particles, result.bonds, sim.time_step(), sim.critical_time_step(),
+                    test.confined() ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
+                                                  spec.loading.confining_stress * 1e-6,
+                                                  b.consolidation_steps)
+                                    : ""));
 
     HistoryRecorder history((folder / "history.csv").string());
     CrackRecorder cracks((folder / "cracks.csv").string());
-    std::vector<double> strain, stress;
+    std::unique_ptr<SnapshotWriter> snaps;
+    snaps = std::make_unique<SnapshotWriter>((folder / "snapshots").string());
+    analysis::CompressionSeries series;
+    series.confining_stress = spec.loading.confining_stress;
     const auto interval = static_cast<std::uint64_t>(spec.history_interval);
     std::string stop = "";
     std::string status = "complete";
     auto last_bar = std::chrono::steady_clock::now();
+    // Quality of the test: quasi-static checks (physics.md §6.1) and the confining-stress error,
+    // tracked up to the peak and over the whole test.
+    std::vector<double> imbalance, ke_ratio, confine_err;
+    double next_snapshot = 0.0;
+    snaps->write(sim, 0.0);
+    next_snapshot = spec.snapshot_strain_interval;
     for (;;) {
       if (opt.interrupt && opt.interrupt->load()) {
         status = "interrupted";
@@ -212,17 +497,33 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         break;
       }
       if (sim.step_count() % interval == 0) sim.request_energy_sample();
+      test.control(sim);
       sim.step();
       if ((sim.step_count() - 1) % interval != 0) continue;
-      const AxialState a = b.protocol.measure(sim);
+      const AxialState a = test.measure(sim);
       history.record(sim, a);
       cracks.record(sim);
       history.flush();
       cracks.flush();
-      strain.push_back(a.strain);
-      stress.push_back(a.stress);
-      if (b.protocol.finished(a, sim.cracks().size())) {
-        stop = b.protocol.stop_reason();
+      series.axial_strain.push_back(a.strain);
+      series.deviatoric.push_back(a.deviatoric);
+      series.lateral_strain.push_back(a.lateral_strain);
+      series.volumetric_strain.push_back(a.volumetric_strain);
+      series.broken_bonds.push_back(static_cast<double>(sim.cracks().size()));
+      // Quality monitors, judged after the run over the pre-peak rows (physics.md §6.1).
+      const double fbar = 0.5 * (a.force_bottom + a.force_top);
+      const double stored = sim.ledger().bond.total() + sim.ledger().contact;
+      imbalance.push_back(fbar > 0.0 ? std::abs(a.force_top - a.force_bottom) / fbar : 0.0);
+      ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
+      if (test.confined())
+        confine_err.push_back(std::abs(a.confining_stress - spec.loading.confining_stress) /
+                              spec.loading.confining_stress);
+      if (spec.snapshot_strain_interval > 0.0 && a.strain >= next_snapshot) {
+        snaps->write(sim, a.strain);
+        while (next_snapshot <= a.strain) next_snapshot += spec.snapshot_strain_interval;
+      }
+      if (test.finished(a, sim.cracks().size())) {
+        stop = test.stop_reason();
         break;
       }
       const auto now = std::chrono::steady_clock::now();
@@ -233,10 +534,10 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         const int width = 30, fill = static_cast<int>(frac * width);
         std::fprintf(
             stderr,
-            "\r[%s%s] strain %.4f  stress %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
+            "\r[%s%s] strain %.4f  q %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
             std::string(static_cast<std::size_t>(fill), '#').c_str(),
             std::string(static_cast<std::size_t>(width - fill), '.').c_str(), a.strain,
-            a.stress * 1e-6, sim.cracks().size(), el, el * (1 - frac) / frac);
+            a.deviatoric * 1e-6, sim.cracks().size(), el, el * (1 - frac) / frac);
         std::fflush(stderr);
       }
     }
@@ -244,49 +545,111 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     cracks.record(sim);
     cracks.flush();
     history.flush();
+    snaps->write(sim, series.axial_strain.empty() ? 0.0 : series.axial_strain.back());
 
     result.wall_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     result.steps = sim.step_count();
-    const auto peak = analysis::find_peak(strain, stress);
-    const auto fit = analysis::tangent_modulus(strain, stress);
-    result.peak_stress = peak.stress;
-    result.strain_at_peak = peak.strain;
-    result.youngs_modulus = fit.valid ? fit.slope : std::nan("");
+    const analysis::CompressionResult an = analysis::analyse_compression(series);
+    result.peak_stress = an.peak_deviatoric;
+    result.sigma1_at_peak = an.sigma1_at_peak;
+    result.strain_at_peak = an.strain_at_peak;
+    result.youngs_modulus = an.e_t50.valid ? an.e_t50.slope : std::nan("");
+    result.poisson = an.poisson;
     result.cracks = sim.cracks().size();
     for (const auto& c : sim.cracks())
       (c.mode == CrackMode::Tensile ? result.tensile : result.shear)++;
     result.energy_residual_relative = sim.ledger().residual_relative;
+    // Pre-peak rows once the load exceeds 10 % of the peak (the ramp-up start is excluded).
+    double imbalance_pre = 0.0, ke_ratio_pre = 0.0, confine_err_pre = 0.0, confine_err_all = 0.0;
+    for (std::size_t k = 0; k < series.deviatoric.size(); ++k) {
+      if (k < confine_err.size()) confine_err_all = std::max(confine_err_all, confine_err[k]);
+      const bool pre = series.axial_strain[k] <= an.strain_at_peak &&
+                       series.deviatoric[k] >= 0.1 * an.peak_deviatoric;
+      if (!pre) continue;
+      imbalance_pre = std::max(imbalance_pre, imbalance[k]);
+      ke_ratio_pre = std::max(ke_ratio_pre, ke_ratio[k]);
+      if (k < confine_err.size()) confine_err_pre = std::max(confine_err_pre, confine_err[k]);
+    }
+    bool quasi_static = imbalance_pre <= 0.05 && ke_ratio_pre <= 1e-3;
+    if (!quasi_static)
+      warnings.push_back(fmt::format(
+          "the test was not quasi-static before the peak: platen force imbalance {:.3g} (limit "
+          "0.05), kinetic/strain energy {:.3g} (limit 1e-3); lower loading.platen_speed",
+          imbalance_pre, ke_ratio_pre));
+    if (test.confined() && confine_err_pre > 0.02)
+      warnings.push_back(fmt::format(
+          "the confining stress left its 2 % band before the peak (largest error {:.3g} %)",
+          100 * confine_err_pre));
+    for (std::size_t k = sim.warnings().size(); k < warnings.size(); ++k)
+      if (k >= sim.warnings().size()) log("warning: " + warnings[k]);
+    const char* test_kind = !test.confined() ? "uniaxial compression (UCS)"
+                            : spec.dimension == 2 ? "biaxial compression"
+                                                  : "triaxial compression";
     json summary{
         {"status", status},
         {"stop_reason", stop},
         {"experiment", spec.name},
+        {"test", test_kind},
+        {"confining_stress_pa", spec.loading.confining_stress},
+        {"lateral_boundary",
+         !test.confined() ? "none"
+         : test.lateral() == LateralBoundary::Cylinder ? "cylindrical servo wall"
+                                                       : "servo-controlled plane walls"},
         {"particles", result.particles},
         {"bonds_initial", result.bonds},
         {"bonds_broken", result.cracks},
         {"cracks_tensile", result.tensile},
         {"cracks_shear", result.shear},
         {"steps", result.steps},
+        {"consolidation_steps", b.consolidation_steps},
         {"simulated_time_s", sim.time()},
         {"time_step_s", sim.time_step()},
+        {"density_scaling", spec.density_scaling},
         {"wall_seconds", result.wall_seconds},
         {"particle_steps_per_second", static_cast<double>(result.particles) *
                                           static_cast<double>(result.steps) / result.wall_seconds},
-        {"peak_axial_stress_pa", peak.stress},
-        {"peak_axial_stress_mpa", peak.stress * 1e-6},
-        {"axial_strain_at_peak", peak.strain},
-        {"youngs_modulus_pa", fit.valid ? json(fit.slope) : json(nullptr)},
+        {"peak_reached", an.peak_reached},
+        {"peak_deviatoric_stress_pa", an.peak_deviatoric},
+        {"peak_deviatoric_stress_mpa", an.peak_deviatoric * 1e-6},
+        {"sigma1_at_peak_pa", an.sigma1_at_peak},
+        {"axial_strain_at_peak", an.strain_at_peak},
+        {"youngs_modulus_pa", an.e_t50.valid ? json(an.e_t50.slope) : json(nullptr)},
         {"youngs_modulus_method",
-         "least-squares slope of axial stress vs axial strain, pre-peak points at 40-60 % of peak "
-         "(ISRM tangent E_t50)"},
-        {"youngs_modulus_fit", {{"points", fit.points}, {"r2", fit.r2}}},
+         fmt::format("ISRM tangent E_t50: least-squares slope of q = sigma_1 - sigma_3 against "
+                     "axial strain over pre-peak samples at {:.0f}-{:.0f} % of the peak",
+                     100 * an.e_t50_lo, 100 * an.e_t50_hi)},
+        {"youngs_modulus_fit", {{"points", an.e_t50.points}, {"r2", an.e_t50.r2}}},
+        {"youngs_modulus_average_pa", an.e_av.valid ? json(an.e_av.slope) : json(nullptr)},
+        {"youngs_modulus_secant50_pa", nan_null(an.e_s50)},
+        {"poisson_ratio", nan_null(an.poisson)},
+        {"crack_initiation_stress_pa", nan_null(an.crack_initiation)},
+        {"crack_initiation_method", "q when the broken bonds reach 5 % of those at the peak"},
+        {"crack_damage_stress_pa", nan_null(an.crack_damage)},
+        {"residual_strength_pa", nan_null(an.residual)},
+        {"brittleness_index", nan_null(an.brittleness)},
+        {"analysis_flags", an.flags},
+        {"quasi_static",
+         {{"ok", quasi_static},
+          {"max_platen_force_imbalance_before_peak", imbalance_pre},
+          {"max_kinetic_to_strain_energy_before_peak", ke_ratio_pre}}},
+        {"confining_stress_error",
+         {{"max_relative_before_peak", confine_err_pre}, {"max_relative_overall", confine_err_all}}},
         {"platen_speed_m_per_s", spec.loading.platen_speed},
-        {"sample_height_m", b.protocol.height0()},
-        {"sample_area_m2", b.protocol.area()},
+        {"strain_rate_per_s", 2.0 * spec.loading.platen_speed / test.height0()},
+        {"sample_height_m", test.height0()},
+        {"sample_area_m2", test.area()},
+        {"sample", b.sample_report},
         {"energy", ledger_json(sim.ledger())},
-        {"warnings", sim.warnings()}};
+        {"snapshots", snaps->count()},
+        {"warnings", warnings}};
     write_json(folder / "summary.json", summary);
-    manifest["files"] = {"experiment.toml", "history.csv", "cracks.csv", "summary.json"};
+    manifest["files"] = {"experiment.toml", "history.csv", "cracks.csv", "summary.json",
+                         "snapshots/particles.pvd", "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
+    if (spec.plot) {
+      make_plot(folder, log);
+      if (fs::exists(folder / "stress_strain.png")) manifest["files"].push_back("stress_strain.png");
+    }
     finish(status, stop);
   } catch (const std::exception& e) {
     result.wall_seconds =
@@ -295,6 +658,72 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     throw;
   }
   return result;
+}
+
+SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining,
+                      const RunOptions& opt) {
+  if (confining.empty())
+    throw InputError("sweep", "--confining", "(none)", "give at least one confining stress");
+  for (double c : confining)
+    if (!(c >= 0.0))
+      throw InputError("sweep", "--confining", num(c), "each confining stress must be >= 0 Pa");
+  ExperimentSpec base = spec;
+  const fs::path folder = make_folder(spec);
+  fs::rename(folder, folder.string() + "-sweep");
+  SweepResult out;
+  out.folder = folder.string() + "-sweep";
+  base.output_directory = out.folder;
+  // Copies of one sample: a generated sample is packed once and cached in the sweep folder.
+  json runs = json::array();
+  std::vector<double> s3, s1;
+  out.status = "complete";
+  for (double c : confining) {
+    ExperimentSpec one = base;
+    one.loading.confining_stress = c;
+    one.name = fmt::format("{}-confining-{}MPa", spec.name, c * 1e-6);
+    if (opt.log) opt.log(fmt::format("sweep: confining stress {} MPa", c * 1e-6));
+    RunResult r = run_experiment(one, opt);
+    out.runs.push_back(r);
+    runs.push_back({{"confining_stress_pa", c},
+                    {"folder", fs::path(r.folder).filename().string()},
+                    {"status", r.status},
+                    {"peak_deviatoric_stress_pa", r.peak_stress},
+                    {"sigma1_at_peak_pa", r.sigma1_at_peak},
+                    {"youngs_modulus_pa", nan_null(r.youngs_modulus)},
+                    {"poisson_ratio", nan_null(r.poisson)},
+                    {"cracks", r.cracks}});
+    if (r.status != "complete") {
+      out.status = r.status;
+      break;
+    }
+    s3.push_back(c);
+    s1.push_back(r.sigma1_at_peak);
+  }
+  const auto mc = analysis::fit_mohr_coulomb(s3, s1);
+  const auto hb = analysis::fit_hoek_brown(s3, s1);
+  json sweep{{"status", out.status},
+             {"experiment", spec.name},
+             {"runs", runs},
+             {"mohr_coulomb",
+              {{"valid", mc.valid},
+               {"method", "least squares of sigma_1 on sigma_3 (principal-stress form)"},
+               {"k", mc.k},
+               {"friction_angle_deg", mc.friction_angle_deg},
+               {"cohesion_pa", mc.cohesion},
+               {"ucs_intercept_pa", mc.ucs},
+               {"implied_tensile_strength_pa", mc.tensile},
+               {"r2", nan_null(mc.r2)},
+               {"flag", mc.flag}}},
+             {"hoek_brown",
+              {{"valid", hb.valid},
+               {"sigma_ci_pa", hb.sigma_ci},
+               {"m_i", hb.m_i},
+               {"sigma_ci_linearised_pa", hb.sigma_ci_linear},
+               {"m_i_linearised", hb.m_i_linear},
+               {"rms_residual_pa", hb.rms},
+               {"flag", hb.flag}}}};
+  write_json(fs::path(out.folder) / "sweep.json", sweep);
+  return out;
 }
 
 }  // namespace breccia

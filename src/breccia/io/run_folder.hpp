@@ -7,7 +7,11 @@
 #include <functional>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "breccia/io/experiment.hpp"
+#include "breccia/io/geometry_file.hpp"
+#include "breccia/sample/packing.hpp"
 
 namespace breccia {
 
@@ -23,6 +27,7 @@ struct RunResult {
   std::string status;  // complete | interrupted | failed
   std::string stop_reason;
   double peak_stress = 0.0, strain_at_peak = 0.0, youngs_modulus = 0.0;
+  double confining_stress = 0.0, sigma1_at_peak = 0.0, poisson = 0.0;
   std::size_t particles = 0, bonds = 0, cracks = 0, tensile = 0, shear = 0;
   std::uint64_t steps = 0;
   double wall_seconds = 0.0;
@@ -30,6 +35,32 @@ struct RunResult {
 };
 
 RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& options);
+
+// A generated sample and its packing report (JSON object).
+struct GeneratedSample {
+  GeometryData geometry;
+  nlohmann::json report;
+};
+PackingSettings packing_settings(const ExperimentSpec& spec);
+// Packs the sample of `spec` ([sample] keys) and, when `path` is not empty, writes it there as a
+// breccia-geometry file with the report beside it (`path`.json).
+GeneratedSample generate_sample(const ExperimentSpec& spec, const std::string& path,
+                                const std::function<void(const std::string&)>& log);
+
+// Runs the experiment once per confining stress on copies of one sample; writes a sweep folder
+// with the run folders, sweep.json and the Mohr-Coulomb and Hoek-Brown fits. Returns its path.
+struct SweepResult {
+  std::string folder;
+  std::vector<RunResult> runs;
+  std::string status;
+};
+SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining_stresses,
+                      const RunOptions& options);
+
+// Human-readable headline results of a run folder (summary.json) or sweep folder (sweep.json).
+std::string summarise_folder(const std::string& folder);
+// Draws stress_strain.png in a run folder (scripts/plot_run.py); false with a message if not.
+bool plot_run(const std::string& folder);
 
 // A description of this machine for manifests and benchmark records.
 std::string machine_description();

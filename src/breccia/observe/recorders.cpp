@@ -33,6 +33,11 @@ HistoryRecorder::HistoryRecorder(const std::string& path)
                   "time_s",
                   "axial_strain",
                   "axial_stress_pa",
+                  "axial_stress_nominal_pa",
+                  "deviatoric_stress_pa",
+                  "confining_stress_pa",
+                  "lateral_strain",
+                  "volumetric_strain",
                   "platen_force_bottom_n",
                   "platen_force_top_n",
                   "broken_bonds",
@@ -63,9 +68,11 @@ void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
   const std::size_t tensile = tensile_;
   const EnergyLedger& L = sim.ledger();
   csv_.write_line(fmt::format(
-      "{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
+      "{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},"
+      "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
       "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g}",
-      sim.step_count(), sim.time(), a.strain, a.stress, a.force_bottom, a.force_top,
+      sim.step_count(), sim.time(), a.strain, a.stress, a.stress_nominal, a.deviatoric,
+      a.confining_stress, a.lateral_strain, a.volumetric_strain, a.force_bottom, a.force_top,
       sim.cracks().size(), tensile, sim.cracks().size() - tensile, sim.intact_bonds(),
       sim.active_contacts(), L.kinetic(), L.bond.tension, L.bond.compression, L.bond.shear,
       L.bond.bending, L.bond.twisting, L.contact, L.boundary_work, L.friction, L.local_damping,

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "breccia/engine/simulation.hpp"
-#include "breccia/protocol/platen_compression.hpp"
+#include "breccia/protocol/compression_test.hpp"
 
 namespace breccia {
 

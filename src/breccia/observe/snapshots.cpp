@@ -1,0 +1,165 @@
+#include "breccia/observe/snapshots.hpp"
+
+#include <fmt/format.h>
+#include <fmt/os.h>
+
+#include <filesystem>
+
+#include "breccia/core/error.hpp"
+
+namespace breccia {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Writes `text` to path atomically (temporary file, then rename).
+void put(const fs::path& path, const std::string& text) {
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::FILE* f = std::fopen(tmp.c_str(), "w");
+    if (!f) throw InputError(tmp.string(), "", "", "cannot write the snapshot file");
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  fs::rename(tmp, path);
+}
+
+std::string header(std::size_t points, std::size_t cells) {
+  return fmt::format(
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
+      "byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"{}\" "
+      "NumberOfCells=\"{}\">\n",
+      points, cells);
+}
+const char* kFooter = "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+
+void points_block(std::string& s, const std::vector<Vec3>& x) {
+  s += "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (const Vec3& p : x) s += fmt::format("{:.9g} {:.9g} {:.9g}\n", p.x, p.y, p.z);
+  s += "</DataArray>\n</Points>\n";
+}
+
+// Vertex cells (one per point) or line cells (pairs of points).
+void cells_block(std::string& s, std::size_t cells, int per_cell) {
+  s += "<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (std::size_t c = 0; c < cells * static_cast<std::size_t>(per_cell); ++c)
+    s += fmt::format("{}\n", c);
+  s += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  for (std::size_t c = 1; c <= cells; ++c) s += fmt::format("{}\n", c * per_cell);
+  s += "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+  for (std::size_t c = 0; c < cells; ++c) s += per_cell == 1 ? "1\n" : "3\n";
+  s += "</DataArray>\n</Cells>\n";
+}
+
+template <class F>
+void scalar(std::string& s, const char* name, const char* type, std::size_t n, F&& f) {
+  s += fmt::format("<DataArray type=\"{}\" Name=\"{}\" format=\"ascii\">\n", type, name);
+  for (std::size_t i = 0; i < n; ++i) s += fmt::format("{}\n", f(i));
+  s += "</DataArray>\n";
+}
+template <class F>
+void vector(std::string& s, const char* name, std::size_t n, F&& f) {
+  s += fmt::format(
+      "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">\n",
+      name);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 v = f(i);
+    s += fmt::format("{:.9g} {:.9g} {:.9g}\n", v.x, v.y, v.z);
+  }
+  s += "</DataArray>\n";
+}
+
+}  // namespace
+
+SnapshotWriter::SnapshotWriter(std::string folder) : folder_(std::move(folder)) {
+  std::error_code ec;
+  fs::create_directories(folder_, ec);
+  if (ec) throw InputError(folder_, "", "", "cannot create the snapshot folder: " + ec.message());
+}
+
+void SnapshotWriter::write(const Simulation& sim, double axial_strain) {
+  const ParticleStore& p = sim.particles();
+  const auto& cracks = sim.cracks();
+  for (; cracks_seen_ < cracks.size(); ++cracks_seen_) {
+    ++broken_per_tag_[cracks[cracks_seen_].id1];
+    ++broken_per_tag_[cracks[cracks_seen_].id2];
+  }
+  const std::string name = fmt::format("{:05d}", times_.size());
+  const std::size_t n = p.size();
+  {
+    std::string s = header(n, n);
+    std::vector<Vec3> x(n);
+    for (std::size_t i = 0; i < n; ++i) x[i] = p.pos_rad[i].x;
+    points_block(s, x);
+    cells_block(s, n, 1);
+    s += "<PointData Scalars=\"radius\" Vectors=\"velocity\">\n";
+    scalar(s, "radius", "Float64", n, [&](std::size_t i) { return p.pos_rad[i].r; });
+    scalar(s, "tag", "Int64", n, [&](std::size_t i) { return p.tag[i]; });
+    scalar(s, "broken_bonds", "Int32", n, [&](std::size_t i) {
+      const auto it = broken_per_tag_.find(p.tag[i]);
+      return it == broken_per_tag_.end() ? 0 : it->second;
+    });
+    vector(s, "velocity", n, [&](std::size_t i) { return p.vel[i]; });
+    vector(s, "displacement", n, [&](std::size_t i) { return p.displacement[i]; });
+    s += "</PointData>\n";
+    s += kFooter;
+    put(fs::path(folder_) / ("particles_" + name + ".vtu"), s);
+  }
+  {
+    std::vector<Vec3> x;
+    std::apply(
+        [&](const auto&... set) {
+          auto one = [&](const auto& b) {
+            for (std::size_t k = 0; k < b.size(); ++k) {
+              if (!b.intact[k]) continue;
+              x.push_back(p.pos_rad[b.pairs.first[k]].x);
+              x.push_back(p.pos_rad[b.pairs.second[k]].x);
+            }
+          };
+          (one(set), ...);
+        },
+        sim.bonds());
+    std::string s = header(x.size(), x.size() / 2);
+    points_block(s, x);
+    cells_block(s, x.size() / 2, 2);
+    s += kFooter;
+    put(fs::path(folder_) / ("bonds_" + name + ".vtu"), s);
+  }
+  {
+    const std::size_t m = cracks.size();
+    std::vector<Vec3> x(m);
+    for (std::size_t k = 0; k < m; ++k) x[k] = cracks[k].position;
+    std::string s = header(m, m);
+    points_block(s, x);
+    cells_block(s, m, 1);
+    s += "<PointData Scalars=\"mode\">\n";
+    scalar(s, "mode", "Int32", m,
+           [&](std::size_t k) { return cracks[k].mode == CrackMode::Tensile ? 0 : 1; });
+    scalar(s, "time_s", "Float64", m, [&](std::size_t k) { return cracks[k].time; });
+    scalar(s, "step", "Int64", m, [&](std::size_t k) { return cracks[k].step; });
+    scalar(s, "energy_j", "Float64", m, [&](std::size_t k) { return cracks[k].energy.total(); });
+    vector(s, "normal", m, [&](std::size_t k) { return cracks[k].normal; });
+    s += "</PointData>\n";
+    s += kFooter;
+    put(fs::path(folder_) / ("cracks_" + name + ".vtu"), s);
+  }
+  times_.push_back(sim.time());
+  names_.push_back(name);
+  (void)axial_strain;
+  write_collections();
+}
+
+void SnapshotWriter::write_collections() const {
+  for (const char* kind : {"particles", "bonds", "cracks"}) {
+    std::string s =
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+    for (std::size_t k = 0; k < times_.size(); ++k)
+      s += fmt::format("<DataSet timestep=\"{:.9g}\" file=\"{}_{}.vtu\"/>\n", times_[k], kind,
+                       names_[k]);
+    s += "</Collection>\n</VTKFile>\n";
+    put(fs::path(folder_) / (std::string(kind) + ".pvd"), s);
+  }
+}
+
+}  // namespace breccia

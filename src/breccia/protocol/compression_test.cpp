@@ -1,0 +1,265 @@
+#include "breccia/protocol/compression_test.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <numeric>
+
+#include "breccia/core/error.hpp"
+#include "breccia/core/format.hpp"
+
+namespace breccia {
+
+PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings s,
+                                     LateralBoundary lateral)
+    : st_(s), lateral_(lateral) {
+  const ParticleStore& p = sim.particles();
+  planar_ = p.planar();
+  thickness_ = p.thickness();
+  axis_ = planar_ ? 1 : 2;
+  if (planar_) lateral_ = LateralBoundary::Prism;
+  const double inf = std::numeric_limits<double>::infinity();
+  Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+  double r_max = 0.0;
+  for (const PosRad& q : p.pos_rad) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], q.x[k] - q.r);
+      hi[k] = std::max(hi[k], q.x[k] + q.r);
+    }
+    r_max = std::max(r_max, q.r);
+  }
+  Vec3 up{};
+  up[axis_] = 1.0;
+  Wall b = Wall::plane("platen_bottom", lo, up);
+  Wall t = Wall::plane("platen_top", hi, -up);
+  bottom_ = sim.add_wall(b);
+  top_ = sim.add_wall(t);
+  centre_ = (lo + hi) * 0.5;
+  double shell = 0.0;  // cylinder radius: outermost particle surface
+  for (const PosRad& q : p.pos_rad)
+    shell = std::max(shell, std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r);
+  if (confined()) {
+    if (lateral_ == LateralBoundary::Cylinder) {
+      side_.push_back(sim.add_wall(Wall::cylinder("confining_cylinder", {centre_.x, centre_.y, 0},
+                                                  {0, 0, 1}, shell)));
+    } else {
+      side_.push_back(sim.add_wall(Wall::plane("confining_x0", lo, {1, 0, 0})));
+      side_.push_back(sim.add_wall(Wall::plane("confining_x1", hi, {-1, 0, 0})));
+      if (!planar_) {
+        side_.push_back(sim.add_wall(Wall::plane("confining_y0", lo, {0, 1, 0})));
+        side_.push_back(sim.add_wall(Wall::plane("confining_y1", hi, {0, -1, 0})));
+      }
+    }
+  } else {
+    // Boundary particles within one maximum radius of each lateral face (or of the shell).
+    for (std::uint32_t i = 0; i < p.size(); ++i) {
+      const PosRad& q = p.pos_rad[i];
+      if (lateral_ == LateralBoundary::Cylinder) {
+        if (std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r > shell - r_max)
+          face_[0].push_back(i);
+        continue;
+      }
+      if (q.x.x - q.r < lo.x + r_max) face_[0].push_back(i);
+      if (q.x.x + q.r > hi.x - r_max) face_[1].push_back(i);
+      if (!planar_ && q.x.y - q.r < lo.y + r_max) face_[2].push_back(i);
+      if (!planar_ && q.x.y + q.r > hi.y - r_max) face_[3].push_back(i);
+    }
+  }
+  servo_ = StressServo{st_.confining_stress, st_.servo_relaxation, 10.0 * st_.platen_speed};
+}
+
+double PlatenCompression::height(const Simulation& sim) const {
+  return sim.walls()[top_].point[axis_] - sim.walls()[bottom_].point[axis_];
+}
+
+void PlatenCompression::widths(const Simulation& sim, double w[2]) const {
+  const auto& W = sim.walls();
+  const ParticleStore& p = sim.particles();
+  if (confined()) {
+    if (lateral_ == LateralBoundary::Cylinder) {
+      w[0] = w[1] = 2.0 * W[side_[0]].radius;
+    } else {
+      w[0] = W[side_[1]].point.x - W[side_[0]].point.x;
+      w[1] = planar_ ? thickness_ : W[side_[3]].point.y - W[side_[2]].point.y;
+    }
+    return;
+  }
+  auto mean = [&](const std::vector<std::uint32_t>& ids, auto&& f) {
+    double s = 0.0;
+    for (std::uint32_t i : ids) s += f(p.pos_rad[i]);
+    return ids.empty() ? 0.0 : s / static_cast<double>(ids.size());
+  };
+  if (lateral_ == LateralBoundary::Cylinder) {
+    const double r = mean(face_[0], [&](const PosRad& q) {
+      return std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r;
+    });
+    w[0] = w[1] = 2.0 * r;
+    return;
+  }
+  w[0] = mean(face_[1], [](const PosRad& q) { return q.x.x + q.r; }) -
+         mean(face_[0], [](const PosRad& q) { return q.x.x - q.r; });
+  w[1] = planar_ ? thickness_
+                 : mean(face_[3], [](const PosRad& q) { return q.x.y + q.r; }) -
+                       mean(face_[2], [](const PosRad& q) { return q.x.y - q.r; });
+}
+
+double PlatenCompression::current_area(const Simulation& sim) const {
+  double w[2];
+  widths(sim, w);
+  if (lateral_ == LateralBoundary::Cylinder) return std::numbers::pi * 0.25 * w[0] * w[0];
+  return w[0] * w[1];
+}
+
+double PlatenCompression::lateral_stress(const Simulation& sim) const {
+  if (!confined()) return 0.0;
+  const auto& W = sim.walls();
+  const double h = height(sim);
+  if (lateral_ == LateralBoundary::Cylinder) {
+    const Wall& c = W[side_[0]];
+    return c.radial_force / (2.0 * std::numbers::pi * c.radius * h);
+  }
+  double w[2];
+  widths(sim, w);
+  double sum = 0.0;
+  for (std::size_t k = 0; k < side_.size(); ++k) {
+    const Wall& s = W[side_[k]];
+    const double area = h * (k < 2 ? w[1] : w[0]);
+    sum += dot(s.force, s.normal) / area;
+  }
+  return sum / static_cast<double>(side_.size());
+}
+
+void PlatenCompression::drive_lateral(Simulation& sim) const {
+  auto& W = sim.walls();
+  const double h = height(sim), dt = sim.time_step();
+  if (lateral_ == LateralBoundary::Cylinder) {
+    servo_.drive_cylinder(W[side_[0]], h, dt, k_min_);
+    return;
+  }
+  double w[2];
+  widths(sim, w);
+  for (std::size_t k = 0; k < side_.size(); ++k) servo_.drive(W[side_[k]], h * (k < 2 ? w[1] : w[0]), dt, k_min_);
+}
+
+void PlatenCompression::control(Simulation& sim) {
+  if (confined()) drive_lateral(sim);
+}
+
+std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
+  // Smallest servo stiffness: one wall contact of a mean-size particle at a small overlap.
+  {
+    double rsum = 0.0;
+    for (const PosRad& q : sim.particles().pos_rad) rsum += q.r;
+    const double r = rsum / static_cast<double>(sim.particles().size());
+    std::visit(
+        [&]<class CL>(const ContactSet<CL>& c) {
+          PairGeometry g = pair_geometry({}, r, {0, 0, 2 * r}, r, {}, {}, {}, {}, 1, 1, planar_,
+                                         thickness_);
+          g.wall = true;
+          g.delta = 1e-4 * r;
+          double kn = 0.0, ks = 0.0;
+          CL::timestep_stiffness(c.wall_params, g, kn, ks);
+          k_min_ = kn;
+        },
+        sim.contact_model());
+  }
+  auto& W = sim.walls();
+  const std::uint64_t step0 = sim.step_count();
+  if (confined()) {
+    // Consolidation: platens and lateral walls servo to sigma_3 until every wall's stress (mean
+    // of 10 checks, 20 steps apart) has held within the tolerance for 20 checks.
+    consolidated_ = false;
+    std::vector<std::vector<double>> recent(2);
+    int held = 0;
+    while (sim.step_count() - step0 < st_.max_consolidation_steps) {
+      for (int k = 0; k < 20; ++k) {
+        const double a = current_area(sim);
+        servo_.drive(W[bottom_], a, sim.time_step(), k_min_);
+        servo_.drive(W[top_], a, sim.time_step(), k_min_);
+        drive_lateral(sim);
+        sim.step();
+      }
+      const double a = current_area(sim);
+      const double axial = 0.5 * (dot(W[bottom_].force, W[bottom_].normal) +
+                                  dot(W[top_].force, W[top_].normal)) /
+                           a;
+      const double values[2] = {axial, lateral_stress(sim)};
+      bool ok = true;
+      for (int k = 0; k < 2; ++k) {
+        recent[k].push_back(values[k]);
+        if (recent[k].size() > 10) recent[k].erase(recent[k].begin());
+        const double avg = std::accumulate(recent[k].begin(), recent[k].end(), 0.0) /
+                           static_cast<double>(recent[k].size());
+        ok = ok && recent[k].size() == 10 &&
+             std::abs(avg - st_.confining_stress) <=
+                 st_.consolidation_tolerance * st_.confining_stress;
+      }
+      held = ok ? held + 1 : 0;
+      if (held >= 20) {
+        consolidated_ = true;
+        break;
+      }
+    }
+  }
+  // Axial loading from here: the reference state of analysis.md §1.1.
+  h0_ = height(sim);
+  widths(sim, w0_);
+  area0_ = current_area(sim);
+  Vec3 up{};
+  up[axis_] = 1.0;
+  double ramp = st_.ramp_time;
+  if (ramp <= 0.0) ramp = std::max(10.0 * h0_ / bar_wave_speed, 1000.0 * sim.time_step());
+  for (auto [w, sign] : {std::pair{bottom_, 1.0}, std::pair{top_, -1.0}}) {
+    W[w].controlled = false;
+    W[w].target_velocity = up * (sign * st_.platen_speed);
+    W[w].ramp = {sim.time(), ramp};
+    W[w].update_motion(sim.time());
+  }
+  peak_ = 0.0;
+  return sim.step_count() - step0;
+}
+
+AxialState PlatenCompression::measure(const Simulation& sim) const {
+  const Wall& b = sim.walls()[bottom_];
+  const Wall& t = sim.walls()[top_];
+  AxialState s;
+  s.strain = (h0_ - height(sim)) / h0_;
+  // Platen loads: the force the platen exerts on the sample, along its inward normal.
+  s.force_bottom = dot(b.force, b.normal);
+  s.force_top = dot(t.force, t.normal);
+  const double f = 0.5 * (s.force_bottom + s.force_top);
+  s.stress = f / current_area(sim);
+  s.stress_nominal = f / area0_;
+  double w[2];
+  widths(sim, w);
+  if (lateral_ == LateralBoundary::Cylinder) {
+    s.lateral_strain = (w0_[0] - w[0]) / w0_[0];
+    s.volumetric_strain = s.strain + 2.0 * s.lateral_strain;
+  } else if (planar_) {
+    s.lateral_strain = (w0_[0] - w[0]) / w0_[0];
+    s.volumetric_strain = s.strain + s.lateral_strain;
+  } else {
+    const double ex = (w0_[0] - w[0]) / w0_[0], ey = (w0_[1] - w[1]) / w0_[1];
+    s.lateral_strain = 0.5 * (ex + ey);
+    s.volumetric_strain = s.strain + ex + ey;
+  }
+  s.confining_stress = lateral_stress(sim);
+  s.deviatoric = s.stress - st_.confining_stress;
+  return s;
+}
+
+bool PlatenCompression::finished(const AxialState& s, std::size_t broken_bonds) {
+  peak_ = std::max(peak_, s.deviatoric);
+  if (s.strain >= st_.max_strain) {
+    stop_reason_ = "reached the maximum strain " + num(st_.max_strain);
+    return true;
+  }
+  if (broken_bonds > 0 && peak_ > 0.0 && s.deviatoric < st_.stop_fraction * peak_) {
+    stop_reason_ = "deviatoric stress fell below " + num(st_.stop_fraction) + " of the peak";
+    return true;
+  }
+  return false;
+}
+
+}  // namespace breccia
