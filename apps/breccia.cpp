@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
   run->add_flag("--quiet", quiet, "no progress bar or messages; only the run folder is printed");
 
   auto* gen = app.add_subcommand("generate",
-                                  "pack and bond a sample ([sample] keys) and save it to a file");
+                                 "pack and bond a sample ([sample] keys) and save it to a file");
   std::string gen_file, gen_out;
   std::vector<std::string> gen_overrides;
   gen->add_option("experiment", gen_file, "experiment file (TOML); omit for the default");
@@ -60,7 +60,8 @@ int main(int argc, char** argv) {
       ->expected(1, 100);
   sweep->add_option("--output", sweep_output, "folder that receives the sweep folder");
 
-  auto* summ = app.add_subcommand("summarise", "print the headline results of a run or sweep folder");
+  auto* summ =
+      app.add_subcommand("summarise", "print the headline results of a run or sweep folder");
   std::string summ_dir;
   summ->add_option("folder", summ_dir, "run folder or sweep folder")->required();
 

@@ -2,12 +2,14 @@
 // fail with a clear error and no half-written result.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/core/error.hpp"
@@ -64,35 +66,98 @@ void expect_input_error(const std::string& toml, std::initializer_list<const cha
 
 }  // namespace
 
-TEST(App, SmallRunWritesACompleteRunFolder) {
+namespace {
+
+// The small sample of the tests: the default experiment's sample (2,266 grains), as written by
+// `breccia generate` with the default settings.
+const std::string kSmallSample =
+    std::string(" --set sample.source=\"file\" --set sample.file=\"") + BRECCIA_SOURCE_DIR +
+    "/tests/data/ucs-small.geom\" --set engine.density_scaling=100 --set output.plot=false";
+
+// Least-squares slope of q against axial strain over the rows of history.csv whose q lies in
+// [lo, hi] x peak before the peak: an independent reading of the modulus the summary reports.
+double history_slope(const fs::path& history, double lo, double hi) {
+  std::ifstream h(history);
+  std::string line;
+  std::getline(h, line);
+  std::vector<std::string> cols;
+  for (std::size_t a = 0, e; a <= line.size(); a = e + 1) {
+    e = line.find(',', a);
+    if (e == std::string::npos) e = line.size();
+    cols.push_back(line.substr(a, e - a));
+  }
+  const auto col = [&](const char* n) {
+    return static_cast<std::size_t>(std::find(cols.begin(), cols.end(), n) - cols.begin());
+  };
+  const std::size_t ie = col("axial_strain"), iq = col("deviatoric_stress_pa");
+  std::vector<double> e, q;
+  while (std::getline(h, line)) {
+    std::vector<double> v;
+    std::stringstream ss(line);
+    for (std::string t; std::getline(ss, t, ',');) v.push_back(std::atof(t.c_str()));
+    e.push_back(v[ie]);
+    q.push_back(v[iq]);
+  }
+  const std::size_t ip = static_cast<std::size_t>(std::max_element(q.begin(), q.end()) - q.begin());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0, n = 0;
+  for (std::size_t k = 0; k <= ip; ++k)
+    if (q[k] >= lo * q[ip] && q[k] <= hi * q[ip]) {
+      sx += e[k];
+      sy += q[k];
+      sxx += e[k] * e[k];
+      sxy += e[k] * q[k];
+      n += 1;
+    }
+  return (sxy - sx * sy / n) / (sxx - sx * sx / n);
+}
+
+nlohmann::json run_small(const fs::path& out, const std::string& extra, std::string* folder_out) {
+  const Result r = run("run --quiet --output " + out.string() + kSmallSample + extra);
+  EXPECT_EQ(r.code, 0) << r.out;
+  const fs::path folder = last_line(r.out);
+  if (folder_out) *folder_out = folder.string();
+  return nlohmann::json::parse(read(folder / "summary.json"));
+}
+
+}  // namespace
+
+TEST(App, SmallUcsWritesACompleteRunFolder) {
   const fs::path out = fs::temp_directory_path() / "breccia_app_test";
   fs::remove_all(out);
-  const Result r = run("run --quiet --output " + out.string() +
-                       " --set sample.cells=[3,3,6] --set loading.platen_speed=0.5"
-                       " --set output.history_interval=50 --set bond.tensile_strength=5e6"
-                       " --set bond.cohesion=5e6 --set loading.max_strain=0.01");
-  ASSERT_EQ(r.code, 0) << r.out;
-  const fs::path folder = last_line(r.out);
-  ASSERT_TRUE(fs::is_directory(folder)) << r.out;
-  for (const char* f :
-       {"manifest.json", "summary.json", "history.csv", "cracks.csv", "experiment.toml"})
-    EXPECT_TRUE(fs::exists(folder / f)) << f;
+  std::string f;
+  const auto summary = run_small(out, " --set loading.platen_speed=0.1", &f);
+  const fs::path folder = f;
+  for (const char* name : {"manifest.json", "summary.json", "history.csv", "cracks.csv",
+                           "experiment.toml", "snapshots/particles.pvd", "snapshots/bonds.pvd",
+                           "snapshots/cracks.pvd", "snapshots/particles_00000.vtu"})
+    EXPECT_TRUE(fs::exists(folder / name)) << name;
   const auto manifest = nlohmann::json::parse(read(folder / "manifest.json"));
   EXPECT_EQ(manifest["status"], "complete");
   EXPECT_EQ(manifest["seed"], 1);
+  EXPECT_EQ(manifest["density_scaling"], 100.0);
   EXPECT_FALSE(manifest["machine"].get<std::string>().empty());
-  const auto summary = nlohmann::json::parse(read(folder / "summary.json"));
-  EXPECT_GT(summary["peak_axial_stress_pa"].get<double>(), 0.0);
-  EXPECT_GT(summary["bonds_broken"].get<int>(), 0);
+  // A peak exists and is followed by the drop that ended the test; cracks are recorded.
+  EXPECT_TRUE(summary["peak_reached"].get<bool>());
+  EXPECT_GT(summary["peak_deviatoric_stress_pa"].get<double>(), 1e6);
+  EXPECT_GT(summary["bonds_broken"].get<int>(), 100);
+  EXPECT_EQ(summary["particles"], 2266);
+  // The summary's modulus is the slope of the recorded curve over its stated window.
+  const double e_summary = summary["youngs_modulus_pa"].get<double>();
+  const auto window = summary["youngs_modulus_fit"]["window_fraction_of_peak"];
+  EXPECT_NEAR(history_slope(folder / "history.csv", window[0], window[1]), e_summary,
+              1e-6 * e_summary);
+  const double nu = summary["poisson_ratio"].get<double>();
+  EXPECT_GT(nu, 0.0);
+  EXPECT_LT(nu, 0.5);
   // The resolved experiment reads back to the same spec.
   const ExperimentSpec again = load_experiment((folder / "experiment.toml").string(), {});
-  EXPECT_EQ(again.cells[2], 6);
-  EXPECT_EQ(again.parallel_bond.tensile_strength, 5e6);
-  // history.csv: header plus rows with 26 columns; cracks.csv rows match the count.
+  EXPECT_EQ(again.parallel_bond.tensile_strength, 30e6);
+  EXPECT_EQ(again.density_scaling, 100.0);
+  // history.csv rows; cracks.csv rows match the count.
   std::ifstream h(folder / "history.csv");
   std::string line;
   std::getline(h, line);
-  EXPECT_EQ(std::count(line.begin(), line.end(), ','), 25);
+  EXPECT_EQ(std::count(line.begin(), line.end(), ','), 30);
   int rows = 0;
   while (std::getline(h, line)) ++rows;
   EXPECT_GT(rows, 10);
@@ -100,6 +165,35 @@ TEST(App, SmallRunWritesACompleteRunFolder) {
   int cracks = -1;
   while (std::getline(c, line)) ++cracks;
   EXPECT_EQ(cracks, summary["bonds_broken"].get<int>());
+  // summarise reads it back.
+  const Result s = run("summarise " + folder.string());
+  EXPECT_EQ(s.code, 0);
+  EXPECT_NE(s.out.find("uniaxial compression"), std::string::npos) << s.out;
+  fs::remove_all(out);
+}
+
+TEST(App, TriaxialHoldsConfinementAndStrengthRisesWithIt) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_triaxial";
+  fs::remove_all(out);
+  const auto ucs = run_small(out, " --set loading.platen_speed=0.1", nullptr);
+  const auto tri =
+      run_small(out, " --set loading.platen_speed=0.1 --set loading.confining_stress=5e6", nullptr);
+  EXPECT_EQ(tri["test"], "triaxial compression");
+  // The servo holds sigma_3 within 2 % up to the peak (issue requirement).
+  EXPECT_LT(tri["confining_stress_error"]["max_relative_before_peak"].get<double>(), 0.02);
+  EXPECT_GT(tri["peak_deviatoric_stress_pa"].get<double>(),
+            1.1 * ucs["peak_deviatoric_stress_pa"].get<double>());
+  fs::remove_all(out);
+}
+
+TEST(App, SameSeedGivesTheSameRun) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_repeat";
+  fs::remove_all(out);
+  std::string f1, f2;
+  run_small(out, " --set loading.platen_speed=0.2 --set loading.max_strain=0.004", &f1);
+  run_small(out, " --set loading.platen_speed=0.2 --set loading.max_strain=0.004 --threads 1", &f2);
+  EXPECT_EQ(read(fs::path(f1) / "history.csv"), read(fs::path(f2) / "history.csv"));
+  EXPECT_EQ(read(fs::path(f1) / "cracks.csv"), read(fs::path(f2) / "cracks.csv"));
   fs::remove_all(out);
 }
 
@@ -109,6 +203,8 @@ TEST(App, BadExperimentFilesFailClearly) {
   expect_input_error("[loading]\nplaten_speed = \"fast\"\n", {"exp.toml:2", "expected a number"});
   expect_input_error("[loading]\nplaten_speed = 0\n", {"loading.platen_speed", "value > 0"});
   expect_input_error("[sample]\nradius = -1e-3\n", {"sample.radius", "-0.001", "value > 0"});
+  expect_input_error("[sample]\nradius_max = \"big\"\n",
+                     {"sample.radius_max", "expected a number"});
   expect_input_error("[bond]\nmodulus = -5\n", {"bond.modulus", "value > 0 Pa"});
   expect_input_error("[bond]\nfriction = 0.5\n", {"bond.friction", "for law \"parallel_bond\""});
   expect_input_error("[contact]\nlaw = \"spring\"\n",
@@ -121,6 +217,19 @@ TEST(App, BadExperimentFilesFailClearly) {
   expect_input_error("[engine]\ndimension = 2\n[contact]\nlaw = \"hertz_mindlin\"\n",
                      {"contact.law", "2D"});
   expect_input_error("[engine\n", {"exp.toml:1", "TOML syntax"});
+  // Sample generation keys.
+  expect_input_error("[sample]\nradius_min = -1e-3\n", {"sample.radius_min", "value > 0"});
+  expect_input_error("[sample]\nradius_min = 2e-3\nradius_max = 1e-3\n",
+                     {"sample.radius_max", ">= sample.radius_min"});
+  expect_input_error("[sample]\nporosity = 1.2\n", {"sample.porosity", "0 < value < 1"});
+  expect_input_error("[sample]\nporosity = 0\n", {"sample.porosity"});
+  expect_input_error("[sample]\nshape = \"sphere\"\n", {"sample.shape", "\"cylinder\""});
+  expect_input_error("[engine]\ndimension = 2\n[contact]\nlaw = \"linear\"\n",
+                     {"sample.shape", "rectangle"});
+  expect_input_error("[material]\npreset = \"basalt\"\n", {"material.preset", "berea_analog"});
+  expect_input_error("[sample]\ndistribution = \"classes\"\nclass_radii = [1e-3]\n",
+                     {"sample.class_radii", "mass_fractions"});
+  expect_input_error("[engine]\ndensity_scaling = 0.5\n", {"engine.density_scaling", ">= 1"});
 }
 
 TEST(App, BadInputOnTheCommandLineWritesNoRunFolder) {
@@ -185,8 +294,9 @@ TEST(App, InterruptedRunKeepsItsRecordsAndSaysSo) {
   const fs::path out = fs::temp_directory_path() / "breccia_app_int";
   fs::remove_all(out);
   // SIGINT after 3 s, long before the default experiment ends.
-  const Result r = run_with_prefix("timeout -s INT 3 ", "run --quiet --output " + out.string() +
-                                                            " --set output.history_interval=20");
+  const Result r =
+      run_with_prefix("timeout -s INT 3 ", "run --quiet --output " + out.string() + kSmallSample +
+                                               " --set output.history_interval=20");
   const fs::path folder = last_line(r.out);
   ASSERT_TRUE(fs::exists(folder / "manifest.json")) << r.out;
   const auto manifest = nlohmann::json::parse(read(folder / "manifest.json"));

@@ -68,8 +68,8 @@ CompressionResult analyse_compression(const CompressionSeries& s) {
   r.e_s50 = kNaN;
   for (std::size_t k = 1; k <= ip; ++k)
     if (q[k] >= 0.5 * peak.stress && q[k - 1] < 0.5 * peak.stress) {
-      const double e50 = e[k - 1] + (e[k] - e[k - 1]) * (0.5 * peak.stress - q[k - 1]) /
-                                        (q[k] - q[k - 1]);
+      const double e50 =
+          e[k - 1] + (e[k] - e[k - 1]) * (0.5 * peak.stress - q[k - 1]) / (q[k] - q[k - 1]);
       r.e_s50 = e50 > 0.0 ? 0.5 * peak.stress / e50 : kNaN;
       break;
     }
@@ -103,7 +103,10 @@ CompressionResult analyse_compression(const CompressionSeries& s) {
     double best = -std::numeric_limits<double>::infinity();
     std::size_t icd = 0;
     for (std::size_t k = 0; k <= ip; ++k) {
-      const std::size_t a = k >= 2 ? k - 2 : 0, b = std::min(ip, k + 2);
+      // Centred window of up to 5 samples, narrowed symmetrically near the ends (a lopsided
+      // window would shift the maximum).
+      const std::size_t h = std::min({std::size_t{2}, k, ip - k});
+      const std::size_t a = k - h, b = k + h;
       double m = 0.0;
       for (std::size_t j = a; j <= b; ++j) m += s.volumetric_strain[j];
       m /= static_cast<double>(b - a + 1);
@@ -113,7 +116,7 @@ CompressionResult analyse_compression(const CompressionSeries& s) {
       }
     }
     r.crack_damage = q[icd];
-    if (icd + 2 >= ip) {
+    if (icd == ip) {
       r.no_reversal = true;
       r.crack_damage = peak.stress;
       r.flags.push_back("no_reversal");

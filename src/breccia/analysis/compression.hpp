@@ -18,13 +18,13 @@ struct CompressionSeries {
 struct CompressionResult {
   bool peak_reached = false;  // false when the maximum is the last sample
   double peak_deviatoric = 0.0, sigma1_at_peak = 0.0, strain_at_peak = 0.0;
-  LinearFit e_t50;           // over [0.4, 0.6] q_peak, widened to >= 5 samples (§1.3)
+  LinearFit e_t50;                        // over [0.4, 0.6] q_peak, widened to >= 5 samples (§1.3)
   double e_t50_lo = 0.4, e_t50_hi = 0.6;  // the window actually used
-  LinearFit e_av;            // over [0.25, 0.75] q_peak
-  double e_s50 = 0.0;        // secant at 50 % of the peak (NaN if not crossed)
-  double poisson = 0.0;      // -slope of lateral vs axial strain over the E_t50 window
-  double crack_initiation = 0.0;  // q at 5 % of the cracks at peak (NaN without cracks)
-  double crack_damage = 0.0;      // q at the maximum volumetric strain before the peak
+  LinearFit e_av;                         // over [0.25, 0.75] q_peak
+  double e_s50 = 0.0;                     // secant at 50 % of the peak (NaN if not crossed)
+  double poisson = 0.0;                   // -slope of lateral vs axial strain over the E_t50 window
+  double crack_initiation = 0.0;          // q at 5 % of the cracks at peak (NaN without cracks)
+  double crack_damage = 0.0;              // q at the maximum volumetric strain before the peak
   bool no_reversal = false;
   double residual = 0.0;     // median q over the last 10 % of the strain record (NaN: no plateau)
   double brittleness = 0.0;  // (q_peak - residual) / q_peak

@@ -243,8 +243,8 @@ const std::vector<Key>& key_table() {
                          &ExperimentSpec::radius_min));
     k.push_back(real_key("sample", "radius_max", "m", 0, kInf, true,
                          "largest radius (>= radius_min)", &ExperimentSpec::radius_max));
-    k.push_back(real_key("sample", "radius_mean", "m", 0, kInf, true,
-                         "lognormal: mean radius", &ExperimentSpec::radius_mean));
+    k.push_back(real_key("sample", "radius_mean", "m", 0, kInf, true, "lognormal: mean radius",
+                         &ExperimentSpec::radius_mean));
     k.push_back(real_key("sample", "radius_sd", "m", 0, kInf, false,
                          "lognormal: standard deviation of the radius",
                          &ExperimentSpec::radius_sd));
@@ -253,11 +253,10 @@ const std::vector<Key>& key_table() {
     k.push_back(real_list_key("sample", "class_mass_fractions", "",
                               "classes: solid-mass fraction of each class (sum 1)",
                               &ExperimentSpec::class_mass_fractions));
-    k.push_back(real_key("sample", "porosity", "", 0, 1, true,
-                         "target porosity: fixes the particle count; with packing_target = "
-                         "\"porosity\" also the final state",
-                         &ExperimentSpec::porosity));
-    k.back().allowed = "allowed: 0 < value < 1";
+    k.push_back(nested_real("sample", "porosity", "", 0, 1, true, true,
+                            "target porosity: fixes the particle count; with packing_target = "
+                            "\"porosity\" also the final state",
+                            [](ExperimentSpec& s) -> double& { return s.porosity; }));
     k.push_back(choice_key("sample", "packing_target", {"stress", "porosity"},
                            "stress: radii servo to isotropic_stress after packing (low locked-in "
                            "stress, P&C 2004); porosity: packed at the target porosity, "
@@ -342,10 +341,10 @@ const std::vector<Key>& key_table() {
         "0: uniaxial (UCS); > 0: triaxial (3D) or biaxial (2D) with servo-controlled lateral "
         "walls (a cylindrical wall for cylinders) held at this stress",
         [](ExperimentSpec& s) -> double& { return s.loading.confining_stress; }));
-    k.push_back(nested_real(
-        "loading", "servo_relaxation", "", 0, 1, true, false,
-        "alpha_s of the wall servo (physics.md §6.2)",
-        [](ExperimentSpec& s) -> double& { return s.loading.servo_relaxation; }));
+    k.push_back(
+        nested_real("loading", "servo_relaxation", "", 0, 1, true, false,
+                    "alpha_s of the wall servo (physics.md §6.2)",
+                    [](ExperimentSpec& s) -> double& { return s.loading.servo_relaxation; }));
     // [output]
     k.push_back(
         string_key("output", "directory",
@@ -520,8 +519,8 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
                            num(s.radius_max) + "] m");
     if (s.distribution == "classes" &&
         (s.class_radii.empty() || s.class_radii.size() != s.class_mass_fractions.size()))
-      throw InputError(source, "sample.class_radii", std::to_string(s.class_radii.size()) +
-                                                         " radii",
+      throw InputError(source, "sample.class_radii",
+                       std::to_string(s.class_radii.size()) + " radii",
                        "classes need one sample.class_mass_fractions entry per radius");
   }
   if (s.density_scaling > 1.0 && s.gravity > 0.0)
@@ -533,7 +532,9 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
 
 std::vector<std::pair<std::string, std::string>> material_presets() {
   return {
-      {"custom", "no preset; every value comes from the keys and their defaults."},
+      {"custom",
+       "the plain law defaults (linear contacts, the parallel bond's defaults, 2650 kg/m^3), "
+       "then the keys."},
       {"berea_analog",
        "Berea sandstone analog, UNCALIBRATED: Hertz-Mindlin grains G = 29 GPa, nu = 0.33, "
        "mu = 0.4 and bond strengths T = 30 MPa, c = 300 MPa from the RICEBAL calibration "
@@ -547,7 +548,16 @@ std::vector<std::pair<std::string, std::string>> material_presets() {
 }
 
 void apply_preset(ExperimentSpec& s, const std::string& name, const std::string& where) {
-  if (name == "custom") return;
+  if (name == "custom") {
+    // The plain law defaults (the built-in default experiment itself uses berea_analog).
+    const ExperimentSpec plain;
+    s.density = plain.density;
+    s.contact_law = plain.contact_law;
+    s.linear = plain.linear;
+    s.hertz = plain.hertz;
+    s.parallel_bond = plain.parallel_bond;
+    return;
+  }
   if (name == "berea_analog") {
     s.density = 2650.0;
     s.contact_law = "hertz_mindlin";

@@ -16,9 +16,9 @@ struct ExperimentSpec {
   std::string name = "ucs-berea-analog";
   // [engine]
   std::int64_t dimension = 3;
-  std::int64_t threads = 0;  // 0 = all cores
-  double gravity = 0.0;      // m/s^2 along -z (3D) or -y (2D)
-  EngineConfig engine;       // gravity is filled from `gravity` when the simulation is built
+  std::int64_t threads = 0;      // 0 = all cores
+  double gravity = 0.0;          // m/s^2 along -z (3D) or -y (2D)
+  EngineConfig engine;           // gravity is filled from `gravity` when the simulation is built
   double density_scaling = 1.0;  // mass and inertia factor for quasi-static runs (>= 1)
   // [material]
   std::string preset = "custom";
@@ -35,11 +35,11 @@ struct ExperimentSpec {
   std::string packing_target = "stress";  // "stress" (servo to isotropic_stress) or "porosity"
   double isotropic_stress = 0.1e6;
   std::int64_t max_particles = 2'000'000;
-  bool cache = true;  // reuse a generated sample with the same settings
+  bool cache = true;                            // reuse a generated sample with the same settings
   std::array<std::int64_t, 3> cells{6, 6, 12};  // lattice
-  double radius = 0.5e-3;  // lattice
+  double radius = 0.5e-3;                       // lattice
   double density = 2650.0;
-  double thickness = 1e-3;  // 2D only
+  double thickness = 1e-3;    // 2D only
   std::string geometry_file;  // file, table, gengeo
   // Bonds between pairs with gap <= this when the sample lists none (generated samples: at
   // generation).
@@ -56,7 +56,7 @@ struct ExperimentSpec {
   PlatenCompressionSettings loading;
   // [output]
   std::string output_directory = "runs";
-  std::int64_t history_interval = 200;  // steps
+  std::int64_t history_interval = 200;      // steps
   double snapshot_strain_interval = 0.002;  // axial strain between ParaView snapshots; 0 = none
   bool plot = true;                         // stress-strain PNG at the end (needs matplotlib)
   bool progress = true;

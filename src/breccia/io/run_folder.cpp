@@ -8,9 +8,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <memory>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -19,9 +19,9 @@
 #include "breccia/core/error.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/io/geometry_file.hpp"
+#include "breccia/io/sample_import.hpp"
 #include "breccia/observe/recorders.hpp"
 #include "breccia/observe/snapshots.hpp"
-#include "breccia/io/sample_import.hpp"
 #include "breccia/sample/lattice.hpp"
 #include "breccia/version.hpp"
 
@@ -223,9 +223,10 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, LateralBoundary&
     g.dimension = ps.dimension();
     g.thickness = ps.thickness();
     for (std::size_t i = 0; i < ps.size(); ++i)
-      g.particles.push_back(
-          {.tag = ps.tag[i], .position = ps.pos_rad[i].x, .radius = ps.pos_rad[i].r,
-           .density = ps.density[i]});
+      g.particles.push_back({.tag = ps.tag[i],
+                             .position = ps.pos_rad[i].x,
+                             .radius = ps.pos_rad[i].r,
+                             .density = ps.density[i]});
     report["lattice"] = s.dimension == 2 ? "hexagonal" : "fcc";
   }
   if (g.dimension != want)
@@ -307,7 +308,9 @@ json ledger_json(const EnergyLedger& L) {
 
 namespace {
 
-json nan_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json nan_null(double v) {
+  return std::isfinite(v) ? json(v) : json(nullptr);
+}
 
 void make_plot(const fs::path& folder, const std::function<void(const std::string&)>& log) {
   if (!plot_run(folder.string()))
@@ -315,12 +318,14 @@ void make_plot(const fs::path& folder, const std::function<void(const std::strin
 }
 
 std::string mpa(const json& j, const char* key) {
-  return j.contains(key) && j[key].is_number() ? fmt::format("{:.2f} MPa", j[key].get<double>() * 1e-6)
-                                               : "n/a";
+  return j.contains(key) && j[key].is_number()
+             ? fmt::format("{:.2f} MPa", j[key].get<double>() * 1e-6)
+             : "n/a";
 }
 std::string gpa(const json& j, const char* key) {
-  return j.contains(key) && j[key].is_number() ? fmt::format("{:.2f} GPa", j[key].get<double>() * 1e-9)
-                                               : "n/a";
+  return j.contains(key) && j[key].is_number()
+             ? fmt::format("{:.2f} GPa", j[key].get<double>() * 1e-9)
+             : "n/a";
 }
 std::string plain(const json& j, const char* key, const char* f = "{:.3g}") {
   return j.contains(key) && j[key].is_number() ? fmt::format(fmt::runtime(f), j[key].get<double>())
@@ -333,8 +338,8 @@ std::string plain(const json& j, const char* key, const char* f = "{:.3g}") {
 bool plot_run(const std::string& folder) {
   const fs::path script = fs::path(BRECCIA_SOURCE_DIR) / "scripts" / "plot_run.py";
   const fs::path logf = fs::path(folder) / "plot.log";
-  const std::string cmd = fmt::format("/usr/bin/python3 '{}' '{}' > '{}' 2>&1", script.string(),
-                                      folder, logf.string());
+  const std::string cmd =
+      fmt::format("/usr/bin/python3 '{}' '{}' > '{}' 2>&1", script.string(), folder, logf.string());
   if (std::system(cmd.c_str()) != 0) return false;
   fs::remove(logf);
   return true;
@@ -346,7 +351,8 @@ std::string summarise_folder(const std::string& folder) {
     std::ifstream in(f / "sweep.json");
     const json j = json::parse(in, nullptr, false);
     if (j.is_discarded()) throw InputError((f / "sweep.json").string(), "", "", "not valid JSON");
-    std::string s = fmt::format("sweep {} ({})\n", j.value("experiment", ""), j.value("status", ""));
+    std::string s =
+        fmt::format("sweep {} ({})\n", j.value("experiment", ""), j.value("status", ""));
     s += "  sigma3 (MPa)   peak q (MPa)   sigma1 (MPa)   E_t50 (GPa)   cracks\n";
     for (const json& r : j["runs"])
       s += fmt::format("  {:>12.2f}   {:>12.2f}   {:>12.2f}   {:>11}   {:>6}\n",
@@ -383,9 +389,9 @@ std::string summarise_folder(const std::string& folder) {
   std::ifstream in(f / "summary.json");
   const json j = json::parse(in, nullptr, false);
   if (j.is_discarded()) throw InputError((f / "summary.json").string(), "", "", "not valid JSON");
-  std::string s = fmt::format("{}: {}, sigma3 = {} ({}; {})\n", j.value("experiment", ""),
-                              j.value("test", ""), mpa(j, "confining_stress_pa"),
-                              j.value("status", ""), j.value("stop_reason", ""));
+  std::string s =
+      fmt::format("{}: {}, sigma3 = {} ({}; {})\n", j.value("experiment", ""), j.value("test", ""),
+                  mpa(j, "confining_stress_pa"), j.value("status", ""), j.value("stop_reason", ""));
   s += fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
                    mpa(j, "peak_deviatoric_stress_pa"), plain(j, "axial_strain_at_peak", "{:.5f}"),
                    gpa(j, "youngs_modulus_pa"), plain(j, "poisson_ratio"));
@@ -469,10 +475,10 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     result.confining_stress = spec.loading.confining_stress;
     log(fmt::format("sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s){}",
                     result.particles, result.bonds, sim.time_step(), sim.critical_time_step(),
-                    test.confined() ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
-                                                  spec.loading.confining_stress * 1e-6,
-                                                  b.consolidation_steps)
-                                    : ""));
+                    test.confined()
+                        ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
+                                      spec.loading.confining_stress * 1e-6, b.consolidation_steps)
+                        : ""));
 
     HistoryRecorder history((folder / "history.csv").string());
     CrackRecorder cracks((folder / "cracks.csv").string());
@@ -532,12 +538,11 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         const double frac = std::clamp(a.strain / spec.loading.max_strain, 1e-9, 1.0);
         const double el = std::chrono::duration<double>(now - t_start).count();
         const int width = 30, fill = static_cast<int>(frac * width);
-        std::fprintf(
-            stderr,
-            "\r[%s%s] strain %.4f  q %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
-            std::string(static_cast<std::size_t>(fill), '#').c_str(),
-            std::string(static_cast<std::size_t>(width - fill), '.').c_str(), a.strain,
-            a.deviatoric * 1e-6, sim.cracks().size(), el, el * (1 - frac) / frac);
+        std::fprintf(stderr,
+                     "\r[%s%s] strain %.4f  q %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
+                     std::string(static_cast<std::size_t>(fill), '#').c_str(),
+                     std::string(static_cast<std::size_t>(width - fill), '.').c_str(), a.strain,
+                     a.deviatoric * 1e-6, sim.cracks().size(), el, el * (1 - frac) / frac);
         std::fflush(stderr);
       }
     }
@@ -583,7 +588,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
           100 * confine_err_pre));
     for (std::size_t k = sim.warnings().size(); k < warnings.size(); ++k)
       if (k >= sim.warnings().size()) log("warning: " + warnings[k]);
-    const char* test_kind = !test.confined() ? "uniaxial compression (UCS)"
+    const char* test_kind = !test.confined()      ? "uniaxial compression (UCS)"
                             : spec.dimension == 2 ? "biaxial compression"
                                                   : "triaxial compression";
     json summary{
@@ -592,10 +597,10 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         {"experiment", spec.name},
         {"test", test_kind},
         {"confining_stress_pa", spec.loading.confining_stress},
-        {"lateral_boundary",
-         !test.confined() ? "none"
-         : test.lateral() == LateralBoundary::Cylinder ? "cylindrical servo wall"
-                                                       : "servo-controlled plane walls"},
+        {"lateral_boundary", !test.confined() ? "none"
+                             : test.lateral() == LateralBoundary::Cylinder
+                                 ? "cylindrical servo wall"
+                                 : "servo-controlled plane walls"},
         {"particles", result.particles},
         {"bonds_initial", result.bonds},
         {"bonds_broken", result.cracks},
@@ -619,7 +624,10 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
          fmt::format("ISRM tangent E_t50: least-squares slope of q = sigma_1 - sigma_3 against "
                      "axial strain over pre-peak samples at {:.0f}-{:.0f} % of the peak",
                      100 * an.e_t50_lo, 100 * an.e_t50_hi)},
-        {"youngs_modulus_fit", {{"points", an.e_t50.points}, {"r2", an.e_t50.r2}}},
+        {"youngs_modulus_fit",
+         {{"points", an.e_t50.points},
+          {"r2", an.e_t50.r2},
+          {"window_fraction_of_peak", {an.e_t50_lo, an.e_t50_hi}}}},
         {"youngs_modulus_average_pa", an.e_av.valid ? json(an.e_av.slope) : json(nullptr)},
         {"youngs_modulus_secant50_pa", nan_null(an.e_s50)},
         {"poisson_ratio", nan_null(an.poisson)},
@@ -634,7 +642,8 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
           {"max_platen_force_imbalance_before_peak", imbalance_pre},
           {"max_kinetic_to_strain_energy_before_peak", ke_ratio_pre}}},
         {"confining_stress_error",
-         {{"max_relative_before_peak", confine_err_pre}, {"max_relative_overall", confine_err_all}}},
+         {{"max_relative_before_peak", confine_err_pre},
+          {"max_relative_overall", confine_err_all}}},
         {"platen_speed_m_per_s", spec.loading.platen_speed},
         {"strain_rate_per_s", 2.0 * spec.loading.platen_speed / test.height0()},
         {"sample_height_m", test.height0()},
@@ -644,11 +653,13 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         {"snapshots", snaps->count()},
         {"warnings", warnings}};
     write_json(folder / "summary.json", summary);
-    manifest["files"] = {"experiment.toml", "history.csv", "cracks.csv", "summary.json",
-                         "snapshots/particles.pvd", "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
+    manifest["files"] = {
+        "experiment.toml",         "history.csv",         "cracks.csv",          "summary.json",
+        "snapshots/particles.pvd", "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
     if (spec.plot) {
       make_plot(folder, log);
-      if (fs::exists(folder / "stress_strain.png")) manifest["files"].push_back("stress_strain.png");
+      if (fs::exists(folder / "stress_strain.png"))
+        manifest["files"].push_back("stress_strain.png");
     }
     finish(status, stop);
   } catch (const std::exception& e) {

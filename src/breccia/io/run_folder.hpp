@@ -5,9 +5,8 @@
 // incomplete; an interrupted run (Ctrl-C, SIGTERM) keeps its tables and says "interrupted".
 #include <atomic>
 #include <functional>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "breccia/io/experiment.hpp"
 #include "breccia/io/geometry_file.hpp"

@@ -61,8 +61,7 @@ void scalar(std::string& s, const char* name, const char* type, std::size_t n, F
 template <class F>
 void vector(std::string& s, const char* name, std::size_t n, F&& f) {
   s += fmt::format(
-      "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">\n",
-      name);
+      "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">\n", name);
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3 v = f(i);
     s += fmt::format("{:.9g} {:.9g} {:.9g}\n", v.x, v.y, v.z);

@@ -41,8 +41,8 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
     shell = std::max(shell, std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r);
   if (confined()) {
     if (lateral_ == LateralBoundary::Cylinder) {
-      side_.push_back(sim.add_wall(Wall::cylinder("confining_cylinder", {centre_.x, centre_.y, 0},
-                                                  {0, 0, 1}, shell)));
+      side_.push_back(sim.add_wall(
+          Wall::cylinder("confining_cylinder", {centre_.x, centre_.y, 0}, {0, 0, 1}, shell)));
     } else {
       side_.push_back(sim.add_wall(Wall::plane("confining_x0", lo, {1, 0, 0})));
       side_.push_back(sim.add_wall(Wall::plane("confining_x1", hi, {-1, 0, 0})));
@@ -99,9 +99,9 @@ void PlatenCompression::widths(const Simulation& sim, double w[2]) const {
   }
   w[0] = mean(face_[1], [](const PosRad& q) { return q.x.x + q.r; }) -
          mean(face_[0], [](const PosRad& q) { return q.x.x - q.r; });
-  w[1] = planar_ ? thickness_
-                 : mean(face_[3], [](const PosRad& q) { return q.x.y + q.r; }) -
-                       mean(face_[2], [](const PosRad& q) { return q.x.y - q.r; });
+  w[1] = planar_ ? thickness_ : mean(face_[3], [](const PosRad& q) {
+                                  return q.x.y + q.r;
+                                }) - mean(face_[2], [](const PosRad& q) { return q.x.y - q.r; });
 }
 
 double PlatenCompression::current_area(const Simulation& sim) const {
@@ -139,7 +139,8 @@ void PlatenCompression::drive_lateral(Simulation& sim) const {
   }
   double w[2];
   widths(sim, w);
-  for (std::size_t k = 0; k < side_.size(); ++k) servo_.drive(W[side_[k]], h * (k < 2 ? w[1] : w[0]), dt, k_min_);
+  for (std::size_t k = 0; k < side_.size(); ++k)
+    servo_.drive(W[side_[k]], h * (k < 2 ? w[1] : w[0]), dt, k_min_);
 }
 
 void PlatenCompression::control(Simulation& sim) {
@@ -154,8 +155,8 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
     const double r = rsum / static_cast<double>(sim.particles().size());
     std::visit(
         [&]<class CL>(const ContactSet<CL>& c) {
-          PairGeometry g = pair_geometry({}, r, {0, 0, 2 * r}, r, {}, {}, {}, {}, 1, 1, planar_,
-                                         thickness_);
+          PairGeometry g =
+              pair_geometry({}, r, {0, 0, 2 * r}, r, {}, {}, {}, {}, 1, 1, planar_, thickness_);
           g.wall = true;
           g.delta = 1e-4 * r;
           double kn = 0.0, ks = 0.0;
@@ -181,9 +182,8 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
         sim.step();
       }
       const double a = current_area(sim);
-      const double axial = 0.5 * (dot(W[bottom_].force, W[bottom_].normal) +
-                                  dot(W[top_].force, W[top_].normal)) /
-                           a;
+      const double axial =
+          0.5 * (dot(W[bottom_].force, W[bottom_].normal) + dot(W[top_].force, W[top_].normal)) / a;
       const double values[2] = {axial, lateral_stress(sim)};
       bool ok = true;
       for (int k = 0; k < 2; ++k) {

@@ -23,8 +23,8 @@ struct PlatenCompressionSettings {
   double max_strain = 0.02;
   double stop_fraction = 0.5;  // stop after the peak once stress < stop_fraction x peak
   double platen_friction = 0.0;
-  double confining_stress = 0.0;      // Pa; > 0: confined by lateral servo walls
-  double servo_relaxation = 0.5;      // alpha_s of §6.2
+  double confining_stress = 0.0;          // Pa; > 0: confined by lateral servo walls
+  double servo_relaxation = 0.5;          // alpha_s of §6.2
   double consolidation_tolerance = 0.01;  // relative; lateral stress error for "consolidated"
   std::uint64_t max_consolidation_steps = 200000;
 };

@@ -1,0 +1,52 @@
+"""Run-folder outputs that other programs read: ParaView snapshots (read back with meshio, a VTK
+reader from Debian's python3-meshio) and the stress-strain PNG."""
+import json
+import os
+import subprocess
+import tempfile
+import xml.etree.ElementTree as ET
+
+import meshio
+
+CLI = os.environ["BRECCIA_CLI"]
+SOURCE = os.environ["BRECCIA_SOURCE_DIR"]
+
+
+def run_small(out):
+    cmd = [CLI, "run", "--quiet", "--output", out,
+           "--set", 'sample.source="file"',
+           "--set", f'sample.file="{SOURCE}/tests/data/ucs-small.geom"',
+           "--set", "engine.density_scaling=100", "--set", "loading.platen_speed=0.2",
+           "--set", "loading.max_strain=0.008", "--set", "output.snapshot_strain_interval=0.004"]
+    r = subprocess.run(cmd, capture_output=True, text=True, check=True)
+    return r.stdout.strip().splitlines()[-1]
+
+
+def test_snapshots_and_plot_are_readable():
+    with tempfile.TemporaryDirectory() as out:
+        folder = run_small(out)
+        summary = json.load(open(os.path.join(folder, "summary.json")))
+        snaps = os.path.join(folder, "snapshots")
+        for kind in ("particles", "bonds", "cracks"):
+            root = ET.parse(os.path.join(snaps, f"{kind}.pvd")).getroot()
+            files = [d.get("file") for d in root.iter("DataSet")]
+            assert len(files) == summary["snapshots"] >= 3
+            times = [float(d.get("timestep")) for d in root.iter("DataSet")]
+            assert times == sorted(times)
+        first = meshio.read(os.path.join(snaps, "particles_00000.vtu"))
+        assert len(first.points) == summary["particles"]
+        for name in ("radius", "velocity", "displacement", "broken_bonds", "tag"):
+            assert name in first.point_data, name
+        assert first.point_data["velocity"].shape == (summary["particles"], 3)
+        assert (first.point_data["radius"] > 0).all()
+        last = sorted(f for f in os.listdir(snaps) if f.startswith("particles_"))[-1]
+        final = meshio.read(os.path.join(snaps, last))
+        # Every broken bond counts at both of its particles.
+        assert final.point_data["broken_bonds"].sum() == 2 * summary["bonds_broken"]
+        bonds = meshio.read(os.path.join(snaps, "bonds_00000.vtu"))
+        assert sum(len(c.data) for c in bonds.cells) == summary["bonds_initial"]
+        cracks = meshio.read(os.path.join(snaps, last.replace("particles", "cracks")))
+        assert len(cracks.points) == summary["bonds_broken"]
+        png = os.path.join(folder, "stress_strain.png")
+        with open(png, "rb") as f:
+            assert f.read(8) == b"\x89PNG\r\n\x1a\n"

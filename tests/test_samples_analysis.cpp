@@ -1,0 +1,235 @@
+// Sample generation and import, and the compression-test analysis against the worked examples of
+// analysis.md §1.8-§1.9.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+
+#include "breccia/analysis/compression.hpp"
+#include "breccia/core/error.hpp"
+#include "breccia/io/geometry_file.hpp"
+#include "breccia/io/sample_import.hpp"
+#include "breccia/sample/packing.hpp"
+
+namespace fs = std::filesystem;
+using namespace breccia;
+using namespace breccia::analysis;
+
+TEST(Analysis, WorkedExampleModuliAndPoisson) {
+  // analysis.md §1.8: q = E e (1 - e / 2 e_p), E = 20 GPa, e_p = 0.01, e_l = -0.25 e_a.
+  CompressionSeries s;
+  for (int k = 0; k <= 20; ++k) {
+    const double e = 0.5e-3 * k;
+    s.axial_strain.push_back(e);
+    s.deviatoric.push_back(20e9 * e * (1 - e / 0.02));
+    s.lateral_strain.push_back(-0.25 * e);
+    s.volumetric_strain.push_back(0.5 * e);
+    s.broken_bonds.push_back(0.0);
+  }
+  // One more sample past the peak so that the peak counts as reached.
+  s.axial_strain.push_back(0.0105);
+  s.deviatoric.push_back(99e6);
+  s.lateral_strain.push_back(-0.25 * 0.0105);
+  s.volumetric_strain.push_back(0.0);
+  s.broken_bonds.push_back(0.0);
+  const CompressionResult r = analyse_compression(s);
+  EXPECT_TRUE(r.peak_reached);
+  EXPECT_NEAR(r.peak_deviatoric, 100e6, 1.0);
+  EXPECT_NEAR(r.strain_at_peak, 0.01, 1e-15);
+  // The [0.4, 0.6] window holds 3 samples, so it is widened once to [0.35, 0.65] (5 samples).
+  EXPECT_NEAR(r.e_t50_lo, 0.35, 1e-12);
+  EXPECT_EQ(r.e_t50.points, 5u);
+  EXPECT_NEAR(r.e_t50.slope, 14.00e9, 1e-6 * 14e9);
+  EXPECT_NEAR(r.e_s50, 17.06e9, 0.005e9);
+  EXPECT_NEAR(r.poisson, 0.25, 1e-12);
+}
+
+TEST(Analysis, WorkedExampleCrackDamageAndInitiation) {
+  // analysis.md §1.8 volumetric example; the last sample is the peak, a drop follows.
+  CompressionSeries s;
+  const double ea[] = {1, 2, 3, 4, 5, 6, 7}, ev[] = {0.5, 1.0, 1.4, 1.6, 1.4, 0.6, 0.0};
+  const double q[] = {20, 40, 58, 74, 86, 90, 50}, nb[] = {0, 50, 100, 400, 1000, 2000, 3000};
+  for (int k = 0; k < 7; ++k) {
+    s.axial_strain.push_back(ea[k] * 1e-3);
+    s.deviatoric.push_back(q[k] * 1e6);
+    s.volumetric_strain.push_back(ev[k] * 1e-3);
+    s.lateral_strain.push_back(0.5 * (ev[k] - ea[k]) * 1e-3);
+    s.broken_bonds.push_back(nb[k]);
+  }
+  const CompressionResult r = analyse_compression(s);
+  // The 5-sample moving average of e_v peaks at the 4th sample (74 MPa).
+  EXPECT_NEAR(r.crack_damage, 74e6, 1.0);
+  EXPECT_FALSE(r.no_reversal);
+  // 5 % of the 2000 cracks at peak = 100: first reached at the third sample.
+  EXPECT_NEAR(r.crack_initiation, 58e6, 1.0);
+}
+
+TEST(Analysis, MohrCoulombWorkedExample) {
+  const auto f = fit_mohr_coulomb({0, 10e6, 20e6}, {34.641e6, 64.641e6, 94.641e6});
+  ASSERT_TRUE(f.valid);
+  EXPECT_NEAR(f.k, 3.0, 1e-9);
+  EXPECT_NEAR(f.friction_angle_deg, 30.0, 1e-6);
+  EXPECT_NEAR(f.cohesion, 10e6, 1e-3 * 1e6);
+  EXPECT_NEAR(f.ucs, 34.641e6, 1.0);
+  EXPECT_FALSE(fit_mohr_coulomb({5e6}, {50e6}).valid);
+  EXPECT_EQ(fit_mohr_coulomb({0, 10e6}, {50e6, 50e6}).flag, "nonpositive_friction");
+}
+
+TEST(Analysis, HoekBrownWorkedExample) {
+  const auto f = fit_hoek_brown({0, 10e6, 20e6}, {100e6, 151.421e6, 193.205e6});
+  ASSERT_TRUE(f.valid);
+  EXPECT_NEAR(f.sigma_ci_linear, 100e6, 0.01e6);
+  EXPECT_NEAR(f.m_i_linear, 10.0, 0.01);
+  EXPECT_NEAR(f.sigma_ci, 100e6, 0.01e6);
+  EXPECT_NEAR(f.m_i, 10.0, 0.01);
+  EXPECT_LT(f.rms, 1e4);
+}
+
+TEST(Samples, RadiusDistributionsHaveTheirMoments) {
+  RadiusDistribution u;
+  u.r_min = 1e-3;
+  u.r_max = 2e-3;
+  RadiusDistribution ln;
+  ln.kind = RadiusDistribution::Kind::Lognormal;
+  ln.r_min = 0.1e-3;
+  ln.r_max = 10e-3;
+  ln.mean = 1e-3;
+  ln.sd = 0.2e-3;
+  const int n = 40000;
+  double su = 0, sl = 0, sl2 = 0;
+  for (int k = 0; k < n; ++k) {
+    const double a = u.draw(7, k), b = ln.draw(7, k);
+    ASSERT_GE(a, u.r_min);
+    ASSERT_LE(a, u.r_max);
+    su += a;
+    sl += b;
+    sl2 += b * b;
+  }
+  // Standard errors: uniform sd = 0.29 mm, lognormal sd = 0.2 mm; 5 sigma of the mean over n.
+  EXPECT_NEAR(su / n, 1.5e-3, 5 * 0.29e-3 / std::sqrt(n));
+  const double m = sl / n;
+  EXPECT_NEAR(m, 1e-3, 5 * 0.2e-3 / std::sqrt(n));
+  EXPECT_NEAR(std::sqrt(sl2 / n - m * m), 0.2e-3, 0.01e-3);
+  EXPECT_EQ(u.draw(7, 12), u.draw(7, 12)) << "a pure function of seed and index";
+  RadiusDistribution bad = u;
+  bad.r_max = 0.5e-3;
+  EXPECT_THROW(bad.validate("test"), InputError);
+}
+
+namespace {
+PackingSettings small_prism() {
+  PackingSettings s;
+  s.width = s.depth = 4e-3;
+  s.height = 6e-3;
+  s.radii.r_min = 0.35e-3;
+  s.radii.r_max = 0.5e-3;
+  s.porosity = 0.37;
+  s.bond_gap_tolerance = 5e-6;
+  s.seed = 3;
+  return s;
+}
+}  // namespace
+
+TEST(Samples, PackingReachesItsIsotropicStressAndBonds) {
+  const PackingSettings s = small_prism();
+  const PackedSample p = pack_sample(s);
+  const PackingReport& r = p.report;
+  EXPECT_TRUE(r.converged);
+  // The servo's stopping rule: the relaxed mean stress within 1 % of p0.
+  EXPECT_NEAR(r.locked_in_mean_stress, s.isotropic_stress, 0.01 * s.isotropic_stress);
+  EXPECT_GT(r.porosity, 0.3);
+  EXPECT_LT(r.porosity, 0.5);
+  EXPECT_EQ(p.geometry.particles.size(), r.particles);
+  EXPECT_EQ(p.geometry.bonds.size(), r.bonds);
+  EXPECT_GT(r.bonds, r.particles) << "a connected sample";
+  // Every particle lies inside the final vessel.
+  for (const ParticleSpec& q : p.geometry.particles) {
+    EXPECT_GT(q.position.x, 0.0);
+    EXPECT_LT(q.position.x, r.width);
+    EXPECT_GT(q.position.z, 0.0);
+    EXPECT_LT(q.position.z, r.height);
+  }
+  // Same seed, same sample.
+  const PackedSample again = pack_sample(s);
+  ASSERT_EQ(again.geometry.particles.size(), p.geometry.particles.size());
+  for (std::size_t i = 0; i < p.geometry.particles.size(); ++i)
+    EXPECT_EQ(again.geometry.particles[i].position.x, p.geometry.particles[i].position.x);
+  // Save and load round trip, exactly.
+  const fs::path file = fs::temp_directory_path() / "breccia_sample_roundtrip.geom";
+  write_geometry(file.string(), p.geometry);
+  const GeometryData back = read_geometry(file.string());
+  ASSERT_EQ(back.particles.size(), p.geometry.particles.size());
+  for (std::size_t i = 0; i < back.particles.size(); ++i) {
+    EXPECT_EQ(back.particles[i].tag, p.geometry.particles[i].tag);
+    EXPECT_EQ(back.particles[i].position.y, p.geometry.particles[i].position.y);
+    EXPECT_EQ(back.particles[i].radius, p.geometry.particles[i].radius);
+  }
+  EXPECT_EQ(back.bonds, p.geometry.bonds);
+  fs::remove(file);
+}
+
+TEST(Samples, CylinderAndRectanglePack) {
+  PackingSettings c = small_prism();
+  c.shape = SampleShape::Cylinder;
+  c.diameter = 5e-3;
+  c.servo_to_stress = false;  // porosity mode
+  const PackedSample pc = pack_sample(c);
+  for (const ParticleSpec& q : pc.geometry.particles)
+    EXPECT_LE(std::hypot(q.position.x, q.position.y), 2.5e-3);
+  EXPECT_TRUE(pc.report.converged);
+  PackingSettings r = small_prism();
+  r.shape = SampleShape::Rectangle;
+  r.width = 6e-3;
+  r.height = 10e-3;
+  r.thickness = 1e-3;
+  r.porosity = 0.16;
+  const PackedSample pr = pack_sample(r);
+  EXPECT_EQ(pr.geometry.dimension, Dimension::Two);
+  for (const ParticleSpec& q : pr.geometry.particles) EXPECT_EQ(q.position.z, 0.0);
+  EXPECT_NEAR(pr.report.locked_in_mean_stress, r.isotropic_stress, 0.01 * r.isotropic_stress);
+}
+
+TEST(Samples, BadPackingSettingsAreRefused) {
+  PackingSettings s = small_prism();
+  s.width = 1e-3;  // narrower than 4 grains
+  EXPECT_THROW(pack_sample(s), InputError);
+  s = small_prism();
+  s.porosity = 1.5;
+  EXPECT_THROW(pack_sample(s), InputError);
+}
+
+TEST(Samples, GenGeoFileImports) {
+  // Written by python3-gengeo (InsertGenerator3D, generateBonds with tolerance 1e-5).
+  const GeometryData g =
+      read_gengeo(std::string(BRECCIA_SOURCE_DIR) + "/tests/data/gengeo_small.geo", 2650, 1.0);
+  EXPECT_EQ(g.dimension, Dimension::Three);
+  EXPECT_EQ(g.particles.size(), 340u);
+  EXPECT_EQ(g.bonds.size(), 889u);
+  EXPECT_EQ(g.particles[0].tag, 1u) << "GenGeo id 0 becomes tag 1";
+  EXPECT_DOUBLE_EQ(g.particles[0].radius, 0.3260281576);
+  EXPECT_EQ(g.bonds[0], (std::pair<std::uint64_t, std::uint64_t>{1, 92}));
+  EXPECT_NO_THROW(g.make_store());
+}
+
+TEST(Samples, XyzrTableImportsAndRejectsBadRows) {
+  const fs::path f = fs::temp_directory_path() / "breccia_table.csv";
+  std::ofstream(f) << "x,y,z,r\n0,0,0,1e-3\n2e-3, 0, 0, 1e-3  # comment\n\n";
+  const GeometryData g = read_xyzr_table(f.string(), Dimension::Three, 2650, 1.0);
+  ASSERT_EQ(g.particles.size(), 2u);
+  EXPECT_EQ(g.particles[1].position.x, 2e-3);
+  EXPECT_EQ(g.particles[1].tag, 2u);
+  std::ofstream(f) << "0 0 0 1e-3\n1e-3 0 0 -1\n";
+  try {
+    read_xyzr_table(f.string(), Dimension::Three, 2650, 1.0);
+    ADD_FAILURE() << "negative radius accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("breccia_table.csv:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("radius"), std::string::npos) << e.what();
+  }
+  std::ofstream(f) << "0 0 1e-3\n";
+  EXPECT_THROW(read_xyzr_table(f.string(), Dimension::Three, 2650, 1.0), InputError);
+  EXPECT_EQ(read_xyzr_table(f.string(), Dimension::Two, 2650, 1e-3).particles.size(), 1u);
+  fs::remove(f);
+}
