@@ -11,33 +11,6 @@ namespace {
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-struct Line {
-  double slope = 0.0, intercept = 0.0, r2 = 0.0;
-  bool valid = false;
-};
-
-Line least_squares(const std::vector<double>& x, const std::vector<double>& y) {
-  Line l;
-  const std::size_t n = std::min(x.size(), y.size());
-  if (n < 2) return l;
-  double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
-  for (std::size_t k = 0; k < n; ++k) {
-    sx += x[k];
-    sy += y[k];
-    sxx += x[k] * x[k];
-    sxy += x[k] * y[k];
-    syy += y[k] * y[k];
-  }
-  const double dn = static_cast<double>(n);
-  const double vx = sxx - sx * sx / dn, vy = syy - sy * sy / dn, cxy = sxy - sx * sy / dn;
-  if (!(vx > 0.0)) return l;
-  l.slope = cxy / vx;
-  l.intercept = (sy - l.slope * sx) / dn;
-  l.r2 = vy > 0.0 ? cxy * cxy / (vx * vy) : 1.0;
-  l.valid = true;
-  return l;
-}
-
 }  // namespace
 
 CompressionResult analyse_compression(const CompressionSeries& s) {
@@ -82,7 +55,7 @@ CompressionResult analyse_compression(const CompressionSeries& s) {
         x.push_back(e[k]);
         y.push_back(s.lateral_strain[k]);
       }
-    const Line l = least_squares(x, y);
+    const LinearFit l = fit_line(x, y);
     // Lateral strain is compression-positive, so expansion makes the slope negative.
     if (l.valid && x.size() >= 3) r.poisson = -l.slope;
   }
@@ -132,7 +105,7 @@ CompressionResult analyse_compression(const CompressionSeries& s) {
         xs.push_back(e[k]);
         ys.push_back(q[k]);
       }
-    const Line l = least_squares(xs, ys);
+    const LinearFit l = fit_line(xs, ys);
     if (xs.size() >= 3 && l.valid && std::abs(l.slope) < 0.05 * r.e_t50.slope) {
       std::vector<double> sorted = ys;
       std::sort(sorted.begin(), sorted.end());
@@ -159,7 +132,7 @@ MohrCoulombFit fit_mohr_coulomb(const std::vector<double>& sigma3,
     f.flag = "fewer_than_two_tests";
     return f;
   }
-  const Line l = least_squares(x, y);
+  const LinearFit l = fit_line(x, y);
   if (!l.valid) {
     f.flag = "single_confining_stress";
     return f;
@@ -191,7 +164,7 @@ HoekBrownFit fit_hoek_brown(const std::vector<double>& sigma3, const std::vector
     x[k] = sigma3[k];
     y[k] = (sigma1[k] - sigma3[k]) * (sigma1[k] - sigma3[k]);
   }
-  const Line l = least_squares(x, y);
+  const LinearFit l = fit_line(x, y);
   double sc = 0.0, mi = 10.0;
   if (l.valid && l.intercept > 0.0) {
     f.sigma_ci_linear = std::sqrt(l.intercept);

@@ -1,5 +1,6 @@
 #include "breccia/analysis/stress_strain.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace breccia::analysis {
@@ -14,26 +15,20 @@ PeakResult find_peak(const std::vector<double>& strain, const std::vector<double
   return p;
 }
 
-LinearFit tangent_modulus(const std::vector<double>& strain, const std::vector<double>& stress,
-                          double lo, double hi) {
+LinearFit fit_line(const std::vector<double>& x, const std::vector<double>& y,
+                   std::size_t min_points) {
   LinearFit f;
-  const PeakResult peak = find_peak(strain, stress);
-  if (!peak.found || !(peak.stress > 0.0)) return f;
-  double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
-  std::size_t n = 0;
-  for (std::size_t k = 0; k <= peak.index; ++k) {
-    const double s = stress[k];
-    if (s < lo * peak.stress || s > hi * peak.stress) continue;
-    const double x = strain[k];
-    sx += x;
-    sy += s;
-    sxx += x * x;
-    sxy += x * s;
-    syy += s * s;
-    ++n;
-  }
+  const std::size_t n = std::min(x.size(), y.size());
   f.points = n;
-  if (n < 3) return f;
+  if (n < min_points || n < 2) return f;
+  double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    sx += x[k];
+    sy += y[k];
+    sxx += x[k] * x[k];
+    sxy += x[k] * y[k];
+    syy += y[k] * y[k];
+  }
   const double dn = static_cast<double>(n);
   const double vx = sxx - sx * sx / dn, vy = syy - sy * sy / dn, cxy = sxy - sx * sy / dn;
   if (!(vx > 0.0)) return f;
@@ -42,6 +37,20 @@ LinearFit tangent_modulus(const std::vector<double>& strain, const std::vector<d
   f.r2 = vy > 0.0 ? cxy * cxy / (vx * vy) : 1.0;
   f.valid = true;
   return f;
+}
+
+LinearFit tangent_modulus(const std::vector<double>& strain, const std::vector<double>& stress,
+                          double lo, double hi) {
+  const PeakResult peak = find_peak(strain, stress);
+  if (!peak.found || !(peak.stress > 0.0)) return LinearFit{};
+  std::vector<double> x, y;
+  for (std::size_t k = 0; k <= peak.index; ++k) {
+    if (stress[k] < lo * peak.stress || stress[k] > hi * peak.stress) continue;
+    x.push_back(strain[k]);
+    y.push_back(stress[k]);
+  }
+  // Fewer than 3 points: no value rather than noise.
+  return fit_line(x, y, 3);
 }
 
 }  // namespace breccia::analysis

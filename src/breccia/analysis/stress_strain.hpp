@@ -24,6 +24,11 @@ struct LinearFit {
   bool valid = false;  // false with fewer than 3 points: no value rather than noise
 };
 
+// Ordinary least-squares line y = slope x + intercept; valid with at least `min_points` points
+// and some spread in x.
+LinearFit fit_line(const std::vector<double>& x, const std::vector<double>& y,
+                   std::size_t min_points = 2);
+
 // Least-squares line through the pre-peak points whose stress lies in [lo, hi] x peak.
 LinearFit tangent_modulus(const std::vector<double>& strain, const std::vector<double>& stress,
                           double lo = 0.4, double hi = 0.6);

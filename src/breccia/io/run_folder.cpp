@@ -10,7 +10,6 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <memory>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -482,8 +481,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
 
     HistoryRecorder history((folder / "history.csv").string());
     CrackRecorder cracks((folder / "cracks.csv").string());
-    std::unique_ptr<SnapshotWriter> snaps;
-    snaps = std::make_unique<SnapshotWriter>((folder / "snapshots").string());
+    SnapshotWriter snaps((folder / "snapshots").string());
     analysis::CompressionSeries series;
     series.confining_stress = spec.loading.confining_stress;
     const auto interval = static_cast<std::uint64_t>(spec.history_interval);
@@ -493,9 +491,8 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     // Quality of the test: quasi-static checks (physics.md §6.1) and the confining-stress error,
     // tracked up to the peak and over the whole test.
     std::vector<double> imbalance, ke_ratio, confine_err;
-    double next_snapshot = 0.0;
-    snaps->write(sim, 0.0);
-    next_snapshot = spec.snapshot_strain_interval;
+    snaps.write(sim);
+    double next_snapshot = spec.snapshot_strain_interval;
     for (;;) {
       if (opt.interrupt && opt.interrupt->load()) {
         status = "interrupted";
@@ -525,7 +522,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         confine_err.push_back(std::abs(a.confining_stress - spec.loading.confining_stress) /
                               spec.loading.confining_stress);
       if (spec.snapshot_strain_interval > 0.0 && a.strain >= next_snapshot) {
-        snaps->write(sim, a.strain);
+        snaps.write(sim);
         while (next_snapshot <= a.strain) next_snapshot += spec.snapshot_strain_interval;
       }
       if (test.finished(a, sim.cracks().size())) {
@@ -550,7 +547,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     cracks.record(sim);
     cracks.flush();
     history.flush();
-    snaps->write(sim, series.axial_strain.empty() ? 0.0 : series.axial_strain.back());
+    snaps.write(sim);
 
     result.wall_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
@@ -576,6 +573,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
       ke_ratio_pre = std::max(ke_ratio_pre, ke_ratio[k]);
       if (k < confine_err.size()) confine_err_pre = std::max(confine_err_pre, confine_err[k]);
     }
+    const std::size_t logged = warnings.size();  // those of the set-up were logged already
     bool quasi_static = imbalance_pre <= 0.05 && ke_ratio_pre <= 1e-3;
     if (!quasi_static)
       warnings.push_back(fmt::format(
@@ -586,8 +584,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
       warnings.push_back(fmt::format(
           "the confining stress left its 2 % band before the peak (largest error {:.3g} %)",
           100 * confine_err_pre));
-    for (std::size_t k = sim.warnings().size(); k < warnings.size(); ++k)
-      if (k >= sim.warnings().size()) log("warning: " + warnings[k]);
+    for (std::size_t k = logged; k < warnings.size(); ++k) log("warning: " + warnings[k]);
     const char* test_kind = !test.confined()      ? "uniaxial compression (UCS)"
                             : spec.dimension == 2 ? "biaxial compression"
                                                   : "triaxial compression";
@@ -650,7 +647,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         {"sample_area_m2", test.area()},
         {"sample", b.sample_report},
         {"energy", ledger_json(sim.ledger())},
-        {"snapshots", snaps->count()},
+        {"snapshots", snaps.count()},
         {"warnings", warnings}};
     write_json(folder / "summary.json", summary);
     manifest["files"] = {

@@ -77,7 +77,7 @@ SnapshotWriter::SnapshotWriter(std::string folder) : folder_(std::move(folder)) 
   if (ec) throw InputError(folder_, "", "", "cannot create the snapshot folder: " + ec.message());
 }
 
-void SnapshotWriter::write(const Simulation& sim, double axial_strain) {
+void SnapshotWriter::write(const Simulation& sim) {
   const ParticleStore& p = sim.particles();
   const auto& cracks = sim.cracks();
   for (; cracks_seen_ < cracks.size(); ++cracks_seen_) {
@@ -145,7 +145,6 @@ void SnapshotWriter::write(const Simulation& sim, double axial_strain) {
   }
   times_.push_back(sim.time());
   names_.push_back(name);
-  (void)axial_strain;
   write_collections();
 }
 

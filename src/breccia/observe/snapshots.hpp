@@ -16,7 +16,7 @@ namespace breccia {
 class SnapshotWriter {
  public:
   explicit SnapshotWriter(std::string folder);
-  void write(const Simulation& sim, double axial_strain);
+  void write(const Simulation& sim);
   std::size_t count() const noexcept { return times_.size(); }
 
  private:

@@ -5,11 +5,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <numbers>
 #include <numeric>
 
-#include "breccia/boundary/servo.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 #include "breccia/core/rng.hpp"
@@ -255,59 +253,30 @@ PackedSample pack_sample(const PackingSettings& s,
   const double r_mean = rsum / static_cast<double>(n);
   cfg.skin = 0.4 * r_mean;
   // Particles are placed shrunk in the vessel of the requested size, then grown to full size.
-  const double expand = 1.0;
-  const Vec3 centre = (region.lower() + region.upper()) * 0.5;
-  for (std::size_t i = 0; i < n; ++i) {
-    Vec3 x = placed[i].x;
-    if (expand != 1.0) x = centre + (x - centre) * expand;
-    const double r = placed[i].r;
-    store.add({.tag = i + 1, .position = x, .radius = r, .density = s.density});
-  }
+  for (std::size_t i = 0; i < n; ++i)
+    store.add({.tag = i + 1, .position = placed[i].x, .radius = placed[i].r, .density = s.density});
   Simulation sim(std::move(store), cfg, make_contact_model<LinearContact>(cp, cp));
-  const Vec3 lo = centre + (region.lower() - centre) * expand;  // initial vessel
-  const Vec3 hi = centre + (region.upper() - centre) * expand;
-  std::vector<std::size_t> walls;
+  // The vessel stays where it is: the servo acts on the radii (§7.2), not on the walls.
+  const Vec3 lo = region.lower(), hi = region.upper();
   if (s.shape == SampleShape::Cylinder) {
-    walls.push_back(
-        sim.add_wall(Wall::cylinder("vessel_side", {}, {0, 0, 1}, region.radius * expand)));
+    sim.add_wall(Wall::cylinder("vessel_side", {}, {0, 0, 1}, region.radius));
   } else {
-    walls.push_back(sim.add_wall(Wall::plane("vessel_x0", lo, {1, 0, 0})));
-    walls.push_back(sim.add_wall(Wall::plane("vessel_x1", hi, {-1, 0, 0})));
-    walls.push_back(sim.add_wall(Wall::plane("vessel_y0", lo, {0, 1, 0})));
-    walls.push_back(sim.add_wall(Wall::plane("vessel_y1", hi, {0, -1, 0})));
+    sim.add_wall(Wall::plane("vessel_x0", lo, {1, 0, 0}));
+    sim.add_wall(Wall::plane("vessel_x1", hi, {-1, 0, 0}));
+    sim.add_wall(Wall::plane("vessel_y0", lo, {0, 1, 0}));
+    sim.add_wall(Wall::plane("vessel_y1", hi, {0, -1, 0}));
   }
   if (!planar) {
-    walls.push_back(sim.add_wall(Wall::plane("vessel_z0", lo, {0, 0, 1})));
-    walls.push_back(sim.add_wall(Wall::plane("vessel_z1", hi, {0, 0, -1})));
+    sim.add_wall(Wall::plane("vessel_z0", lo, {0, 0, 1}));
+    sim.add_wall(Wall::plane("vessel_z1", hi, {0, 0, -1}));
   }
   sim.initialise();
-
-  // Current vessel extents from the wall positions.
-  auto extents = [&](double& ex, double& ey, double& ez, double& rad) {
-    const auto& W = sim.walls();
-    if (s.shape == SampleShape::Cylinder) {
-      rad = W[walls[0]].radius;
-      ez = W[walls[2]].point.z - W[walls[1]].point.z;
-      ex = ey = 2 * rad;
-    } else {
-      ex = W[walls[1]].point.x - W[walls[0]].point.x;
-      ey = W[walls[3]].point.y - W[walls[2]].point.y;
-      ez = planar ? 0.0 : W[walls[5]].point.z - W[walls[4]].point.z;
-      rad = 0.0;
-    }
-  };
-  auto vessel_volume = [&] {
-    double ex, ey, ez, rad;
-    extents(ex, ey, ez, rad);
-    if (s.shape == SampleShape::Cylinder) return std::numbers::pi * rad * rad * ez;
-    return planar ? ex * ey * s.thickness : ex * ey * ez;
-  };
 
   // 4. Grow the radii to size, 0.1 % per 20 steps, then relax until the mean stress is steady
   // (the 200-step mean changes by less than 0.5 % from one window to the next).
   PackingReport rep;
   const std::uint64_t check_every = 20;
-  auto mean_stress = [&] { return sim.pair_stress().mean(dim, vessel_volume()); };
+  auto mean_stress = [&] { return sim.pair_stress().mean(dim, volume); };
   double applied = 1.0;
   while (applied < 1.0 / shrink && sim.step_count() < s.max_steps) {
     const double f = std::min(1.001, 1.0 / shrink / applied);
@@ -325,8 +294,6 @@ PackedSample pack_sample(const PackingSettings& s,
         sum += mean_stress();
       }
       const double avg = 0.1 * sum;
-      if (std::getenv("BRECCIA_DEBUG_PACK"))
-        log(fmt::format("  step {} p {:.4g}", sim.step_count(), avg));
       if (prev >= 0.0 && std::abs(avg - prev) <= 0.005 * std::abs(prev))
         return std::pair{avg, true};
       prev = avg;
@@ -351,7 +318,7 @@ PackedSample pack_sample(const PackingSettings& s,
         rep.converged = true;
         break;
       }
-      double slope = sim.pair_stress().radius_stiffness / (dim * vessel_volume());
+      double slope = sim.pair_stress().radius_stiffness / (dim * volume);
       if (eps_last != 0.0 && (p - p_last) / eps_last > 0.0) slope = (p - p_last) / eps_last;
       const double eps = std::clamp(0.8 * (s.isotropic_stress - p) / slope, -2e-3, 2e-3);
       sim.scale_radii(1.0 + eps);
@@ -366,32 +333,19 @@ PackedSample pack_sample(const PackingSettings& s,
                     "locked-in stress below is what it reached",
                     s.max_steps));
 
-  // 5. Report (§7.2, §7.7) and the bonded sample (§7.6), stored in spatial order and shifted so
-  // that the final vessel starts at the origin (the cylinder keeps its axis on z).
-  ParticleStore P = sim.particles();
+  // 6. Report (§7.2, §7.7) and the bonded sample (§7.6), stored in spatial order.
+  const ParticleStore& P = sim.particles();
   const PairStress ps = sim.pair_stress();
-  double ex, ey, ez, rad;
-  extents(ex, ey, ez, rad);
-  const Region final_region{s.shape, ex, ey, ez, rad};
-  const double volume_final = vessel_volume();
-  {
-    const auto& W = sim.walls();
-    const Vec3 shift =
-        s.shape == SampleShape::Cylinder
-            ? Vec3{0, 0, -W[walls[1]].point.z}
-            : Vec3{-W[walls[0]].point.x, -W[walls[2]].point.y, planar ? 0.0 : -W[walls[4]].point.z};
-    for (PosRad& q : P.pos_rad) q.x += shift;
-  }
   rep.particles = n;
-  rep.volume = volume_final;
-  rep.width = s.shape == SampleShape::Cylinder ? 2 * rad : ex;
-  rep.depth = planar ? 0.0 : (s.shape == SampleShape::Cylinder ? 2 * rad : ey);
-  rep.height = planar ? ey : ez;
+  rep.volume = volume;
+  rep.width = s.shape == SampleShape::Cylinder ? s.diameter : s.width;
+  rep.depth = planar ? 0.0 : (s.shape == SampleShape::Cylinder ? s.diameter : s.depth);
+  rep.height = s.height;
   rep.steps = sim.step_count();
-  rep.locked_in_mean_stress = ps.mean(dim, volume_final);
-  rep.locked_in_xx = ps.lf[0] / volume_final;
-  rep.locked_in_yy = ps.lf[4] / volume_final;
-  rep.locked_in_zz = ps.lf[8] / volume_final;
+  rep.locked_in_mean_stress = ps.mean(dim, volume);
+  rep.locked_in_xx = ps.lf[0] / volume;
+  rep.locked_in_yy = ps.lf[4] / volume;
+  rep.locked_in_zz = ps.lf[8] / volume;
   rep.mean_coordination = 2.0 * static_cast<double>(ps.touching) / static_cast<double>(n);
   for (std::uint32_t c : ps.coordination) rep.floaters += c < 3 ? 1 : 0;
   double solid = 0.0, rs = 0.0, rs2 = 0.0;
@@ -414,9 +368,10 @@ PackedSample pack_sample(const PackingSettings& s,
   std::iota(order.begin(), order.end(), 0);
   auto key = [&](std::size_t i) {
     const Vec3& x = P.pos_rad[i].x;
-    return std::array<long, 4>{static_cast<long>(std::floor((x.z) / cell)),
-                               static_cast<long>(std::floor((x.y) / cell)),
-                               static_cast<long>(std::floor((x.x) / cell)), static_cast<long>(i)};
+    return std::array<long, 4>{static_cast<long>(std::floor((x.z - lo.z) / cell)),
+                               static_cast<long>(std::floor((x.y - lo.y) / cell)),
+                               static_cast<long>(std::floor((x.x - lo.x) / cell)),
+                               static_cast<long>(i)};
   };
   std::sort(order.begin(), order.end(),
             [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
@@ -449,11 +404,11 @@ PackedSample pack_sample(const PackingSettings& s,
   }
   std::sort(g.bonds.begin(), g.bonds.end());
   rep.bonds = g.bonds.size();
-  rep.porosity = 1.0 - (solid - overlap) / volume_final;
+  rep.porosity = 1.0 - (solid - overlap) / volume;
   double interior_bonds = 0.0;
   std::size_t interior = 0;
   for (std::size_t i = 0; i < n; ++i)
-    if (final_region.wall_distance(P.pos_rad[i].x) > 2.0 * rep.radius_max) {
+    if (region.wall_distance(P.pos_rad[i].x) > 2.0 * rep.radius_max) {
       interior_bonds += bonds_of[i];
       ++interior;
     }

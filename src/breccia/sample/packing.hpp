@@ -1,9 +1,10 @@
 #pragma once
-// Dense random packings by radius expansion in a rigid frictionless vessel (physics.md §7.2, the
-// PFC / Potyondy & Cundall 2004 material genesis): draw radii for a target porosity, place them
-// shrunk at random without overlap, grow them to size while cycling with strong damping, then
-// either servo all radii to a target isotropic stress (default, low locked-in stress) or relax at
-// the target porosity. Finally every pair with a gap within the tolerance is bonded (§7.6).
+// Dense random packings by radius expansion in a rigid vessel (physics.md §7.2, the PFC /
+// Potyondy & Cundall 2004 material genesis): draw radii for a target porosity, place them shrunk
+// at random without overlap, grow them to size frictionless while cycling with strong damping and
+// relax; then either servo all radii to a target isotropic stress with friction on (default, low
+// locked-in stress) or keep the target porosity. Finally every pair with a gap within the
+// tolerance is bonded (§7.6).
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -48,8 +49,8 @@ struct PackingReport {
   bool converged = false;
   double wall_seconds = 0.0;
   double volume = 0.0;  // vessel volume (2D: area x thickness)
-  // Final vessel size (stress mode compacts it; porosity mode keeps the requested one): width
-  // (x, or diameter), depth (y, or diameter; 0 in 2D), height (z, or y in 2D).
+  // Vessel size (the requested one): width (x, or diameter), depth (y, or diameter; 0 in 2D),
+  // height (z, or y in 2D).
   double width = 0.0, depth = 0.0, height = 0.0;
 };
 

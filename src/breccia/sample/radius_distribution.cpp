@@ -36,9 +36,7 @@ const char* RadiusDistribution::name(Kind k) {
 }
 
 void RadiusDistribution::validate(const std::string& where) const {
-  if (kind == Kind::Classes) {
-    // Bounds follow from the classes.
-  } else {
+  if (kind != Kind::Classes) {  // classes carry their own radii
     if (!(r_min > 0.0) || !std::isfinite(r_min))
       throw InputError(where, "sample.radius_min", num(r_min), "must be a radius > 0 m");
     if (!(r_max >= r_min) || !std::isfinite(r_max))
