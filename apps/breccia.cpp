@@ -38,6 +38,21 @@ int main(int argc, char** argv) {
   run->add_option("--output", output, "folder that receives the run folder (output.directory)");
   run->add_option("--threads", threads, "OpenMP threads (engine.threads)");
   run->add_flag("--quiet", quiet, "no progress bar or messages; only the run folder is printed");
+  std::uint64_t stop_at_step = 0;
+  run->add_option("--stop-at-step", stop_at_step,
+                  "stop with a checkpoint once the engine has taken this many steps in all; "
+                  "continue with `breccia resume`");
+
+  auto* resume = app.add_subcommand(
+      "resume", "continue an interrupted run from its checkpoint, in the same run folder");
+  std::string resume_dir;
+  int resume_threads = -1;
+  bool resume_quiet = false;
+  std::uint64_t resume_stop = 0;
+  resume->add_option("folder", resume_dir, "run folder with a checkpoint.bin")->required();
+  resume->add_option("--threads", resume_threads, "OpenMP threads (the result does not change)");
+  resume->add_flag("--quiet", resume_quiet, "no progress bar or messages");
+  resume->add_option("--stop-at-step", resume_stop, "stop again, with a checkpoint, at this step");
 
   auto* gen = app.add_subcommand("generate",
                                  "pack and bond a sample ([sample] keys) and save it to a file");
@@ -97,8 +112,27 @@ int main(int argc, char** argv) {
       opt.interrupt = &g_interrupt;
       opt.show_progress = !quiet && spec.progress && isatty(fileno(stderr));
       if (!quiet) opt.log = [](const std::string& m) { std::cerr << m << "\n"; };
+      opt.stop_at_step = stop_at_step;
       const breccia::RunResult r = breccia::run_experiment(spec, opt);
       if (!quiet) {
+        std::cerr << "status: " << r.status << " (" << r.stop_reason << ")\n";
+        std::cerr << breccia::summarise_folder(r.folder);
+      }
+      std::cout << r.folder << std::endl;
+      return r.status == "complete" ? 0 : 130;
+    }
+    if (*resume) {
+      std::signal(SIGINT, on_signal);
+      std::signal(SIGTERM, on_signal);
+      breccia::RunOptions opt;
+      opt.command_line = command_line;
+      opt.interrupt = &g_interrupt;
+      opt.stop_at_step = resume_stop;
+      opt.show_progress = !resume_quiet && isatty(fileno(stderr));
+      if (!resume_quiet) opt.log = [](const std::string& m) { std::cerr << m << "\n"; };
+      const breccia::RunResult r =
+          breccia::resume_run(resume_dir, breccia::ResumeOptions{resume_threads}, opt);
+      if (!resume_quiet) {
         std::cerr << "status: " << r.status << " (" << r.stop_reason << ")\n";
         std::cerr << breccia::summarise_folder(r.folder);
       }

@@ -308,6 +308,71 @@ TEST(App, InterruptedRunKeepsItsRecordsAndSaysSo) {
   int rows = 0;
   while (std::getline(h, line)) ++rows;
   EXPECT_GT(rows, 2) << "the rows recorded before the signal are kept";
+  EXPECT_TRUE(fs::exists(folder / "checkpoint.bin")) << "an interrupted run can be resumed";
+  EXPECT_EQ(manifest["checkpoint"]["file"], "checkpoint.bin");
+  fs::remove_all(out);
+}
+
+// Restart equivalence: a test stopped between two history rows, left with rows written after its
+// checkpoint (as a crash leaves them), resumed on 1 thread, stopped again and resumed to the end,
+// writes byte for byte the history, crack catalogue and snapshots of the uninterrupted test.
+TEST(App, ResumedRunGivesTheSameResultAsAnUninterruptedOne) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_resume";
+  fs::remove_all(out);
+  const std::string opts = kSmallSample + " --set loading.max_strain=0.0075";
+  std::string whole;
+  run_small(out / "whole", opts, &whole);
+
+  const Result first = run("run --quiet --output " + (out / "split").string() + opts +
+                           " --stop-at-step 2501");  // rows are at steps 1, 201, ..., 2401, 2601
+  EXPECT_EQ(first.code, 130) << first.out;
+  const fs::path split = last_line(first.out);
+  ASSERT_TRUE(fs::exists(split / "checkpoint.bin")) << first.out;
+  auto manifest = nlohmann::json::parse(read(split / "manifest.json"));
+  EXPECT_EQ(manifest["status"], "interrupted");
+  EXPECT_EQ(manifest["checkpoint"]["step"], 2501);
+  // What a crash after the checkpoint leaves behind: rows the checkpoint does not know.
+  std::ofstream(split / "history.csv", std::ios::app) << "9999,1,2,3\n";
+  std::ofstream(split / "cracks.csv", std::ios::app) << "9999,1,parallel_bond\n";
+
+  const Result second = run("resume --quiet --threads 1 --stop-at-step 6001 " + split.string());
+  EXPECT_EQ(second.code, 130) << second.out;
+  const Result third = run("resume --quiet " + split.string());
+  ASSERT_EQ(third.code, 0) << third.out;
+  EXPECT_EQ(last_line(third.out), split.string());
+
+  const fs::path a = whole;
+  EXPECT_EQ(read(a / "history.csv"), read(split / "history.csv"));
+  const std::string cracks = read(split / "cracks.csv");
+  EXPECT_GT(std::count(cracks.begin(), cracks.end(), '\n'), 10) << "the test must break bonds";
+  EXPECT_EQ(read(a / "cracks.csv"), cracks);
+  for (const auto& e : fs::directory_iterator(a / "snapshots"))
+    EXPECT_EQ(read(e.path()), read(split / "snapshots" / e.path().filename()))
+        << e.path().filename();
+  const auto sa = nlohmann::json::parse(read(a / "summary.json"));
+  const auto sb = nlohmann::json::parse(read(split / "summary.json"));
+  for (const char* key : {"peak_deviatoric_stress_pa", "youngs_modulus_pa", "poisson_ratio",
+                          "bonds_broken", "steps", "simulated_time_s", "energy", "quasi_static"})
+    EXPECT_EQ(sa[key], sb[key]) << key;
+  manifest = nlohmann::json::parse(read(split / "manifest.json"));
+  EXPECT_EQ(manifest["status"], "complete");
+  EXPECT_EQ(manifest["resumed"].size(), 2u);
+  EXPECT_FALSE(manifest.contains("checkpoint"));
+  EXPECT_FALSE(fs::exists(split / "checkpoint.bin")) << "a finished run drops its checkpoint";
+
+  // Nothing to resume in a finished run; a damaged checkpoint is refused by name.
+  const Result again = run("resume --quiet " + split.string());
+  EXPECT_EQ(again.code, 2);
+  EXPECT_NE(again.out.find("nothing to resume"), std::string::npos) << again.out;
+  const Result stopped =
+      run("run --quiet --output " + (out / "cut").string() + opts + " --stop-at-step 300");
+  const fs::path cut = last_line(stopped.out);
+  ASSERT_TRUE(fs::exists(cut / "checkpoint.bin")) << stopped.out;
+  fs::resize_file(cut / "checkpoint.bin", fs::file_size(cut / "checkpoint.bin") / 2);
+  const Result damaged = run("resume --quiet " + cut.string());
+  EXPECT_EQ(damaged.code, 2);
+  EXPECT_NE(damaged.out.find("checkpoint.bin"), std::string::npos) << damaged.out;
+  EXPECT_NE(damaged.out.find("truncated"), std::string::npos) << damaged.out;
   fs::remove_all(out);
 }
 

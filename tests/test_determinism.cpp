@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <sstream>
 
 #include "block_fixture.hpp"
+#include "breccia/core/archive.hpp"
 #include "breccia/core/parallel.hpp"
 
 using namespace breccia;
@@ -51,4 +53,65 @@ TEST(Determinism, OneAndTwoThreadsGiveBitwiseEqualTrajectories) {
   EXPECT_EQ(a.work, b.work);
   EXPECT_EQ(a.residual, b.residual);
   EXPECT_NE(a.wall_force, 0.0);
+}
+
+// A checkpoint taken between two steps, restored into a new simulation, continues bit for bit as
+// the original: positions, velocities, wall forces and work, the crack catalogue and the energy
+// ledger after further steps that break bonds and rebuild the neighbour lists.
+TEST(Checkpoint, RestoredSimulationContinuesBitwiseEqual) {
+  Simulation a = test::compressed_block(4, 4, 12, 2.0, 3e6);
+  a.run(1237);  // mid-ramp, between energy samples and rebuilds
+  std::stringstream buf;
+  ArchiveWriter w(buf);
+  a.save_state(w);
+  ASSERT_TRUE(w.good());
+  ArchiveReader r(buf, "in-memory checkpoint");
+  Simulation b = Simulation::restore(r);
+  const std::uint64_t rebuilds = a.neighbour_rebuilds();
+  const std::size_t cracks = a.cracks().size();
+  a.run(1500);
+  b.run(1500);
+  ASSERT_GT(a.cracks().size(), cracks) << "the continuation must break bonds";
+  ASSERT_GT(a.neighbour_rebuilds(), rebuilds) << "the continuation must rebuild neighbour lists";
+  EXPECT_EQ(a.step_count(), b.step_count());
+  EXPECT_EQ(a.time(), b.time());
+  const auto& pa = a.particles();
+  const auto& pb = b.particles();
+  ASSERT_EQ(pa.size(), pb.size());
+  EXPECT_EQ(0, std::memcmp(pa.pos_rad.data(), pb.pos_rad.data(), pa.size() * sizeof(PosRad)));
+  EXPECT_EQ(0, std::memcmp(pa.vel.data(), pb.vel.data(), pa.size() * sizeof(Vec3)));
+  EXPECT_EQ(0, std::memcmp(pa.angvel.data(), pb.angvel.data(), pa.size() * sizeof(Vec3)));
+  ASSERT_EQ(a.cracks().size(), b.cracks().size());
+  for (std::size_t k = 0; k < a.cracks().size(); ++k) {
+    EXPECT_EQ(a.cracks()[k].bond_tag, b.cracks()[k].bond_tag);
+    EXPECT_EQ(a.cracks()[k].step, b.cracks()[k].step);
+    EXPECT_EQ(a.cracks()[k].law, b.cracks()[k].law);
+  }
+  EXPECT_EQ(a.walls()[1].force.z, b.walls()[1].force.z);
+  EXPECT_EQ(a.walls()[1].work, b.walls()[1].work);
+  EXPECT_EQ(a.ledger().residual, b.ledger().residual);
+  EXPECT_EQ(a.ledger().friction, b.ledger().friction);
+  EXPECT_EQ(a.intact_bonds(), b.intact_bonds());
+}
+
+TEST(Checkpoint, TruncatedOrForeignDataIsRefusedWithAClearError) {
+  Simulation a = test::compressed_block(2, 2, 2, 2.0, 3e6);
+  a.run(10);
+  std::stringstream buf;
+  ArchiveWriter w(buf);
+  a.save_state(w);
+  const std::string whole = buf.str();
+  for (std::size_t cut : {whole.size() / 2, whole.size() - 1, std::size_t{20}}) {
+    std::stringstream part(whole.substr(0, cut));
+    ArchiveReader r(part, "cut.bin");
+    try {
+      (void)Simulation::restore(r);
+      ADD_FAILURE() << "a checkpoint cut at " << cut << " bytes was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cut.bin"), std::string::npos) << e.what();
+    }
+  }
+  std::stringstream junk(std::string(4096, 'x'));
+  ArchiveReader r(junk, "junk.bin");
+  EXPECT_THROW((void)Simulation::restore(r), InputError);
 }

@@ -19,6 +19,9 @@
 
 namespace breccia {
 
+class ArchiveWriter;
+class ArchiveReader;
+
 struct EngineConfig {
   double time_step = 0.0;               // s; 0 = use the critical estimate times safety_factor
   double safety_factor = 0.3;           // S of §1.5
@@ -182,7 +185,16 @@ class Simulation {
     return user_force_;
   }
 
+  // --- checkpoints (engine/checkpoint.cpp) ---
+  // Writes the complete state between two steps: a simulation restored from it continues
+  // exactly, bit for bit, as this one would have (same neighbour lists in the same order, same
+  // contact histories, ledger accumulators and crack catalogue).
+  void save_state(ArchiveWriter& a) const;
+  static Simulation restore(ArchiveReader& a);
+
  private:
+  struct RestoreTag {};
+  explicit Simulation(RestoreTag) {}
   template <class CL>
   void step_impl(ContactSet<CL>& contacts);
   template <class CL>

@@ -362,6 +362,11 @@ const std::vector<Key>& key_table() {
                          &ExperimentSpec::plot));
     k.push_back(
         bool_key("output", "progress", "progress bar on a terminal", &ExperimentSpec::progress));
+    k.push_back(real_key("output", "checkpoint_interval_s", "s", 0, kInf, false,
+                         "wall-clock seconds between checkpoints (checkpoint.bin, continued by "
+                         "`breccia resume RUN_FOLDER`); 0 = only when interrupted. A checkpoint "
+                         "is also written on Ctrl-C, SIGTERM and --stop-at-step",
+                         &ExperimentSpec::checkpoint_interval));
     return k;
   }();
   return keys;

@@ -60,6 +60,7 @@ struct ExperimentSpec {
   double snapshot_strain_interval = 0.002;  // axial strain between ParaView snapshots; 0 = none
   bool plot = true;                         // stress-strain PNG at the end (needs matplotlib)
   bool progress = true;
+  double checkpoint_interval = 600.0;  // wall-clock s between checkpoints; 0 = on interrupt only
 
   std::string source;  // file the spec came from ("built-in default" otherwise)
 };

@@ -10,11 +10,13 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "breccia/analysis/compression.hpp"
 #include "breccia/analysis/stress_strain.hpp"
+#include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/io/geometry_file.hpp"
@@ -414,36 +416,116 @@ std::string summarise_folder(const std::string& folder) {
   return s;
 }
 
-RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
+namespace {
+
+constexpr const char* kCheckpointMagic = "breccia-checkpoint";
+constexpr std::uint32_t kCheckpointFormat = 1;
+constexpr const char* kCheckpointFile = "checkpoint.bin";
+
+// What the loading loop carries from one row to the next besides the engine, the protocol and
+// the recorders: the analysed series, the quality monitors and the run's bookkeeping.
+struct LoopState {
+  analysis::CompressionSeries series;
+  std::vector<double> imbalance, ke_ratio, confine_err;
+  double next_snapshot = 0.0;
+  double wall_seconds = 0.0;  // spent in earlier sessions of this run (updated when saved)
+  std::uint64_t consolidation_steps = 0;
+  std::uint64_t bonds_initial = 0;
+  std::vector<std::string> warnings;  // those of the set-up
+
+  void save(ArchiveWriter& a) const {
+    a.label("loop");
+    a.vector(series.axial_strain);
+    a.vector(series.deviatoric);
+    a.vector(series.lateral_strain);
+    a.vector(series.volumetric_strain);
+    a.vector(series.broken_bonds);
+    a.value(series.confining_stress);
+    a.vector(imbalance);
+    a.vector(ke_ratio);
+    a.vector(confine_err);
+    a.value(next_snapshot);
+    a.value(wall_seconds);
+    a.value(consolidation_steps);
+    a.value(bonds_initial);
+    a.value(static_cast<std::uint64_t>(warnings.size()));
+    for (const std::string& w : warnings) a.string(w);
+  }
+  void load(ArchiveReader& a) {
+    a.label("loop");
+    a.vector(series.axial_strain);
+    a.vector(series.deviatoric);
+    a.vector(series.lateral_strain);
+    a.vector(series.volumetric_strain);
+    a.vector(series.broken_bonds);
+    a.value(series.confining_stress);
+    a.vector(imbalance);
+    a.vector(ke_ratio);
+    a.vector(confine_err);
+    a.value(next_snapshot);
+    a.value(wall_seconds);
+    a.value(consolidation_steps);
+    a.value(bonds_initial);
+    warnings.resize(a.get<std::uint64_t>());
+    for (std::string& w : warnings) a.string(w);
+    const std::size_t rows = series.axial_strain.size();
+    for (std::size_t m :
+         {series.deviatoric.size(), series.lateral_strain.size(), series.volumetric_strain.size(),
+          series.broken_bonds.size(), imbalance.size(), ke_ratio.size()})
+      if (m != rows)
+        throw InputError(a.where(), "series", std::to_string(m),
+                         "series lengths differ: the checkpoint is corrupt");
+  }
+};
+
+// One run in progress: everything a checkpoint holds.
+struct Session {
+  Simulation sim;
+  PlatenCompression test;
+  HistoryRecorder history;
+  CrackRecorder cracks;
+  SnapshotWriter snaps;
+  LoopState loop;
+};
+
+// Writes checkpoint.bin atomically (temporary file, then rename): a crash while writing leaves the
+// previous checkpoint intact.
+void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Session& s) {
+  const fs::path path = folder / kCheckpointFile, tmp = folder / "checkpoint.bin.tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint");
+    ArchiveWriter a(out);
+    a.string(kCheckpointMagic);
+    a.value(kCheckpointFormat);
+    a.string(kVersion);
+    a.string(to_toml(spec));
+    s.loop.save(a);
+    s.sim.save_state(a);
+    s.test.save_state(a);
+    s.history.save_state(a);
+    s.cracks.save_state(a);
+    s.snaps.save_state(a);
+    a.label("end of checkpoint");
+    out.flush();
+    if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint (disk full?)");
+  }
+  fs::rename(tmp, path);
+}
+
+// Loads the loop, runs it to its end (or the next interruption), and writes the summary and the
+// final manifest. `t_start` is when this session began.
+RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& manifest, Session& ss,
+                  const RunOptions& opt, std::chrono::steady_clock::time_point t_start) {
   auto log = [&](const std::string& m) {
     if (opt.log) opt.log(m);
   };
-  if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
-  const auto t_start = std::chrono::steady_clock::now();
-  // Build first: a bad sample (geometry file, bond list) fails before any file is written.
-  Built b = build(spec, log);
-  const fs::path folder = make_folder(spec);
   RunResult result;
   result.folder = folder.string();
-  json manifest{
-      {"program", "breccia"},
-      {"version", kVersion},
-      {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
-      {"command", opt.command_line},
-      {"experiment_source", spec.source},
-      {"seed", spec.engine.seed},
-      {"threads", max_threads()},
-      {"machine", machine_description()},
-      {"status", "running"},
-      {"density_scaling", spec.density_scaling},
-      {"grain_density_kg_m3", spec.density},
-      {"simulated_density_kg_m3", spec.density * spec.density_scaling},
-      {"bar_wave_speed_m_s", b.bar_wave_speed},
-      {"sample", b.sample_report},
-      {"resolved_experiment", to_toml(spec)}};
-  { std::ofstream(folder / "experiment.toml") << to_toml(spec); }
-  write_json(folder / "manifest.json", manifest);
-
+  auto wall = [&] {
+    return ss.loop.wall_seconds +
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  };
   auto finish = [&](const std::string& status, const std::string& reason) {
     result.status = status;
     result.stop_reason = reason;
@@ -452,51 +534,40 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     manifest["wall_seconds"] = result.wall_seconds;
     write_json(folder / "manifest.json", manifest);
   };
+  auto checkpoint = [&] {
+    const double before = ss.loop.wall_seconds;
+    ss.loop.wall_seconds = wall();
+    write_checkpoint(folder, spec, ss);
+    ss.loop.wall_seconds = before;
+    manifest["checkpoint"] = {{"file", kCheckpointFile},
+                              {"step", ss.sim.step_count()},
+                              {"time_s", ss.sim.time()},
+                              {"resume_command", "breccia resume " + folder.string()}};
+    write_json(folder / "manifest.json", manifest);
+  };
 
   try {
-    Simulation& sim = b.sim;
-    PlatenCompression& test = b.protocol;
-    std::vector<std::string> warnings = sim.warnings();
-    if (test.confined() && !test.consolidated())
-      warnings.push_back(fmt::format(
-          "consolidation to {} MPa did not settle within {} steps; loading started anyway",
-          spec.loading.confining_stress * 1e-6, b.consolidation_steps));
-    for (const std::string& w : warnings) log("warning: " + w);
-    manifest["time_step_s"] = sim.time_step();
-    manifest["critical_time_step_s"] = sim.critical_time_step();
-    manifest["particles"] = sim.particles().size();
-    manifest["bonds"] = sim.intact_bonds();
-    manifest["consolidation_steps"] = b.consolidation_steps;
-    manifest["strain_rate_per_s"] = 2.0 * spec.loading.platen_speed / test.height0();
-    write_json(folder / "manifest.json", manifest);
+    Simulation& sim = ss.sim;
+    PlatenCompression& test = ss.test;
+    LoopState& L = ss.loop;
+    analysis::CompressionSeries& series = L.series;
     result.particles = sim.particles().size();
-    result.bonds = sim.intact_bonds();
+    result.bonds = L.bonds_initial;
     result.confining_stress = spec.loading.confining_stress;
-    log(fmt::format("sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s){}",
-                    result.particles, result.bonds, sim.time_step(), sim.critical_time_step(),
-                    test.confined()
-                        ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
-                                      spec.loading.confining_stress * 1e-6, b.consolidation_steps)
-                        : ""));
-
-    HistoryRecorder history((folder / "history.csv").string());
-    CrackRecorder cracks((folder / "cracks.csv").string());
-    SnapshotWriter snaps((folder / "snapshots").string());
-    analysis::CompressionSeries series;
-    series.confining_stress = spec.loading.confining_stress;
     const auto interval = static_cast<std::uint64_t>(spec.history_interval);
     std::string stop = "";
     std::string status = "complete";
-    auto last_bar = std::chrono::steady_clock::now();
-    // Quality of the test: quasi-static checks (physics.md §6.1) and the confining-stress error,
-    // tracked up to the peak and over the whole test.
-    std::vector<double> imbalance, ke_ratio, confine_err;
-    snaps.write(sim);
-    double next_snapshot = spec.snapshot_strain_interval;
+    auto last_bar = std::chrono::steady_clock::now(), last_checkpoint = last_bar;
     for (;;) {
-      if (opt.interrupt && opt.interrupt->load()) {
+      const bool stop_step = opt.stop_at_step > 0 && sim.step_count() >= opt.stop_at_step;
+      if ((opt.interrupt && opt.interrupt->load()) || stop_step) {
+        // Between two steps: the checkpoint continues exactly from here.
+        checkpoint();
         status = "interrupted";
-        stop = "interrupted by a signal";
+        stop = stop_step ? fmt::format("stopped at step {} (--stop-at-step)", sim.step_count())
+                         : "interrupted by a signal";
+        log(fmt::format("checkpoint at step {}: continue with `breccia resume {}`",
+                        sim.step_count(), folder.string()));
         break;
       }
       if (sim.step_count() % interval == 0) sim.request_energy_sample();
@@ -504,10 +575,10 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
       sim.step();
       if ((sim.step_count() - 1) % interval != 0) continue;
       const AxialState a = test.measure(sim);
-      history.record(sim, a);
-      cracks.record(sim);
-      history.flush();
-      cracks.flush();
+      ss.history.record(sim, a);
+      ss.cracks.record(sim);
+      ss.history.flush();
+      ss.cracks.flush();
       series.axial_strain.push_back(a.strain);
       series.deviatoric.push_back(a.deviatoric);
       series.lateral_strain.push_back(a.lateral_strain);
@@ -516,24 +587,30 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
       // Quality monitors, judged after the run over the pre-peak rows (physics.md §6.1).
       const double fbar = 0.5 * (a.force_bottom + a.force_top);
       const double stored = sim.ledger().bond.total() + sim.ledger().contact;
-      imbalance.push_back(fbar > 0.0 ? std::abs(a.force_top - a.force_bottom) / fbar : 0.0);
-      ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
+      L.imbalance.push_back(fbar > 0.0 ? std::abs(a.force_top - a.force_bottom) / fbar : 0.0);
+      L.ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
       if (test.confined())
-        confine_err.push_back(std::abs(a.confining_stress - spec.loading.confining_stress) /
-                              spec.loading.confining_stress);
-      if (spec.snapshot_strain_interval > 0.0 && a.strain >= next_snapshot) {
-        snaps.write(sim);
-        while (next_snapshot <= a.strain) next_snapshot += spec.snapshot_strain_interval;
+        L.confine_err.push_back(std::abs(a.confining_stress - spec.loading.confining_stress) /
+                                spec.loading.confining_stress);
+      if (spec.snapshot_strain_interval > 0.0 && a.strain >= L.next_snapshot) {
+        ss.snaps.write(sim);
+        while (L.next_snapshot <= a.strain) L.next_snapshot += spec.snapshot_strain_interval;
       }
       if (test.finished(a, sim.cracks().size())) {
         stop = test.stop_reason();
         break;
       }
       const auto now = std::chrono::steady_clock::now();
+      if (spec.checkpoint_interval > 0.0 &&
+          std::chrono::duration<double>(now - last_checkpoint).count() >=
+              spec.checkpoint_interval) {
+        checkpoint();
+        last_checkpoint = std::chrono::steady_clock::now();
+      }
       if (opt.show_progress && now - last_bar > std::chrono::milliseconds(250)) {
         last_bar = now;
         const double frac = std::clamp(a.strain / spec.loading.max_strain, 1e-9, 1.0);
-        const double el = std::chrono::duration<double>(now - t_start).count();
+        const double el = wall();
         const int width = 30, fill = static_cast<int>(frac * width);
         std::fprintf(stderr,
                      "\r[%s%s] strain %.4f  q %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
@@ -544,13 +621,12 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
       }
     }
     if (opt.show_progress) std::fprintf(stderr, "\n");
-    cracks.record(sim);
-    cracks.flush();
-    history.flush();
-    snaps.write(sim);
+    ss.cracks.record(sim);
+    ss.cracks.flush();
+    ss.history.flush();
+    ss.snaps.write(sim);
 
-    result.wall_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    result.wall_seconds = wall();
     result.steps = sim.step_count();
     const analysis::CompressionResult an = analysis::analyse_compression(series);
     result.peak_stress = an.peak_deviatoric;
@@ -565,14 +641,15 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     // Pre-peak rows once the load exceeds 10 % of the peak (the ramp-up start is excluded).
     double imbalance_pre = 0.0, ke_ratio_pre = 0.0, confine_err_pre = 0.0, confine_err_all = 0.0;
     for (std::size_t k = 0; k < series.deviatoric.size(); ++k) {
-      if (k < confine_err.size()) confine_err_all = std::max(confine_err_all, confine_err[k]);
+      if (k < L.confine_err.size()) confine_err_all = std::max(confine_err_all, L.confine_err[k]);
       const bool pre = series.axial_strain[k] <= an.strain_at_peak &&
                        series.deviatoric[k] >= 0.1 * an.peak_deviatoric;
       if (!pre) continue;
-      imbalance_pre = std::max(imbalance_pre, imbalance[k]);
-      ke_ratio_pre = std::max(ke_ratio_pre, ke_ratio[k]);
-      if (k < confine_err.size()) confine_err_pre = std::max(confine_err_pre, confine_err[k]);
+      imbalance_pre = std::max(imbalance_pre, L.imbalance[k]);
+      ke_ratio_pre = std::max(ke_ratio_pre, L.ke_ratio[k]);
+      if (k < L.confine_err.size()) confine_err_pre = std::max(confine_err_pre, L.confine_err[k]);
     }
+    std::vector<std::string> warnings = L.warnings;
     const std::size_t logged = warnings.size();  // those of the set-up were logged already
     bool quasi_static = imbalance_pre <= 0.05 && ke_ratio_pre <= 1e-3;
     if (!quasi_static)
@@ -604,7 +681,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         {"cracks_tensile", result.tensile},
         {"cracks_shear", result.shear},
         {"steps", result.steps},
-        {"consolidation_steps", b.consolidation_steps},
+        {"consolidation_steps", L.consolidation_steps},
         {"simulated_time_s", sim.time()},
         {"time_step_s", sim.time_step()},
         {"density_scaling", spec.density_scaling},
@@ -645,14 +722,22 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
         {"strain_rate_per_s", 2.0 * spec.loading.platen_speed / test.height0()},
         {"sample_height_m", test.height0()},
         {"sample_area_m2", test.area()},
-        {"sample", b.sample_report},
+        {"sample", manifest.value("sample", json::object())},
         {"energy", ledger_json(sim.ledger())},
-        {"snapshots", snaps.count()},
+        {"snapshots", ss.snaps.count()},
         {"warnings", warnings}};
+    if (manifest.contains("resumed")) summary["resumed"] = manifest["resumed"];
     write_json(folder / "summary.json", summary);
     manifest["files"] = {
         "experiment.toml",         "history.csv",         "cracks.csv",          "summary.json",
         "snapshots/particles.pvd", "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
+    if (status == "complete") {
+      // A finished run needs no checkpoint; an interrupted one keeps it for `breccia resume`.
+      fs::remove(folder / kCheckpointFile);
+      manifest.erase("checkpoint");
+    } else {
+      manifest["files"].push_back(kCheckpointFile);
+    }
     if (spec.plot) {
       make_plot(folder, log);
       if (fs::exists(folder / "stress_strain.png"))
@@ -660,12 +745,156 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     }
     finish(status, stop);
   } catch (const std::exception& e) {
-    result.wall_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    result.wall_seconds = wall();
     finish("failed", e.what());
     throw;
   }
   return result;
+}
+
+}  // namespace
+
+RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
+  auto log = [&](const std::string& m) {
+    if (opt.log) opt.log(m);
+  };
+  if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
+  const auto t_start = std::chrono::steady_clock::now();
+  // Build first: a bad sample (geometry file, bond list) fails before any file is written.
+  Built b = build(spec, log);
+  const fs::path folder = make_folder(spec);
+  json manifest{
+      {"program", "breccia"},
+      {"version", kVersion},
+      {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
+      {"command", opt.command_line},
+      {"experiment_source", spec.source},
+      {"seed", spec.engine.seed},
+      {"threads", max_threads()},
+      {"machine", machine_description()},
+      {"status", "running"},
+      {"density_scaling", spec.density_scaling},
+      {"grain_density_kg_m3", spec.density},
+      {"simulated_density_kg_m3", spec.density * spec.density_scaling},
+      {"bar_wave_speed_m_s", b.bar_wave_speed},
+      {"sample", b.sample_report},
+      {"resolved_experiment", to_toml(spec)}};
+  { std::ofstream(folder / "experiment.toml") << to_toml(spec); }
+  write_json(folder / "manifest.json", manifest);
+
+  Simulation& sim = b.sim;
+  PlatenCompression& test = b.protocol;
+  LoopState loop;
+  loop.warnings = sim.warnings();
+  loop.consolidation_steps = b.consolidation_steps;
+  loop.bonds_initial = sim.intact_bonds();
+  loop.series.confining_stress = spec.loading.confining_stress;
+  loop.next_snapshot = spec.snapshot_strain_interval;
+  if (test.confined() && !test.consolidated())
+    loop.warnings.push_back(fmt::format(
+        "consolidation to {} MPa did not settle within {} steps; loading started anyway",
+        spec.loading.confining_stress * 1e-6, b.consolidation_steps));
+  for (const std::string& w : loop.warnings) log("warning: " + w);
+  manifest["time_step_s"] = sim.time_step();
+  manifest["critical_time_step_s"] = sim.critical_time_step();
+  manifest["particles"] = sim.particles().size();
+  manifest["bonds"] = sim.intact_bonds();
+  manifest["consolidation_steps"] = b.consolidation_steps;
+  manifest["strain_rate_per_s"] = 2.0 * spec.loading.platen_speed / test.height0();
+  write_json(folder / "manifest.json", manifest);
+  log(fmt::format(
+      "sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s){}",
+      sim.particles().size(), sim.intact_bonds(), sim.time_step(), sim.critical_time_step(),
+      test.confined() ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
+                                    spec.loading.confining_stress * 1e-6, b.consolidation_steps)
+                      : ""));
+  std::unique_ptr<Session> ss;
+  try {
+    ss.reset(new Session{std::move(b.sim), std::move(b.protocol),
+                         HistoryRecorder((folder / "history.csv").string()),
+                         CrackRecorder((folder / "cracks.csv").string()),
+                         SnapshotWriter((folder / "snapshots").string()), std::move(loop)});
+    ss->snaps.write(ss->sim);
+  } catch (const std::exception& e) {
+    manifest["status"] = "failed";
+    manifest["stop_reason"] = e.what();
+    write_json(folder / "manifest.json", manifest);
+    throw;
+  }
+  return execute(spec, folder, manifest, *ss, opt, t_start);
+}
+
+RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
+                     const RunOptions& opt) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const fs::path folder(folder_name);
+  const fs::path mpath = folder / "manifest.json", cpath = folder / kCheckpointFile;
+  if (!fs::exists(mpath))
+    throw InputError(folder_name, "manifest.json", "(missing)", "not a Breccia run folder");
+  json manifest;
+  {
+    std::ifstream in(mpath);
+    manifest = json::parse(in, nullptr, false);
+  }
+  if (manifest.is_discarded() || !manifest.is_object())
+    throw InputError(mpath.string(), "", "", "not valid JSON");
+  const std::string status = manifest.value("status", "unknown");
+  if (status == "complete")
+    throw InputError(mpath.string(), "status", status, "the run is complete: nothing to resume");
+  if (!fs::exists(cpath))
+    throw InputError(cpath.string(), "", "(missing)",
+                     "the run (status '" + status +
+                         "') has no checkpoint: it stopped before writing one "
+                         "(see output.checkpoint_interval_s)");
+  std::ifstream in(cpath, std::ios::binary);
+  if (!in) throw InputError(cpath.string(), "", "", "cannot read the checkpoint");
+  ArchiveReader a(in, cpath.string());
+  if (a.string() != kCheckpointMagic)
+    throw InputError(cpath.string(), "header", "", "not a Breccia checkpoint");
+  const auto format = a.get<std::uint32_t>();
+  const std::string version = a.string();
+  if (format != kCheckpointFormat || version != kVersion)
+    throw InputError(cpath.string(), "version",
+                     version + " (format " + std::to_string(format) + ")",
+                     std::string("this is breccia ") + kVersion + " (format " +
+                         std::to_string(kCheckpointFormat) +
+                         "): resume with the version that wrote the checkpoint");
+  // The resolved experiment travels in the checkpoint; only run-time options may change.
+  std::vector<std::string> overrides;
+  if (ro.threads >= 0) overrides.push_back("engine.threads=" + std::to_string(ro.threads));
+  const ExperimentSpec spec = parse_experiment(a.string(), cpath.string(), overrides);
+  if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
+
+  LoopState loop;
+  loop.load(a);
+  Simulation sim = Simulation::restore(a);
+  PlatenCompression test = PlatenCompression::restore(a);
+  test.check_restored(sim, cpath.string());
+  HistoryRecorder history((folder / "history.csv").string(), a);
+  CrackRecorder cracks((folder / "cracks.csv").string(), a);
+  SnapshotWriter snaps((folder / "snapshots").string(), a, sim);
+  a.label("end of checkpoint");
+  if (loop.imbalance.size() != loop.series.axial_strain.size())
+    throw InputError(cpath.string(), "loop", "", "inconsistent series: the checkpoint is corrupt");
+
+  if (opt.log)
+    opt.log(fmt::format("resuming {} at step {} (simulated time {:.6g} s)", folder_name,
+                        sim.step_count(), sim.time()));
+  json entry{{"at_step", sim.step_count()},
+             {"at_time_s", sim.time()},
+             {"previous_status", status},
+             {"when", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
+             {"command", opt.command_line},
+             {"threads", max_threads()},
+             {"machine", machine_description()}};
+  if (!manifest.contains("resumed")) manifest["resumed"] = json::array();
+  manifest["resumed"].push_back(entry);
+  manifest["status"] = "running";
+  manifest.erase("stop_reason");
+  write_json(mpath, manifest);
+  Session ss{std::move(sim),    std::move(test),  std::move(history),
+             std::move(cracks), std::move(snaps), std::move(loop)};
+  return execute(spec, folder, manifest, ss, opt, t_start);
 }
 
 SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining,

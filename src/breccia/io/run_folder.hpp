@@ -2,8 +2,10 @@
 // Runs an experiment spec into a self-describing run folder: manifest.json (version, seed, threads,
 // machine, resolved spec, status), history.csv, cracks.csv, summary.json. The manifest is written
 // first with status "running" and rewritten at the end, so a run killed on the way is visibly
-// incomplete; an interrupted run (Ctrl-C, SIGTERM) keeps its tables and says "interrupted".
+// incomplete; an interrupted run (Ctrl-C, SIGTERM) keeps its tables, says "interrupted" and
+// leaves a checkpoint (checkpoint.bin) that `resume_run` continues exactly.
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -19,6 +21,13 @@ struct RunOptions {
   const std::atomic<bool>* interrupt = nullptr;  // set from a signal handler to stop cleanly
   bool show_progress = false;                    // progress bar on stderr
   std::function<void(const std::string&)> log;   // human-readable messages
+  // Stop cleanly, with a checkpoint, once the engine has taken this many steps in all (0 = no
+  // limit): for splitting a long test into jobs, and for the restart tests.
+  std::uint64_t stop_at_step = 0;
+};
+
+struct ResumeOptions {
+  int threads = -1;  // OpenMP threads for the rest of the run (-1: as recorded)
 };
 
 struct RunResult {
@@ -34,6 +43,10 @@ struct RunResult {
 };
 
 RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& options);
+// Continues an interrupted run from its checkpoint.bin, in the same folder: the tables are cut
+// back to the checkpoint and continued, and the result is the one the uninterrupted run gives.
+RunResult resume_run(const std::string& folder, const ResumeOptions& resume,
+                     const RunOptions& options);
 
 // A generated sample and its packing report (JSON object).
 struct GeneratedSample {

@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
+
+#include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 
 namespace breccia {
@@ -13,6 +16,25 @@ CsvFile::CsvFile(const std::string& path, const std::vector<std::string>& column
   for (const auto& c : columns) header += (header.empty() ? "" : ",") + c;
   write_line(header);
   flush();
+}
+
+CsvFile::CsvFile(const std::string& path, std::uint64_t bytes) : path_(path) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec || size < bytes)
+    throw InputError(path, "size", ec ? "missing" : std::to_string(size),
+                     "the checkpoint needs the first " + std::to_string(bytes) +
+                         " bytes of this file as the run wrote them");
+  std::filesystem::resize_file(path, bytes);
+  f_ = std::fopen(path.c_str(), "a");
+  if (!f_) throw InputError(path, "", "", "cannot append to the output file");
+}
+
+std::uint64_t CsvFile::bytes() {
+  flush();
+  const long pos = f_ ? std::ftell(f_) : -1;
+  if (pos < 0) throw InputError(path_, "", "", "cannot tell the position in the output file");
+  return static_cast<std::uint64_t>(pos);
 }
 
 CsvFile::~CsvFile() {
@@ -60,6 +82,19 @@ HistoryRecorder::HistoryRecorder(const std::string& path)
                   "released_by_breaks_j",
                   "energy_residual_j",
                   "energy_residual_relative"}) {}
+
+HistoryRecorder::HistoryRecorder(const std::string& path, ArchiveReader& a)
+    : csv_(path, (a.label("history"), a.get<std::uint64_t>())) {
+  a.value(cracks_seen_);
+  a.value(tensile_);
+}
+
+void HistoryRecorder::save_state(ArchiveWriter& a) {
+  a.label("history");
+  a.value(csv_.bytes());
+  a.value(cracks_seen_);
+  a.value(tensile_);
+}
 
 void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
   const auto& cracks = sim.cracks();
@@ -109,6 +144,17 @@ CrackRecorder::CrackRecorder(const std::string& path)
                   "energy_shear_j",
                   "energy_bending_j",
                   "energy_twisting_j"}) {}
+
+CrackRecorder::CrackRecorder(const std::string& path, ArchiveReader& a)
+    : csv_(path, (a.label("crack table"), a.get<std::uint64_t>())) {
+  a.value(written_);
+}
+
+void CrackRecorder::save_state(ArchiveWriter& a) {
+  a.label("crack table");
+  a.value(csv_.bytes());
+  a.value(written_);
+}
 
 void CrackRecorder::record(const Simulation& sim) {
   const auto& cracks = sim.cracks();

@@ -1,6 +1,7 @@
 #pragma once
 // Recorders: they read the simulation (never change it) and write tables that are flushed as they
 // go, so an interrupted run keeps everything recorded up to then.
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -15,12 +16,17 @@ class CsvFile {
  public:
   CsvFile() = default;
   CsvFile(const std::string& path, const std::vector<std::string>& columns);
+  // Continues a file written earlier: cut back to its first `bytes` bytes (rows a crashed run
+  // wrote after its last checkpoint are dropped), then appended to.
+  CsvFile(const std::string& path, std::uint64_t bytes);
   CsvFile(const CsvFile&) = delete;
   CsvFile& operator=(const CsvFile&) = delete;
   CsvFile(CsvFile&& o) noexcept : f_(o.f_), path_(std::move(o.path_)) { o.f_ = nullptr; }
   ~CsvFile();
   void write_line(const std::string& line);
   void flush();
+  // Bytes written so far (after a flush).
+  std::uint64_t bytes();
   const std::string& path() const { return path_; }
 
  private:
@@ -32,18 +38,23 @@ class CsvFile {
 class HistoryRecorder {
  public:
   explicit HistoryRecorder(const std::string& path);
+  // Resumes the table of a checkpoint (see save_state).
+  HistoryRecorder(const std::string& path, ArchiveReader& a);
   void record(const Simulation& sim, const AxialState& axial);
   void flush() { csv_.flush(); }
+  void save_state(ArchiveWriter& a);
 
  private:
   CsvFile csv_;
-  std::size_t cracks_seen_ = 0, tensile_ = 0;  // running count: no rescan of the catalogue
+  std::uint64_t cracks_seen_ = 0, tensile_ = 0;  // running count: no rescan of the catalogue
 };
 
 // cracks.csv: one row per broken bond with the fields of physics.md §4.0.
 class CrackRecorder {
  public:
   explicit CrackRecorder(const std::string& path);
+  CrackRecorder(const std::string& path, ArchiveReader& a);
+  void save_state(ArchiveWriter& a);
   // Writes the cracks recorded since the last call.
   void record(const Simulation& sim);
   void flush() { csv_.flush(); }
@@ -51,7 +62,7 @@ class CrackRecorder {
 
  private:
   CsvFile csv_;
-  std::size_t written_ = 0;
+  std::uint64_t written_ = 0;
 };
 
 }  // namespace breccia

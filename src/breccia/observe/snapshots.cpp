@@ -5,6 +5,7 @@
 
 #include <filesystem>
 
+#include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 
 namespace breccia {
@@ -75,6 +76,31 @@ SnapshotWriter::SnapshotWriter(std::string folder) : folder_(std::move(folder)) 
   std::error_code ec;
   fs::create_directories(folder_, ec);
   if (ec) throw InputError(folder_, "", "", "cannot create the snapshot folder: " + ec.message());
+}
+
+SnapshotWriter::SnapshotWriter(std::string folder, ArchiveReader& a, const Simulation& sim)
+    : SnapshotWriter(std::move(folder)) {
+  a.label("snapshots");
+  a.vector(times_);
+  names_.resize(times_.size());
+  for (std::string& n : names_) a.string(n);
+  const auto seen = a.get<std::uint64_t>();
+  if (seen > sim.cracks().size())
+    throw InputError(a.where(), "snapshots", std::to_string(seen),
+                     "counts more cracks than the simulation holds: the checkpoint is corrupt");
+  // The broken-bond counts per particle follow from the crack catalogue.
+  for (; cracks_seen_ < seen; ++cracks_seen_) {
+    ++broken_per_tag_[sim.cracks()[cracks_seen_].id1];
+    ++broken_per_tag_[sim.cracks()[cracks_seen_].id2];
+  }
+  write_collections();
+}
+
+void SnapshotWriter::save_state(ArchiveWriter& a) const {
+  a.label("snapshots");
+  a.vector(times_);
+  for (const std::string& n : names_) a.string(n);
+  a.value(static_cast<std::uint64_t>(cracks_seen_));
 }
 
 void SnapshotWriter::write(const Simulation& sim) {

@@ -16,6 +16,10 @@ namespace breccia {
 class SnapshotWriter {
  public:
   explicit SnapshotWriter(std::string folder);
+  // Resumes the collections of a checkpoint; snapshots taken after it are dropped from them
+  // (their files are overwritten by the next ones).
+  SnapshotWriter(std::string folder, ArchiveReader& a, const Simulation& sim);
+  void save_state(ArchiveWriter& a) const;
   void write(const Simulation& sim);
   std::size_t count() const noexcept { return times_.size(); }
 

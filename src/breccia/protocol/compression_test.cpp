@@ -6,6 +6,7 @@
 #include <numbers>
 #include <numeric>
 
+#include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 
@@ -260,6 +261,64 @@ bool PlatenCompression::finished(const AxialState& s, std::size_t broken_bonds) 
     return true;
   }
   return false;
+}
+
+void PlatenCompression::save_state(ArchiveWriter& a) const {
+  a.label("platen compression");
+  a.value(st_);
+  a.value(lateral_);
+  a.value(axis_);
+  a.value(planar_);
+  a.value(thickness_);
+  a.value(bottom_);
+  a.value(top_);
+  a.vector(side_);
+  a.value(centre_);
+  for (const auto& f : face_) a.vector(f);
+  a.value(h0_);
+  a.value(area0_);
+  a.value(w0_);
+  a.value(peak_);
+  a.value(k_min_);
+  a.value(consolidated_);
+  a.value(servo_);
+  a.string(stop_reason_);
+}
+
+PlatenCompression PlatenCompression::restore(ArchiveReader& a) {
+  PlatenCompression t;
+  a.label("platen compression");
+  a.value(t.st_);
+  a.value(t.lateral_);
+  a.value(t.axis_);
+  a.value(t.planar_);
+  a.value(t.thickness_);
+  a.value(t.bottom_);
+  a.value(t.top_);
+  a.vector(t.side_);
+  a.value(t.centre_);
+  for (auto& f : t.face_) a.vector(f);
+  a.value(t.h0_);
+  a.value(t.area0_);
+  a.value(t.w0_);
+  a.value(t.peak_);
+  a.value(t.k_min_);
+  a.value(t.consolidated_);
+  a.value(t.servo_);
+  a.string(t.stop_reason_);
+  return t;
+}
+
+void PlatenCompression::check_restored(const Simulation& sim, const std::string& where) const {
+  const std::size_t walls = sim.walls().size(), n = sim.particles().size();
+  bool ok = bottom_ < walls && top_ < walls;
+  for (std::size_t w : side_) ok = ok && w < walls;
+  for (const auto& f : face_)
+    for (std::uint32_t i : f) ok = ok && i < n;
+  if (!ok)
+    throw InputError(
+        where, "platen compression", "wall or particle index",
+        "refers to a wall or particle the simulation lacks: the checkpoint is corrupt");
 }
 
 }  // namespace breccia

@@ -67,7 +67,14 @@ class PlatenCompression {
   LateralBoundary lateral() const noexcept { return lateral_; }
   const PlatenCompressionSettings& settings() const noexcept { return st_; }
 
+  // Checkpoints: the protocol's state (its walls live in the simulation's state).
+  void save_state(ArchiveWriter& a) const;
+  static PlatenCompression restore(ArchiveReader& a);
+  // Throws InputError naming `where` unless the restored walls and particles exist in `sim`.
+  void check_restored(const Simulation& sim, const std::string& where) const;
+
  private:
+  PlatenCompression() = default;
   double height(const Simulation& sim) const;
   // Current lateral extents (x, y widths; cylinder: diameter twice) from walls or particles.
   void widths(const Simulation& sim, double w[2]) const;

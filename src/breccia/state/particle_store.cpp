@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 
@@ -71,6 +72,60 @@ std::size_t ParticleStore::index_of(std::uint64_t t, const std::string& where) c
   if (it == index_.end())
     throw InputError(where, "particle tag", std::to_string(t), "no particle has this tag");
   return it->second;
+}
+
+void ParticleStore::save(ArchiveWriter& a) const {
+  a.label("particles");
+  a.value(dim_);
+  a.value(thickness_);
+  a.value(body_);
+  a.vector(pos_rad);
+  a.vector(vel);
+  a.vector(angvel);
+  a.vector(force);
+  a.vector(torque);
+  a.vector(mass);
+  a.vector(inertia);
+  a.vector(density);
+  a.vector(orientation);
+  a.vector(angle);
+  a.vector(displacement);
+  a.vector(tag);
+  a.vector(motion);
+  a.vector(drive_vel);
+  a.vector(drive_angvel);
+}
+
+void ParticleStore::load(ArchiveReader& a) {
+  a.label("particles");
+  a.value(dim_);
+  a.value(thickness_);
+  a.value(body_);
+  a.vector(pos_rad);
+  a.vector(vel);
+  a.vector(angvel);
+  a.vector(force);
+  a.vector(torque);
+  a.vector(mass);
+  a.vector(inertia);
+  a.vector(density);
+  a.vector(orientation);
+  a.vector(angle);
+  a.vector(displacement);
+  a.vector(tag);
+  a.vector(motion);
+  a.vector(drive_vel);
+  a.vector(drive_angvel);
+  const std::size_t n = tag.size();
+  for (const std::size_t m :
+       {pos_rad.size(), vel.size(), angvel.size(), force.size(), torque.size(), mass.size(),
+        inertia.size(), density.size(), orientation.size(), angle.size(), displacement.size(),
+        motion.size(), drive_vel.size(), drive_angvel.size()})
+    if (m != n)
+      throw InputError(a.where(), "particles", std::to_string(m),
+                       "array lengths differ: the checkpoint is corrupt");
+  index_.clear();
+  for (std::size_t i = 0; i < n; ++i) index_[tag[i]] = i;
 }
 
 }  // namespace breccia

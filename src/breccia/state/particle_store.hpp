@@ -11,6 +11,9 @@
 
 namespace breccia {
 
+class ArchiveWriter;
+class ArchiveReader;
+
 enum class Dimension : std::uint8_t { Three = 3, Two = 2 };
 
 // How a 2D particle's mass and inertia are computed (physics.md §1.2, §3.4).
@@ -60,6 +63,10 @@ class ParticleStore {
   bool contains(std::uint64_t t) const { return index_.count(t) != 0; }
 
   double mass_of(double radius, double density) const noexcept;
+
+  // Checkpoints: every array in order, then the tag index is rebuilt on loading.
+  void save(ArchiveWriter& a) const;
+  void load(ArchiveReader& a);
   double inertia_of(double mass, double radius) const noexcept;
 
   // Grouped arrays (public: the engine's loops read them directly).
