@@ -1,0 +1,137 @@
+#include "breccia/analysis/ae_clustering.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "breccia/core/error.hpp"
+#include "breccia/core/format.hpp"
+
+namespace breccia::analysis {
+
+double shear_wave_speed(double e, double nu, double rho) {
+  return std::sqrt(e / (2.0 * (1.0 + nu)) / rho);
+}
+
+EventClusterer::EventClusterer(ClusterSettings s) : s_(s) {
+  if (!(s.source_radius > 0.0) || !std::isfinite(s.source_radius))
+    throw InputError("AE clustering", "source_radius", num(s.source_radius), "must be > 0 m");
+  if (!(s.duration > 0.0) || !std::isfinite(s.duration))
+    throw InputError("AE clustering", "duration", num(s.duration), "must be > 0 s");
+}
+
+std::size_t EventClusterer::find(std::size_t e) const {
+  while (parent_[e] != e) e = parent_[e];
+  return e;
+}
+
+std::size_t EventClusterer::event_of(std::size_t crack) const {
+  return find(crack_event_.at(crack));
+}
+
+void EventClusterer::index(std::size_t root, const Vec3& x) {
+  const double h = s_.source_radius;
+  auto& cell = cells_[cell_key(static_cast<long long>(std::floor(x.x / h)),
+                               static_cast<long long>(std::floor(x.y / h)),
+                               static_cast<long long>(std::floor(x.z / h)))];
+  if (std::find(cell.begin(), cell.end(), root) == cell.end()) cell.push_back(root);
+}
+
+std::size_t EventClusterer::add(std::size_t id, double time, const Vec3& x) {
+  close_before(time);
+  // Open events with a crack within r_s: look in the 27 cells around x.
+  const double h = s_.source_radius, r2 = h * h;
+  const long long a = static_cast<long long>(std::floor(x.x / h));
+  const long long b = static_cast<long long>(std::floor(x.y / h));
+  const long long c = static_cast<long long>(std::floor(x.z / h));
+  std::vector<std::size_t> hits;
+  for (long long da = -1; da <= 1; ++da)
+    for (long long db = -1; db <= 1; ++db)
+      for (long long dc = -1; dc <= 1; ++dc) {
+        const auto it = cells_.find(cell_key(a + da, b + db, c + dc));
+        if (it == cells_.end()) continue;
+        for (std::size_t e : it->second) {
+          const std::size_t root = find(e);
+          if (std::find(hits.begin(), hits.end(), root) != hits.end()) continue;
+          if (std::find(open_.begin(), open_.end(), root) == open_.end()) continue;
+          for (const Member& m : members_[root])
+            if (norm2(m.x - x) <= r2) {
+              hits.push_back(root);
+              break;
+            }
+        }
+      }
+  std::size_t event;
+  if (hits.empty()) {
+    event = parent_.size();
+    parent_.push_back(event);
+    last_time_.push_back(time);
+    members_.emplace_back();
+    open_.push_back(event);
+  } else {
+    std::sort(hits.begin(), hits.end());
+    event = hits.front();
+    for (std::size_t k = 1; k < hits.size(); ++k) {
+      const std::size_t gone = hits[k];
+      parent_[gone] = event;
+      for (const Member& m : members_[gone]) {
+        members_[event].push_back(m);
+        index(event, m.x);
+      }
+      members_[gone].clear();
+      members_[gone].shrink_to_fit();
+      open_.erase(std::find(open_.begin(), open_.end(), gone));
+      if (merged) merged(event, gone);
+    }
+  }
+  if (crack_event_.size() <= id) crack_event_.resize(id + 1, static_cast<std::size_t>(-1));
+  crack_event_[id] = event;
+  members_[event].push_back({id, x});
+  last_time_[event] = time;
+  index(event, x);
+  return event;
+}
+
+void EventClusterer::close_before(double time, const std::function<void(std::size_t)>& closed) {
+  for (std::size_t k = 0; k < open_.size();) {
+    const std::size_t e = open_[k];
+    if (time - last_time_[e] > s_.duration) {
+      open_.erase(open_.begin() + static_cast<std::ptrdiff_t>(k));
+      members_[e].clear();
+      members_[e].shrink_to_fit();
+      if (closed) closed(e);
+    } else {
+      ++k;
+    }
+  }
+  // Drop index entries of closed events now and then (they are skipped when found).
+  if (cells_.size() > 64 && open_.empty()) cells_.clear();
+}
+
+void EventClusterer::close_all(const std::function<void(std::size_t)>& closed) {
+  const std::vector<std::size_t> open = open_;
+  open_.clear();
+  for (std::size_t e : open) {
+    members_[e].clear();
+    if (closed) closed(e);
+  }
+  cells_.clear();
+}
+
+std::vector<std::size_t> cluster_cracks(const std::vector<double>& time,
+                                        const std::vector<Vec3>& position, ClusterSettings s) {
+  EventClusterer c(s);
+  for (std::size_t k = 0; k < time.size(); ++k) c.add(k, time[k], position[k]);
+  c.close_all();
+  // Renumber roots in order of their first crack.
+  std::map<std::size_t, std::size_t> number;
+  std::vector<std::size_t> out(time.size());
+  for (std::size_t k = 0; k < time.size(); ++k) {
+    const std::size_t root = c.event_of(k);
+    const auto it = number.emplace(root, number.size()).first;
+    out[k] = it->second;
+  }
+  return out;
+}
+
+}  // namespace breccia::analysis
