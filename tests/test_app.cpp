@@ -346,6 +346,8 @@ TEST(App, ResumedRunGivesTheSameResultAsAnUninterruptedOne) {
   const std::string cracks = read(split / "cracks.csv");
   EXPECT_GT(std::count(cracks.begin(), cracks.end(), '\n'), 10) << "the test must break bonds";
   EXPECT_EQ(read(a / "cracks.csv"), cracks);
+  for (const char* f : {"events.csv", "indicators.csv", "fragments.csv"})
+    EXPECT_EQ(read(a / f), read(split / f)) << f << ": the AE monitor resumes exactly too";
   for (const auto& e : fs::directory_iterator(a / "snapshots"))
     EXPECT_EQ(read(e.path()), read(split / "snapshots" / e.path().filename()))
         << e.path().filename();

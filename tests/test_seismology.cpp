@@ -356,3 +356,21 @@ TEST(CrackSeries, VariancesAndShearFraction) {
   en.pop_back();
   EXPECT_TRUE(std::isnan(crack_series(e10, sh, en, 0.0, 1e-4, s).shear_fraction[0]));
 }
+
+TEST(Clustering, GrainLinkageBySharedGrainsAndContacts) {
+  // Option b of analysis.md §4.1: crack (own grains, grains touched) with its own window T_c.
+  EventClusterer c({0.0, 0.0, Linkage::Grain});
+  const double tc = 1e-6;
+  EXPECT_EQ(c.add_grain(0, 0.0, tc, {1, 2}, {1, 2, 3, 4}), 0u);
+  EXPECT_EQ(c.add_grain(1, 0.5e-6, tc, {2, 7}, {2, 7, 8}), 0u);   // shares grain 2
+  EXPECT_EQ(c.add_grain(2, 0.6e-6, tc, {8, 9}, {8, 9}), 0u);      // 8 touches grain 7
+  EXPECT_EQ(c.add_grain(3, 0.7e-6, tc, {20, 21}, {20, 21}), 1u);  // elsewhere
+  // The window refreshes with each crack: event 0 is open until 0.6 + 1.0 us.
+  EXPECT_EQ(c.add_grain(4, 1.5e-6, tc, {9, 10}, {9, 10}), 0u);
+  EXPECT_EQ(c.add_grain(5, 2.0e-6, tc, {21, 22}, {21, 22}), 2u);  // event 1 closed at 1.7 us
+  // A crack touching both open events merges them.
+  EXPECT_EQ(c.add_grain(6, 2.1e-6, tc, {10, 22}, {10, 22}), 0u);
+  c.close_all();
+  EXPECT_EQ(c.event_of(5), 0u);
+  EXPECT_EQ(c.event_of(3), 1u);
+}

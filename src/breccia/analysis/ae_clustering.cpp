@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <map>
 
+#include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 
@@ -14,6 +16,7 @@ double shear_wave_speed(double e, double nu, double rho) {
 }
 
 EventClusterer::EventClusterer(ClusterSettings s) : s_(s) {
+  if (s.linkage == Linkage::Grain) return;  // windows come with each crack
   if (!(s.source_radius > 0.0) || !std::isfinite(s.source_radius))
     throw InputError("AE clustering", "source_radius", num(s.source_radius), "must be > 0 m");
   if (!(s.duration > 0.0) || !std::isfinite(s.duration))
@@ -37,8 +40,47 @@ void EventClusterer::index(std::size_t root, const Vec3& x) {
   if (std::find(cell.begin(), cell.end(), root) == cell.end()) cell.push_back(root);
 }
 
+std::size_t EventClusterer::join(std::size_t id, double deadline, std::vector<std::size_t>& hits) {
+  std::size_t event;
+  if (hits.empty()) {
+    event = parent_.size();
+    parent_.push_back(event);
+    deadline_.push_back(deadline);
+    members_.emplace_back();
+    touched_.emplace_back();
+    open_.push_back(event);
+  } else {
+    std::sort(hits.begin(), hits.end());
+    event = hits.front();
+    for (std::size_t k = 1; k < hits.size(); ++k) {
+      const std::size_t gone = hits[k];
+      parent_[gone] = event;
+      deadline_[event] = std::max(deadline_[event], deadline_[gone]);
+      for (const Member& m : members_[gone]) {
+        members_[event].push_back(m);
+        index(event, m.x);
+      }
+      members_[gone].clear();
+      members_[gone].shrink_to_fit();
+      std::vector<std::uint32_t> u;
+      std::set_union(touched_[event].begin(), touched_[event].end(), touched_[gone].begin(),
+                     touched_[gone].end(), std::back_inserter(u));
+      touched_[event] = std::move(u);
+      for (std::uint32_t p : touched_[gone]) touch_index_[p].push_back(event);
+      touched_[gone].clear();
+      touched_[gone].shrink_to_fit();
+      open_.erase(std::find(open_.begin(), open_.end(), gone));
+      if (merged) merged(event, gone);
+    }
+  }
+  if (crack_event_.size() <= id) crack_event_.resize(id + 1, static_cast<std::size_t>(-1));
+  crack_event_[id] = event;
+  deadline_[event] = std::max(deadline_[event], deadline);
+  return event;
+}
+
 std::size_t EventClusterer::add(std::size_t id, double time, const Vec3& x) {
-  close_before(time);
+  close_before(time, closed);
   // Open events with a crack within r_s: look in the 27 cells around x.
   const double h = s_.source_radius, r2 = h * h;
   const long long a = static_cast<long long>(std::floor(x.x / h));
@@ -61,45 +103,58 @@ std::size_t EventClusterer::add(std::size_t id, double time, const Vec3& x) {
             }
         }
       }
-  std::size_t event;
-  if (hits.empty()) {
-    event = parent_.size();
-    parent_.push_back(event);
-    last_time_.push_back(time);
-    members_.emplace_back();
-    open_.push_back(event);
-  } else {
-    std::sort(hits.begin(), hits.end());
-    event = hits.front();
-    for (std::size_t k = 1; k < hits.size(); ++k) {
-      const std::size_t gone = hits[k];
-      parent_[gone] = event;
-      for (const Member& m : members_[gone]) {
-        members_[event].push_back(m);
-        index(event, m.x);
-      }
-      members_[gone].clear();
-      members_[gone].shrink_to_fit();
-      open_.erase(std::find(open_.begin(), open_.end(), gone));
-      if (merged) merged(event, gone);
-    }
-  }
-  if (crack_event_.size() <= id) crack_event_.resize(id + 1, static_cast<std::size_t>(-1));
-  crack_event_[id] = event;
+  const std::size_t event = join(id, time + s_.duration, hits);
   members_[event].push_back({id, x});
-  last_time_[event] = time;
   index(event, x);
   return event;
 }
 
-void EventClusterer::close_before(double time, const std::function<void(std::size_t)>& closed) {
+std::size_t EventClusterer::add_grain(std::size_t id, double time, double duration,
+                                      const std::vector<std::uint32_t>& own,
+                                      const std::vector<std::uint32_t>& touched) {
+  close_before(time, closed);
+  std::vector<std::size_t> hits;
+  for (std::uint32_t p : own) {
+    const auto it = touch_index_.find(p);
+    if (it == touch_index_.end()) continue;
+    for (std::size_t e : it->second) {
+      const std::size_t root = find(e);
+      if (std::find(hits.begin(), hits.end(), root) != hits.end()) continue;
+      if (std::find(open_.begin(), open_.end(), root) == open_.end()) continue;
+      if (std::binary_search(touched_[root].begin(), touched_[root].end(), p)) hits.push_back(root);
+    }
+  }
+  const std::size_t event = join(id, time + duration, hits);
+  std::vector<std::uint32_t> t = touched;
+  std::sort(t.begin(), t.end());
+  t.erase(std::unique(t.begin(), t.end()), t.end());
+  std::vector<std::uint32_t> u;
+  std::set_union(touched_[event].begin(), touched_[event].end(), t.begin(), t.end(),
+                 std::back_inserter(u));
+  touched_[event] = std::move(u);
+  for (std::uint32_t p : t) {
+    auto& list = touch_index_[p];
+    if (std::find(list.begin(), list.end(), event) == list.end()) list.push_back(event);
+  }
+  return event;
+}
+
+void EventClusterer::close_before(double time, const std::function<void(std::size_t)>& on_close) {
+  const auto& closed_cb = on_close ? on_close : closed;
   for (std::size_t k = 0; k < open_.size();) {
     const std::size_t e = open_[k];
-    if (time - last_time_[e] > s_.duration) {
+    if (time > deadline_[e]) {
       open_.erase(open_.begin() + static_cast<std::ptrdiff_t>(k));
       members_[e].clear();
       members_[e].shrink_to_fit();
-      if (closed) closed(e);
+      for (std::uint32_t p : touched_[e]) {
+        auto& list = touch_index_[p];
+        list.erase(std::remove(list.begin(), list.end(), e), list.end());
+        if (list.empty()) touch_index_.erase(p);
+      }
+      touched_[e].clear();
+      touched_[e].shrink_to_fit();
+      if (closed_cb) closed_cb(e);
     } else {
       ++k;
     }
@@ -108,14 +163,63 @@ void EventClusterer::close_before(double time, const std::function<void(std::siz
   if (cells_.size() > 64 && open_.empty()) cells_.clear();
 }
 
-void EventClusterer::close_all(const std::function<void(std::size_t)>& closed) {
+void EventClusterer::close_all(const std::function<void(std::size_t)>& on_close) {
+  const auto& closed_cb = on_close ? on_close : closed;
   const std::vector<std::size_t> open = open_;
   open_.clear();
   for (std::size_t e : open) {
     members_[e].clear();
-    if (closed) closed(e);
+    touched_[e].clear();
+    if (closed_cb) closed_cb(e);
   }
   cells_.clear();
+  touch_index_.clear();
+}
+
+void EventClusterer::save(ArchiveWriter& a) const {
+  a.label("event clusterer");
+  a.value(s_);
+  a.vector(parent_);
+  a.vector(crack_event_);
+  a.vector(deadline_);
+  a.vector(open_);
+  for (std::size_t e : open_) {
+    a.value(static_cast<std::uint64_t>(members_[e].size()));
+    for (const Member& m : members_[e]) {
+      a.value(static_cast<std::uint64_t>(m.crack));
+      a.value(m.x);
+    }
+    a.vector(touched_[e]);
+  }
+}
+
+void EventClusterer::load(ArchiveReader& a) {
+  a.label("event clusterer");
+  a.value(s_);
+  a.vector(parent_);
+  a.vector(crack_event_);
+  a.vector(deadline_);
+  a.vector(open_);
+  const std::size_t n = parent_.size();
+  bool ok = deadline_.size() == n;
+  for (std::size_t e : parent_) ok = ok && e < n;
+  for (std::size_t e : open_) ok = ok && e < n;
+  for (std::size_t e : crack_event_) ok = ok && (e < n || e == static_cast<std::size_t>(-1));
+  if (!ok) throw InputError(a.where(), "event clusterer", "indices", "the checkpoint is corrupt");
+  members_.assign(n, {});
+  touched_.assign(n, {});
+  cells_.clear();
+  touch_index_.clear();
+  for (std::size_t e : open_) {
+    members_[e].resize(a.get<std::uint64_t>());
+    for (Member& m : members_[e]) {
+      m.crack = a.get<std::uint64_t>();
+      a.value(m.x);
+      index(e, m.x);
+    }
+    a.vector(touched_[e]);
+    for (std::uint32_t p : touched_[e]) touch_index_[p].push_back(e);
+  }
 }
 
 std::vector<std::size_t> cluster_cracks(const std::vector<double>& time,

@@ -13,11 +13,23 @@
 
 #include "breccia/core/vec3.hpp"
 
+namespace breccia {
+class ArchiveWriter;
+class ArchiveReader;
+}  // namespace breccia
+
 namespace breccia::analysis {
+
+// Two linkage rules (analysis.md §4.1): by source radius (the default of the reference: within
+// r_s of any crack of the event, window T_d after its latest crack), or by grain (option b of the
+// reference: the crack shares a particle with, or touches a contact of, the event's particles;
+// window T_c = 2 D_c / v_S of its latest cracks, D_c the larger grain's diameter).
+enum class Linkage { SourceRadius, Grain };
 
 struct ClusterSettings {
   double source_radius = 0.0;  // r_s, m
-  double duration = 0.0;       // T_d, s
+  double duration = 0.0;       // T_d, s (source-radius linkage)
+  Linkage linkage = Linkage::SourceRadius;
 };
 
 // v_S = sqrt(G / rho) with G = E / (2 (1 + nu)) and rho the bulk density (§4.1), and
@@ -33,13 +45,25 @@ class EventClusterer {
 
   // Adds crack `id` (ids in order of time; equal times in id order). Returns its event id.
   // Events merged by a bridging crack keep the smallest id; `merged` is called with (kept, gone).
+  // Source-radius linkage:
   std::size_t add(std::size_t id, double time, const Vec3& position);
+  // Grain linkage: `own` are the crack's two particles, `touched` those and the particles in
+  // contact with them; `duration` is the crack's window T_c.
+  std::size_t add_grain(std::size_t id, double time, double duration,
+                        const std::vector<std::uint32_t>& own,
+                        const std::vector<std::uint32_t>& touched);
   // Closes every open event whose latest crack is more than T_d before `time`; calls `closed`
   // with each closed event id.
   void close_before(double time, const std::function<void(std::size_t)>& closed = {});
   void close_all(const std::function<void(std::size_t)>& closed = {});
 
   std::function<void(std::size_t kept, std::size_t gone)> merged;
+  // Called for events closed inside add() (and by close_before without its own callback).
+  std::function<void(std::size_t)> closed;
+
+  // Checkpoints: the open events and the crack-to-event map (the cell index is rebuilt).
+  void save(ArchiveWriter& a) const;
+  void load(ArchiveReader& a);
 
   // Final event of every crack added (after merges), and the open events.
   std::size_t event_of(std::size_t crack) const;
@@ -54,11 +78,14 @@ class EventClusterer {
     Vec3 x;
   };
   ClusterSettings s_;
-  std::vector<std::size_t> parent_;           // event merges (union-find over event ids)
-  std::vector<std::size_t> crack_event_;      // event id at the time each crack was added
-  std::vector<double> last_time_;             // per event (valid for roots)
-  std::vector<std::vector<Member>> members_;  // per open root
-  std::vector<std::size_t> open_;             // open roots
+  std::vector<std::size_t> parent_;                  // event merges (union-find over event ids)
+  std::vector<std::size_t> crack_event_;             // event id at the time each crack was added
+  std::vector<double> deadline_;                     // per event: closes when time exceeds it
+  std::vector<std::vector<std::uint32_t>> touched_;  // grain linkage: per open root, sorted
+  std::unordered_map<std::uint32_t, std::vector<std::size_t>> touch_index_;  // particle -> events
+  std::size_t join(std::size_t id, double deadline, std::vector<std::size_t>& hits);
+  std::vector<std::vector<Member>> members_;                       // per open root
+  std::vector<std::size_t> open_;                                  // open roots
   std::unordered_map<long long, std::vector<std::size_t>> cells_;  // cell -> open roots
   long long cell_key(long long a, long long b, long long c) const noexcept {
     return (a * 73856093LL) ^ (b * 19349663LL) ^ (c * 83492791LL);

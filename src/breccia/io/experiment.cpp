@@ -367,6 +367,52 @@ const std::vector<Key>& key_table() {
                          "`breccia resume RUN_FOLDER`); 0 = only when interrupted. A checkpoint "
                          "is also written on Ctrl-C, SIGTERM and --stop-at-step",
                          &ExperimentSpec::checkpoint_interval));
+    // [ae]
+    k.push_back(choice_key(
+        "ae", "clustering", {"source_radius", "grain"},
+        "how cracks link into events (analysis.md §4.1): \"source_radius\" (within r_s of any "
+        "crack of the event, window T_d = 4 r_s / v_S after its latest crack) or \"grain\" "
+        "(shares a grain with, or touches a contact of, the event's grains; window 2 D_c / v_S "
+        "with D_c the larger grain's diameter)",
+        &ExperimentSpec::ae_clustering));
+    k.push_back(real_key("ae", "source_radius", "m", 0, kInf, false,
+                         "r_s: a crack joins an event within this distance of any of its cracks "
+                         "(analysis.md §4.1); 0 = 3 x the largest particle diameter",
+                         &ExperimentSpec::ae_source_radius));
+    k.push_back(real_key("ae", "shear_wave_speed", "m/s", 0, kInf, false,
+                         "v_S for the event duration T_d = 4 r_s / v_S; 0 = sqrt(G / rho) from "
+                         "the test's own modulus and Poisson's ratio at the first crack and the "
+                         "(scaled) bulk density",
+                         &ExperimentSpec::ae_shear_wave_speed));
+    k.push_back(bool_key("ae", "moment_tensors",
+                         "watch the source particles of open events for moment tensors "
+                         "(analysis.md §4.2)",
+                         &ExperimentSpec::ae_moment_tensors));
+    k.push_back(int_key("ae", "moment_interval", 1, 1000000,
+                        "steps between moment-tensor evaluations of an open event",
+                        [](ExperimentSpec& s) -> std::int64_t& { return s.ae_moment_interval; }));
+    k.push_back(real_key("ae", "magnitude_constant", "", -kInf, kInf, false,
+                         "c of M_w = 2/3 log10 M0 + c (M0 in N m; -6.0 after Hazzard & Young, "
+                         "-6.07 IASPEI)",
+                         &ExperimentSpec::ae_magnitude_constant));
+    k.push_back(real_key("ae", "bin_width", "", 0, 1, true,
+                         "strain bin of the indicator series (analysis.md §3.2)",
+                         &ExperimentSpec::ae_bin_width));
+    k.push_back(int_key("ae", "window_bins", 1, 100000,
+                        "trailing window of the indicator series, in bins (shear fraction, "
+                        "MCvar, AEvar)",
+                        [](ExperimentSpec& s) -> std::int64_t& { return s.ae_window_bins; }));
+    k.push_back(int_key("ae", "window_events", 10, 1000000,
+                        "events (b-value) or cracks (D2) per moving window of the curves over "
+                        "strain (analysis.md §5.4, §6.3)",
+                        [](ExperimentSpec& s) -> std::int64_t& { return s.ae_window_events; }));
+    k.push_back(int_key("ae", "window_step", 1, 1000000,
+                        "events or cracks between successive moving windows",
+                        [](ExperimentSpec& s) -> std::int64_t& { return s.ae_window_step; }));
+    k.push_back(int_key("ae", "min_events", 2, 1000000,
+                        "fewest events (b-value) or points (D2) a statistic is computed from; "
+                        "fewer give no value",
+                        [](ExperimentSpec& s) -> std::int64_t& { return s.ae_min_events; }));
     return k;
   }();
   return keys;
@@ -421,7 +467,7 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
       if (!key)
         throw InputError(where_of(source, node), name, show(node),
                          "unknown top-level key; allowed: name, and the tables [engine], "
-                         "[material], [sample], [contact], [bond], [loading], [output]");
+                         "[material], [sample], [contact], [bond], [loading], [output], [ae]");
       key->set(spec, node, where_of(source, node), name);
       continue;
     }
@@ -431,7 +477,7 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
     if (!section_known)
       throw InputError(where_of(source, node), "[" + name + "]", "",
                        "unknown table; allowed: [engine], [material], [sample], [contact], "
-                       "[bond], [loading], [output]");
+                       "[bond], [loading], [output], [ae]");
     for (const auto& [kk, value] : tbl) {
       const std::string item(kk.str());
       const std::string full = name + "." + item;

@@ -61,6 +61,18 @@ struct ExperimentSpec {
   bool plot = true;                         // stress-strain PNG at the end (needs matplotlib)
   bool progress = true;
   double checkpoint_interval = 600.0;  // wall-clock s between checkpoints; 0 = on interrupt only
+  // [ae] acoustic emission and indicator series (analysis.md §3-§6)
+  std::string ae_clustering = "grain";  // grain | source_radius (analysis.md §4.1)
+  double ae_source_radius = 0.0;        // m; 0 = 3 x the largest particle diameter
+  double ae_shear_wave_speed = 0.0;     // m/s; 0 = estimated at the first crack
+  bool ae_moment_tensors = true;
+  std::int64_t ae_moment_interval = 1;
+  double ae_magnitude_constant = -6.0;
+  double ae_bin_width = 5e-5;
+  std::int64_t ae_window_bins = 10;
+  std::int64_t ae_window_events = 100;
+  std::int64_t ae_window_step = 10;
+  std::int64_t ae_min_events = 50;
 
   std::string source;  // file the spec came from ("built-in default" otherwise)
 };

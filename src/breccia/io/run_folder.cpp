@@ -19,8 +19,10 @@
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/parallel.hpp"
+#include "breccia/io/failure_analysis.hpp"
 #include "breccia/io/geometry_file.hpp"
 #include "breccia/io/sample_import.hpp"
+#include "breccia/observe/ae_monitor.hpp"
 #include "breccia/observe/recorders.hpp"
 #include "breccia/observe/snapshots.hpp"
 #include "breccia/sample/lattice.hpp"
@@ -432,6 +434,9 @@ struct LoopState {
   std::uint64_t consolidation_steps = 0;
   std::uint64_t bonds_initial = 0;
   std::vector<std::string> warnings;  // those of the set-up
+  // Reference state of the loading stage for the failure analysis.
+  double volume0 = 0.0, porosity0 = 0.0, length_min = 0.0;
+  std::string wave_speed_method;
 
   void save(ArchiveWriter& a) const {
     a.label("loop");
@@ -450,6 +455,10 @@ struct LoopState {
     a.value(bonds_initial);
     a.value(static_cast<std::uint64_t>(warnings.size()));
     for (const std::string& w : warnings) a.string(w);
+    a.value(volume0);
+    a.value(porosity0);
+    a.value(length_min);
+    a.string(wave_speed_method);
   }
   void load(ArchiveReader& a) {
     a.label("loop");
@@ -468,6 +477,10 @@ struct LoopState {
     a.value(bonds_initial);
     warnings.resize(a.get<std::uint64_t>());
     for (std::string& w : warnings) a.string(w);
+    a.value(volume0);
+    a.value(porosity0);
+    a.value(length_min);
+    a.string(wave_speed_method);
     const std::size_t rows = series.axial_strain.size();
     for (std::size_t m :
          {series.deviatoric.size(), series.lateral_strain.size(), series.volumetric_strain.size(),
@@ -486,6 +499,7 @@ struct Session {
   CrackRecorder cracks;
   SnapshotWriter snaps;
   LoopState loop;
+  AeMonitor ae;
 };
 
 // Writes checkpoint.bin atomically (temporary file, then rename): a crash while writing leaves the
@@ -506,11 +520,43 @@ void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Sessio
     s.history.save_state(a);
     s.cracks.save_state(a);
     s.snaps.save_state(a);
+    s.ae.save(a);
     a.label("end of checkpoint");
     out.flush();
     if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint (disk full?)");
   }
   fs::rename(tmp, path);
+}
+
+// v_S for the event duration (analysis.md §4.1), fixed at the first crack: sqrt(G / rho) with E and
+// nu fitted over the rows recorded so far above 20 % of the current peak (the sample is still
+// intact), and rho the (scaled) grain density times (1 - n0).
+void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
+  const auto& s = L.series;
+  double qmax = 0.0;
+  for (double q : s.deviatoric) qmax = std::max(qmax, q);
+  std::vector<double> x, y, lat;
+  for (std::size_t k = 0; k < s.deviatoric.size(); ++k)
+    if (s.deviatoric[k] >= 0.2 * qmax && qmax > 0.0) {
+      x.push_back(s.axial_strain[k]);
+      y.push_back(s.deviatoric[k]);
+      lat.push_back(s.lateral_strain[k]);
+    }
+  const analysis::LinearFit fe = analysis::fit_line(x, y, 3);
+  const analysis::LinearFit fn = analysis::fit_line(x, lat, 3);
+  const bool e_ok = fe.valid && fe.slope > 0.0;
+  const double E = e_ok ? fe.slope : spec.parallel_bond.modulus;
+  double nu = fn.valid ? -fn.slope : -1.0;
+  const bool nu_ok = nu > 0.0 && nu < 0.5;
+  if (!nu_ok) nu = 0.25;
+  const double rho = spec.density * spec.density_scaling * (1.0 - L.porosity0);
+  const double vs = analysis::shear_wave_speed(E, nu, rho);
+  L.wave_speed_method = fmt::format(
+      "sqrt(G / rho) fixed at the first crack: E = {:.4g} Pa ({}), nu = {:.3g} ({}), rho = {:.5g} "
+      "kg/m^3 (simulated grain density x (1 - n0))",
+      E, e_ok ? "slope of q over the rows so far" : "bond modulus: too few rows", nu,
+      nu_ok ? "lateral/axial strain slope" : "default 0.25", rho);
+  ae.configure(vs);
 }
 
 // Loads the loop, runs it to its end (or the next interruption), and writes the summary and the
@@ -573,6 +619,12 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
       if (sim.step_count() % interval == 0) sim.request_energy_sample();
       test.control(sim);
       sim.step();
+      // Acoustic emission: cheap unless bonds broke in this step or an event is open.
+      if (sim.cracks().size() > ss.ae.cracks_seen() || ss.ae.has_open_events()) {
+        const AxialState now = test.measure(sim);
+        if (!ss.ae.configured()) configure_ae(spec, L, ss.ae);
+        ss.ae.after_step(sim, now.strain, now.deviatoric);
+      }
       if ((sim.step_count() - 1) % interval != 0) continue;
       const AxialState a = test.measure(sim);
       ss.history.record(sim, a);
@@ -621,6 +673,7 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
       }
     }
     if (opt.show_progress) std::fprintf(stderr, "\n");
+    ss.ae.finish();
     ss.cracks.record(sim);
     ss.cracks.flush();
     ss.history.flush();
@@ -737,10 +790,18 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
         {"snapshots", ss.snaps.count()},
         {"warnings", warnings}};
     if (manifest.contains("resumed")) summary["resumed"] = manifest["resumed"];
+    // Failure analysis: events, indicators, stages, fragments, energy budget (analysis.md §2-§9).
+    const json failure = write_failure_analysis(
+        folder, FailureInputs{spec, sim, ss.ae, series, an, L.volume0, L.porosity0, L.length_min,
+                              L.wave_speed_method});
+    for (const auto& [key, value] : failure.items()) summary[key] = value;
     write_json(folder / "summary.json", summary);
-    manifest["files"] = {
-        "experiment.toml",         "history.csv",         "cracks.csv",          "summary.json",
-        "snapshots/particles.pvd", "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
+    manifest["files"] = {"experiment.toml",     "history.csv",
+                         "cracks.csv",          "events.csv",
+                         "indicators.csv",      "b_value_windows.csv",
+                         "d2_windows.csv",      "fragments.csv",
+                         "summary.json",        "snapshots/particles.pvd",
+                         "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
     if (status == "complete") {
       // A finished run needs no checkpoint; an interrupted one keeps it for `breccia resume`.
       fs::remove(folder / kCheckpointFile);
@@ -795,6 +856,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   Simulation& sim = b.sim;
   PlatenCompression& test = b.protocol;
   LoopState loop;
+  AeSettings ae_settings;
   loop.warnings = sim.warnings();
   loop.consolidation_steps = b.consolidation_steps;
   loop.bonds_initial = sim.intact_bonds();
@@ -818,12 +880,37 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
       test.confined() ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
                                     spec.loading.confining_stress * 1e-6, b.consolidation_steps)
                       : ""));
+  // Reference state for porosity and D2, and the acoustic-emission monitor.
+  {
+    const ParticleStore& p = sim.particles();
+    double solid = 0.0, r_max = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      solid += p.mass[i] / p.density[i];
+      r_max = std::max(r_max, p.pos_rad[i].r);
+    }
+    loop.volume0 = test.height0() * test.area();
+    loop.porosity0 = 1.0 - solid / loop.volume0;
+    loop.length_min = spec.dimension == 2
+                          ? std::min(test.height0(), test.width0())
+                          : std::min({test.height0(), test.width0(), test.depth0()});
+    ae_settings.source_radius =
+        spec.ae_source_radius > 0.0 ? spec.ae_source_radius : 3.0 * (2.0 * r_max);
+  }
+  ae_settings.shear_wave_speed = spec.ae_shear_wave_speed;
+  ae_settings.moment_tensors = spec.ae_moment_tensors;
+  ae_settings.moment_interval = static_cast<std::uint64_t>(spec.ae_moment_interval);
+  ae_settings.linkage =
+      spec.ae_clustering == "grain" ? analysis::Linkage::Grain : analysis::Linkage::SourceRadius;
   std::unique_ptr<Session> ss;
   try {
-    ss.reset(new Session{std::move(b.sim), std::move(b.protocol),
-                         HistoryRecorder((folder / "history.csv").string()),
-                         CrackRecorder((folder / "cracks.csv").string()),
-                         SnapshotWriter((folder / "snapshots").string()), std::move(loop)});
+    ss.reset(new Session{
+        std::move(b.sim), std::move(b.protocol), HistoryRecorder((folder / "history.csv").string()),
+        CrackRecorder((folder / "cracks.csv").string()),
+        SnapshotWriter((folder / "snapshots").string()), std::move(loop), AeMonitor(ae_settings)});
+    if (spec.ae_shear_wave_speed > 0.0) {
+      ss->ae.configure(spec.ae_shear_wave_speed);
+      ss->loop.wave_speed_method = "given in the experiment file (ae.shear_wave_speed)";
+    }
     ss->snaps.write(ss->sim);
   } catch (const std::exception& e) {
     manifest["status"] = "failed";
@@ -883,6 +970,8 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   HistoryRecorder history((folder / "history.csv").string(), a);
   CrackRecorder cracks((folder / "cracks.csv").string(), a);
   SnapshotWriter snaps((folder / "snapshots").string(), a, sim);
+  AeMonitor ae;
+  ae.load(a);
   a.label("end of checkpoint");
   if (loop.imbalance.size() != loop.series.axial_strain.size())
     throw InputError(cpath.string(), "loop", "", "inconsistent series: the checkpoint is corrupt");
@@ -902,8 +991,8 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   manifest["status"] = "running";
   manifest.erase("stop_reason");
   write_json(mpath, manifest);
-  Session ss{std::move(sim),    std::move(test),  std::move(history),
-             std::move(cracks), std::move(snaps), std::move(loop)};
+  Session ss{std::move(sim),   std::move(test), std::move(history), std::move(cracks),
+             std::move(snaps), std::move(loop), std::move(ae)};
   return execute(spec, folder, manifest, ss, opt, t_start);
 }
 

@@ -114,36 +114,50 @@ void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
       L.viscous_damping, L.deleted, L.released.total(), L.residual, L.residual_relative));
 }
 
-CrackRecorder::CrackRecorder(const std::string& path)
-    : csv_(path, {"step",
-                  "time_s",
-                  "law",
-                  "bond_tag",
-                  "id1",
-                  "id2",
-                  "r1_m",
-                  "r2_m",
-                  "x_m",
-                  "y_m",
-                  "z_m",
-                  "nx",
-                  "ny",
-                  "nz",
-                  "mode",
-                  "bond_radius_m",
-                  "fn_n",
-                  "fs_n",
-                  "mt_nm",
-                  "mb_nm",
-                  "sigma_pa",
-                  "tau_pa",
-                  "ratio_t",
-                  "ratio_s",
-                  "energy_j",
-                  "energy_normal_j",
-                  "energy_shear_j",
-                  "energy_bending_j",
-                  "energy_twisting_j"}) {}
+std::string crack_row(const CrackRecord& c) {
+  return fmt::format(
+      "{},{:.12g},{},{},{},{},{:.9g},{:.9g},{:.12g},{:.12g},{:.12g},{:.9g},{:.9g},{:.9g},{},"
+      "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.9g},"
+      "{:.9g},{:.9g}",
+      c.step, c.time, c.law, c.bond_tag, c.id1, c.id2, c.R1, c.R2, c.position.x, c.position.y,
+      c.position.z, c.normal.x, c.normal.y, c.normal.z, to_string(c.mode), c.bond_radius, c.Fn,
+      c.Fs, c.Mt, c.Mb, c.sigma, c.tau, c.ratio_t, c.ratio_s, c.energy.total(),
+      c.energy.tension + c.energy.compression, c.energy.shear, c.energy.bending, c.energy.twisting);
+}
+
+std::vector<std::string> crack_columns() {
+  return {"step",
+          "time_s",
+          "law",
+          "bond_tag",
+          "id1",
+          "id2",
+          "r1_m",
+          "r2_m",
+          "x_m",
+          "y_m",
+          "z_m",
+          "nx",
+          "ny",
+          "nz",
+          "mode",
+          "bond_radius_m",
+          "fn_n",
+          "fs_n",
+          "mt_nm",
+          "mb_nm",
+          "sigma_pa",
+          "tau_pa",
+          "ratio_t",
+          "ratio_s",
+          "energy_j",
+          "energy_normal_j",
+          "energy_shear_j",
+          "energy_bending_j",
+          "energy_twisting_j"};
+}
+
+CrackRecorder::CrackRecorder(const std::string& path) : csv_(path, crack_columns()) {}
 
 CrackRecorder::CrackRecorder(const std::string& path, ArchiveReader& a)
     : csv_(path, (a.label("crack table"), a.get<std::uint64_t>())) {
@@ -159,16 +173,7 @@ void CrackRecorder::save_state(ArchiveWriter& a) {
 void CrackRecorder::record(const Simulation& sim) {
   const auto& cracks = sim.cracks();
   for (; written_ < cracks.size(); ++written_) {
-    const CrackRecord& c = cracks[written_];
-    csv_.write_line(fmt::format(
-        "{},{:.12g},{},{},{},{},{:.9g},{:.9g},{:.12g},{:.12g},{:.12g},{:.9g},{:.9g},{:.9g},{},"
-        "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.9g},"
-        "{:.9g},{:.9g}",
-        c.step, c.time, c.law, c.bond_tag, c.id1, c.id2, c.R1, c.R2, c.position.x, c.position.y,
-        c.position.z, c.normal.x, c.normal.y, c.normal.z, to_string(c.mode), c.bond_radius, c.Fn,
-        c.Fs, c.Mt, c.Mb, c.sigma, c.tau, c.ratio_t, c.ratio_s, c.energy.total(),
-        c.energy.tension + c.energy.compression, c.energy.shear, c.energy.bending,
-        c.energy.twisting));
+    csv_.write_line(crack_row(cracks[written_]));
   }
 }
 

@@ -62,6 +62,7 @@ class PlatenCompression {
   double height0() const noexcept { return h0_; }
   double area() const noexcept { return area0_; }
   double width0() const noexcept { return w0_[0]; }
+  double depth0() const noexcept { return w0_[1]; }  // 2D: the thickness
   double peak_stress() const noexcept { return peak_; }
   bool consolidated() const noexcept { return consolidated_; }
   LateralBoundary lateral() const noexcept { return lateral_; }

@@ -1,0 +1,32 @@
+#pragma once
+// Post-test failure analysis of a compression run (analysis.md §2-§9), written into the run
+// folder: the crack catalogue with its derived fields (strain, stage, event), the
+// acoustic-emission event catalogue (events.csv), the indicator series over strain
+// (indicators.csv), moving-window b-values and D2 (b_value_windows.csv, d2_windows.csv), the
+// fragments (fragments.csv) and the energy budget at the test's landmarks. Returns the summary
+// blocks for summary.json.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "breccia/analysis/compression.hpp"
+#include "breccia/engine/simulation.hpp"
+#include "breccia/io/experiment.hpp"
+#include "breccia/observe/ae_monitor.hpp"
+
+namespace breccia {
+
+struct FailureInputs {
+  const ExperimentSpec& spec;
+  const Simulation& sim;
+  const AeMonitor& ae;  // finished (events closed)
+  const analysis::CompressionSeries& series;
+  const analysis::CompressionResult& result;
+  double volume0 = 0.0;            // sample volume at the start of loading, m^3 (2D: x thickness)
+  double initial_porosity = 0.0;   // n0 at the start of loading
+  double sample_length_min = 0.0;  // smallest sample dimension (D2 upper radius 0.25 L)
+  std::string wave_speed_method;   // how v_S was obtained
+};
+
+nlohmann::json write_failure_analysis(const std::filesystem::path& folder, const FailureInputs& in);
+
+}  // namespace breccia

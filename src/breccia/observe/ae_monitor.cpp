@@ -1,0 +1,384 @@
+#include "breccia/observe/ae_monitor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "breccia/core/archive.hpp"
+#include "breccia/core/error.hpp"
+#include "breccia/core/format.hpp"
+
+namespace breccia {
+
+double fracture_energy(const CrackRecord& c, double modulus, double ratio, bool planar,
+                       double thickness) {
+  const double L = c.R1 + c.R2, R = c.bond_radius;
+  const double v = planar ? 2.0 * R * thickness * L : std::numbers::pi * R * R * L;
+  const bool tensile = c.mode == CrackMode::Tensile;
+  const double s = tensile ? c.sigma : c.tau;
+  const double C = tensile ? modulus : modulus / ratio;  // E_b, or G_b = E_b / kappa
+  return C > 0.0 ? s * s * v / (2.0 * C) : 0.0;
+}
+
+namespace {
+
+double kinetic(const ParticleStore& p, std::uint32_t i) {
+  return 0.5 * p.mass[i] * norm2(p.vel[i]) + 0.5 * p.inertia[i] * norm2(p.angvel[i]);
+}
+
+// Contact point of pair (i, j) (physics.md §0.2: middle of the overlap or gap).
+Vec3 contact_point(const ParticleStore& p, std::uint32_t i, std::uint32_t j) {
+  const PosRad& a = p.pos_rad[i];
+  const PosRad& b = p.pos_rad[j];
+  const Vec3 d = b.x - a.x;
+  const double dist = norm(d);
+  const double delta = a.r + b.r - dist;
+  return a.x + d * ((a.r - 0.5 * delta) / dist);
+}
+
+bool contains(const std::vector<std::uint32_t>& v, std::uint32_t x) {
+  return std::binary_search(v.begin(), v.end(), x);
+}
+
+std::uint64_t ref_key(std::uint32_t p, std::uint32_t q) {
+  return (static_cast<std::uint64_t>(p) << 32) | q;
+}
+
+// Calls f(q, force exerted by p on q) for every neighbour pair of p (the pair slot holds the
+// force on the pair's second particle).
+template <class F>
+void for_pairs(const Simulation& sim, std::uint32_t p, F&& f) {
+  std::visit(
+      [&](const auto& c) {
+        const PairList& l = c.pairs;
+        if (l.offsets.size() <= p + 1) return;
+        for (std::uint32_t k = l.offsets[p]; k < l.offsets[p + 1]; ++k)
+          f(l.second[k], c.slot[k].force);
+        for (std::uint32_t m = l.in_offsets[p]; m < l.in_offsets[p + 1]; ++m) {
+          const std::uint32_t k = l.in_slot[m];
+          f(l.first[k], -c.slot[k].force);
+        }
+      },
+      sim.contact_model());
+}
+
+bool is_zero(const Vec3& v) {
+  return v.x == 0.0 && v.y == 0.0 && v.z == 0.0;
+}
+
+}  // namespace
+
+void AeMonitor::configure(double vs) {
+  if (!(vs > 0.0) || !std::isfinite(vs))
+    throw InputError("acoustic emission", "shear_wave_speed", num(vs), "must be > 0 m/s");
+  if (!(s_.source_radius > 0.0))
+    throw InputError("acoustic emission", "source_radius", num(s_.source_radius), "must be > 0 m");
+  s_.shear_wave_speed = vs;
+  duration_ = analysis::event_duration(s_.source_radius, vs);
+  clusterer_.emplace(analysis::ClusterSettings{s_.source_radius, duration_, s_.linkage});
+  clusterer_->merged = [this](std::size_t kept, std::size_t gone) { merge(kept, gone); };
+  clusterer_->closed = [this](std::size_t root) { close(root); };
+}
+
+void AeMonitor::build_grid(const Simulation& sim) {
+  grid_.clear();
+  const double h = s_.source_radius;
+  const auto& pr = sim.particles().pos_rad;
+  for (std::uint32_t i = 0; i < pr.size(); ++i)
+    grid_[{static_cast<long long>(std::floor(pr[i].x.x / h)),
+           static_cast<long long>(std::floor(pr[i].x.y / h)),
+           static_cast<long long>(std::floor(pr[i].x.z / h))}]
+        .push_back(i);
+}
+
+void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
+  const double h = s_.source_radius;
+  const auto& p = sim.particles();
+  const long long a = static_cast<long long>(std::floor(x.x / h));
+  const long long b = static_cast<long long>(std::floor(x.y / h));
+  const long long c = static_cast<long long>(std::floor(x.z / h));
+  std::vector<Watched> add;
+  for (long long da = -1; da <= 1; ++da)
+    for (long long db = -1; db <= 1; ++db)
+      for (long long dc = -1; dc <= 1; ++dc) {
+        const auto it = grid_.find({a + da, b + db, c + dc});
+        if (it == grid_.end()) continue;
+        for (std::uint32_t i : it->second)
+          if (norm2(p.pos_rad[i].x - x) <= h * h) add.push_back({i, kinetic(p, i)});
+      }
+  for (const Watched& w : add) {
+    const auto pos =
+        std::lower_bound(o.watched.begin(), o.watched.end(), w.particle,
+                         [](const Watched& u, std::uint32_t i) { return u.particle < i; });
+    if (pos != o.watched.end() && pos->particle == w.particle) continue;
+    o.watched.insert(pos, w);
+    o.ke_baseline += w.ke0;
+  }
+}
+
+void AeMonitor::add_source(const Simulation& sim, Open& o, std::uint32_t p) {
+  const auto pos = std::lower_bound(o.source.begin(), o.source.end(), p);
+  if (pos != o.source.end() && *pos == p) return;
+  o.source.insert(pos, p);
+  if (!s_.moment_tensors) return;
+  // Reference forces of p on its outside neighbours, as they are now (before the crack acts).
+  const ParticleStore& ps = sim.particles();
+  for_pairs(sim, p, [&](std::uint32_t q, const Vec3& f) {
+    if (is_zero(f) || contains(o.source, q)) return;
+    const std::uint64_t key = ref_key(p, q);
+    const auto at = std::lower_bound(o.refs.begin(), o.refs.end(), key,
+                                     [](const Ref& r, std::uint64_t k) { return r.key < k; });
+    if (at != o.refs.end() && at->key == key) return;
+    o.refs.insert(at, Ref{key, f, contact_point(ps, std::min(p, q), std::max(p, q)), 0});
+  });
+}
+
+void AeMonitor::evaluate(const Simulation& sim, Open& o, double strain) {
+  const ParticleStore& ps = sim.particles();
+  // Kinetic energy of the monitored particles against their baseline.
+  double k = 0.0;
+  for (const Watched& w : o.watched) k += kinetic(ps, w.particle);
+  o.ev.ke_gain = std::max(o.ev.ke_gain, k - o.ke_baseline);
+  if (!s_.moment_tensors) return;
+  ++stamp_;
+  const Vec3 xe = o.ev.centroid();
+  std::array<double, 9> m{};
+  auto add = [&](const Vec3& df, const Vec3& xc) {
+    const Vec3 r = xc - xe;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m[static_cast<std::size_t>(3 * i + j)] += df[i] * r[j];
+  };
+  for (std::uint32_t p : o.source)
+    for_pairs(sim, p, [&](std::uint32_t q, const Vec3& f) {
+      if (contains(o.source, q)) return;  // internal to the source
+      const std::uint64_t key = ref_key(p, q);
+      const auto at = std::lower_bound(o.refs.begin(), o.refs.end(), key,
+                                       [](const Ref& r, std::uint64_t kk) { return r.key < kk; });
+      const bool has_ref = at != o.refs.end() && at->key == key;
+      if (is_zero(f) && !has_ref) return;
+      const Vec3 xc = contact_point(ps, std::min(p, q), std::max(p, q));
+      if (has_ref) {
+        at->seen = stamp_;
+        at->contact_point = xc;
+        if (!is_zero(f))
+          add(f - at->force, xc);
+        else
+          add(-at->force, xc);
+      } else {
+        add(f, xc);  // a contact created since: zero reference force
+      }
+    });
+  for (const Ref& r : o.refs) {
+    if (r.seen == stamp_) continue;
+    const auto p = static_cast<std::uint32_t>(r.key >> 32);
+    const auto q = static_cast<std::uint32_t>(r.key & 0xffffffffu);
+    if (!contains(o.source, p) || contains(o.source, q)) continue;
+    add(-r.force, r.contact_point);  // the contact is gone from the neighbour list
+  }
+  // Scalar moment of the symmetrised tensor: sqrt(sum M_ij^2 / 2).
+  double s2 = 0.0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double v =
+          0.5 * (m[static_cast<std::size_t>(3 * i + j)] + m[static_cast<std::size_t>(3 * j + i)]);
+      s2 += v * v;
+    }
+  const double m0 = std::sqrt(0.5 * s2);
+  ++o.ev.evaluations;
+  if (o.ev.m0_first < 0.0) o.ev.m0_first = m0;
+  if (m0 > o.ev.m0) {
+    o.ev.m0 = m0;
+    o.ev.moment = m;
+    o.ev.t_star = sim.time();
+    o.ev.strain_star = strain;
+  }
+}
+
+void AeMonitor::merge(std::size_t kept, std::size_t gone) {
+  auto gi = open_.find(gone);
+  auto ki = open_.find(kept);
+  if (gi == open_.end() || ki == open_.end()) return;
+  Open& k = ki->second;
+  Open& g = gi->second;
+  AeEvent& a = k.ev;
+  const AeEvent& b = g.ev;
+  a.first_crack = std::min(a.first_crack, b.first_crack);
+  a.cracks += b.cracks;
+  a.tensile += b.tensile;
+  a.shear += b.shear;
+  a.t_first = std::min(a.t_first, b.t_first);
+  a.strain_first = std::min(a.strain_first, b.strain_first);
+  a.t_last = std::max(a.t_last, b.t_last);
+  a.strain_last = std::max(a.strain_last, b.strain_last);
+  a.position_sum += b.position_sum;
+  a.energy += b.energy;
+  a.fracture_energy += b.fracture_energy;
+  if (b.m0 > a.m0) {
+    a.m0 = b.m0;
+    a.moment = b.moment;
+    a.t_star = b.t_star;
+    a.strain_star = b.strain_star;
+  }
+  a.evaluations += b.evaluations;
+  a.ke_gain = std::max(a.ke_gain, b.ke_gain);
+  for (std::uint32_t p : g.source) {
+    const auto pos = std::lower_bound(k.source.begin(), k.source.end(), p);
+    if (pos == k.source.end() || *pos != p) k.source.insert(pos, p);
+  }
+  for (const Ref& r : g.refs) {
+    const auto at = std::lower_bound(k.refs.begin(), k.refs.end(), r.key,
+                                     [](const Ref& x, std::uint64_t kk) { return x.key < kk; });
+    if (at == k.refs.end() || at->key != r.key) k.refs.insert(at, r);
+  }
+  for (const Watched& w : g.watched) {
+    const auto pos =
+        std::lower_bound(k.watched.begin(), k.watched.end(), w.particle,
+                         [](const Watched& u, std::uint32_t i) { return u.particle < i; });
+    if (pos != k.watched.end() && pos->particle == w.particle) continue;
+    k.watched.insert(pos, w);
+    k.ke_baseline += w.ke0;
+  }
+  open_.erase(gi);
+}
+
+void AeMonitor::close(std::size_t root) {
+  const auto it = open_.find(root);
+  if (it == open_.end()) return;
+  AeEvent ev = it->second.ev;
+  ev.source_particles = it->second.source.size();
+  ev.monitored_particles = it->second.watched.size();
+  done_.push_back(ev);
+  done_root_.push_back(root);
+  open_.erase(it);
+}
+
+void AeMonitor::after_step(const Simulation& sim, double strain, double deviatoric) {
+  ++steps_;
+  const auto& cracks = sim.cracks();
+  if (cracks.size() > seen_) {
+    if (!clusterer_)
+      throw InputError("acoustic emission", "shear_wave_speed", "unset",
+                       "the monitor must be configured before the first crack");
+    build_grid(sim);
+    const ParticleStore& ps = sim.particles();
+    const auto& bonds = std::get<BondSet<ParallelBond>>(sim.bonds());
+    for (; seen_ < cracks.size(); ++seen_) {
+      const CrackRecord& c = cracks[seen_];
+      const double ef = fracture_energy(c, bonds.params.modulus, bonds.params.stiffness_ratio,
+                                        ps.planar(), ps.thickness());
+      context_.push_back({strain, deviatoric, ef});
+      std::size_t root;
+      const auto i1 = static_cast<std::uint32_t>(ps.index_of(c.id1));
+      const auto i2 = static_cast<std::uint32_t>(ps.index_of(c.id2));
+      if (s_.linkage == analysis::Linkage::Grain) {
+        // The crack's grains and those in contact with them; window 2 D_c / v_S.
+        std::vector<std::uint32_t> touched{i1, i2};
+        for (std::uint32_t p : {i1, i2})
+          for_pairs(sim, p, [&](std::uint32_t q, const Vec3& f) {
+            if (!is_zero(f)) touched.push_back(q);
+          });
+        const double tc = 2.0 * (2.0 * std::max(c.R1, c.R2)) / s_.shear_wave_speed;
+        root = clusterer_->add_grain(seen_, c.time, tc, {i1, i2}, touched);
+      } else {
+        root = clusterer_->add(seen_, c.time, c.position);
+      }
+      Open& o = open_[root];
+      if (o.ev.cracks == 0) {
+        o.created = steps_;
+        o.ev.first_crack = seen_;
+        o.ev.t_first = c.time;
+        o.ev.strain_first = strain;
+      }
+      ++o.ev.cracks;
+      (c.mode == CrackMode::Tensile ? o.ev.tensile : o.ev.shear)++;
+      o.ev.t_last = c.time;
+      o.ev.strain_last = strain;
+      o.ev.position_sum += c.position;
+      o.ev.energy += c.energy.total();
+      o.ev.fracture_energy += ef;
+      add_source(sim, o, i1);
+      add_source(sim, o, i2);
+      watch_near(sim, o, c.position);
+    }
+  } else if (!open_.empty()) {
+    clusterer_->close_before(sim.time());
+  }
+  if (open_.empty()) return;
+  if (s_.moment_interval > 1 && steps_ % s_.moment_interval != 0) return;
+  // An event is first evaluated one step after it was created: its creation step is the
+  // reference. Particles joining an open event have zero force change in their joining step.
+  for (auto& [root, o] : open_)
+    if (o.created != steps_) evaluate(sim, o, strain);
+}
+
+void AeMonitor::finish() {
+  if (clusterer_) clusterer_->close_all();
+}
+
+std::vector<std::size_t> AeMonitor::crack_events() const {
+  std::vector<std::size_t> out(context_.size(), static_cast<std::size_t>(-1));
+  if (!clusterer_) return out;
+  std::map<std::size_t, std::size_t> index;
+  for (std::size_t k = 0; k < done_root_.size(); ++k) index[done_root_[k]] = k;
+  for (std::size_t c = 0; c < out.size(); ++c) {
+    const auto it = index.find(clusterer_->event_of(c));
+    if (it != index.end()) out[c] = it->second;
+  }
+  return out;
+}
+
+void AeMonitor::save(ArchiveWriter& a) const {
+  a.label("ae monitor");
+  a.value(s_);
+  a.value(duration_);
+  a.value(clusterer_.has_value());
+  if (clusterer_) clusterer_->save(a);
+  a.value(static_cast<std::uint64_t>(open_.size()));
+  for (const auto& [root, o] : open_) {
+    a.value(static_cast<std::uint64_t>(root));
+    a.value(o.ev);
+    a.vector(o.source);
+    a.vector(o.refs);
+    a.vector(o.watched);
+    a.value(o.ke_baseline);
+    a.value(o.created);
+  }
+  a.vector(done_);
+  a.vector(done_root_);
+  a.vector(context_);
+  a.value(seen_);
+  a.value(stamp_);
+  a.value(steps_);
+}
+
+void AeMonitor::load(ArchiveReader& a) {
+  a.label("ae monitor");
+  a.value(s_);
+  a.value(duration_);
+  clusterer_.reset();
+  if (a.get<bool>()) {
+    configure(s_.shear_wave_speed);
+    clusterer_->load(a);
+  }
+  open_.clear();
+  const auto n = a.get<std::uint64_t>();
+  for (std::uint64_t k = 0; k < n; ++k) {
+    Open& o = open_[a.get<std::uint64_t>()];
+    a.value(o.ev);
+    a.vector(o.source);
+    a.vector(o.refs);
+    a.vector(o.watched);
+    a.value(o.ke_baseline);
+    a.value(o.created);
+  }
+  a.vector(done_);
+  a.vector(done_root_);
+  a.vector(context_);
+  a.value(seen_);
+  a.value(stamp_);
+  a.value(steps_);
+  if (done_root_.size() != done_.size())
+    throw InputError(a.where(), "ae monitor", "events", "the checkpoint is corrupt");
+}
+
+}  // namespace breccia

@@ -1,0 +1,122 @@
+#pragma once
+// Acoustic-emission monitor: a recorder subscribed to the engine's break events (the crack
+// catalogue, read after every step). It clusters cracks into events as they happen (Hazzard &
+// Young 2000, analysis.md §4.1) and, while an event is open, watches its source particles: the
+// change of the contact and bond forces they exert on outside neighbours gives the event's moment
+// tensor (Hazzard & Young 2004, §4.2), taken at the maximum scalar moment, and the kinetic energy
+// of the particles within r_s of its cracks gives the kinetic-energy event energy (§4.4). When no
+// event is open, a step costs one comparison.
+//
+// Reference forces: the engine computes a step's pair forces from the positions at its start, so
+// the forces read right after the step in which a bond broke are those of the particles before
+// any crack-induced motion; they serve as the reference of the particles that crack adds to the
+// source. Likewise the kinetic-energy baseline of a monitored particle is read after that step.
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <vector>
+
+#include "breccia/analysis/ae_clustering.hpp"
+#include "breccia/engine/simulation.hpp"
+
+namespace breccia {
+
+struct AeSettings {
+  double source_radius = 0.0;         // r_s, m (0: 3 x the largest particle diameter)
+  double shear_wave_speed = 0.0;      // v_S, m/s (0: estimated by the run at the first crack)
+  std::uint64_t moment_interval = 1;  // steps between moment-tensor evaluations of open events
+  bool moment_tensors = true;
+  analysis::Linkage linkage = analysis::Linkage::SourceRadius;
+};
+
+// One acoustic-emission event (plain data).
+struct AeEvent {
+  std::uint64_t first_crack = 0, cracks = 0, tensile = 0, shear = 0;
+  double t_first = 0.0, t_last = 0.0, strain_first = 0.0, strain_last = 0.0;
+  Vec3 position_sum;               // sum of crack midpoints (centroid = sum / cracks)
+  double energy = 0.0;             // sum of the released bond energies E_brk, J
+  double fracture_energy = 0.0;    // sum of the papers' estimates sigma^2 v / (2 C), J
+  std::array<double, 9> moment{};  // tensor at the maximum scalar moment, row-major, N m
+  double m0 = 0.0;                 // maximum scalar moment over the evaluations
+  double t_star = 0.0, strain_star = 0.0;
+  double m0_first = -1.0;  // scalar moment at the first evaluation (noise reference; -1: none)
+  std::uint64_t evaluations = 0, source_particles = 0, monitored_particles = 0;
+  double ke_gain = 0.0;  // E_KE = max (K_P(t) - K_P(t0)), J
+  Vec3 centroid() const noexcept { return position_sum * (1.0 / static_cast<double>(cracks)); }
+};
+
+// Per-crack values captured in the step of the break.
+struct CrackContext {
+  double axial_strain = 0.0;
+  double deviatoric = 0.0;       // Pa
+  double fracture_energy = 0.0;  // J, analysis.md §2.3
+};
+
+class AeMonitor {
+ public:
+  AeMonitor() = default;
+  // `source_radius` resolved (> 0); clustering starts once the wave speed is set.
+  explicit AeMonitor(AeSettings s) : s_(s) {}
+  bool configured() const noexcept { return clusterer_.has_value(); }
+  // Fixes v_S (and with it T_d = 4 r_s / v_S) before the first crack is processed.
+  void configure(double shear_wave_speed);
+  // After every step: captures the context of new cracks, clusters them, updates open events.
+  void after_step(const Simulation& sim, double axial_strain, double deviatoric);
+  // Closes the open events (end of the test).
+  void finish();
+
+  const std::vector<AeEvent>& events() const noexcept { return done_; }  // in closing order
+  const std::vector<CrackContext>& crack_context() const noexcept { return context_; }
+  // Event (index into events()) of each crack, after finish().
+  std::vector<std::size_t> crack_events() const;
+  const AeSettings& settings() const noexcept { return s_; }
+  double duration() const noexcept { return duration_; }
+  bool has_open_events() const noexcept { return !open_.empty(); }
+  std::size_t cracks_seen() const noexcept { return context_.size(); }
+
+  void save(ArchiveWriter& a) const;
+  void load(ArchiveReader& a);
+
+ private:
+  struct Ref {
+    std::uint64_t key = 0;  // (p << 32) | q: force exerted by source particle p on q
+    Vec3 force, contact_point;
+    std::uint64_t seen = 0;
+  };
+  struct Watched {
+    std::uint32_t particle = 0;
+    double ke0 = 0.0;  // kinetic energy when it joined
+  };
+  struct Open {
+    AeEvent ev;
+    std::vector<std::uint32_t> source;  // sorted
+    std::vector<Ref> refs;              // sorted by key
+    std::vector<Watched> watched;       // sorted by particle
+    double ke_baseline = 0.0;
+    std::uint64_t created = 0;  // monitor step of the first crack
+  };
+  void add_source(const Simulation& sim, Open& o, std::uint32_t p);
+  void watch_near(const Simulation& sim, Open& o, const Vec3& x);
+  void evaluate(const Simulation& sim, Open& o, double strain);
+  void merge(std::size_t kept, std::size_t gone);
+  void close(std::size_t root);
+  void build_grid(const Simulation& sim);
+
+  AeSettings s_;
+  double duration_ = 0.0;
+  std::optional<analysis::EventClusterer> clusterer_;
+  std::map<std::size_t, Open> open_;  // by clusterer root
+  std::vector<AeEvent> done_;
+  std::vector<std::size_t> done_root_;  // clusterer root of each finished event
+  std::vector<CrackContext> context_;
+  std::uint64_t seen_ = 0, stamp_ = 0, steps_ = 0;
+  // Particle grid (cell size r_s) for the monitored set, rebuilt in steps with new cracks.
+  std::map<std::array<long long, 3>, std::vector<std::uint32_t>> grid_;
+};
+
+// The fracture-energy estimate of analysis.md §2.3 for a parallel-bond crack.
+double fracture_energy(const CrackRecord& c, double bond_modulus, double stiffness_ratio,
+                       bool planar, double thickness);
+
+}  // namespace breccia
