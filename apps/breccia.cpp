@@ -6,6 +6,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 
@@ -80,7 +81,8 @@ int main(int argc, char** argv) {
   std::string summ_dir;
   summ->add_option("folder", summ_dir, "run folder or sweep folder")->required();
 
-  auto* report = app.add_subcommand("report", "(re)draw stress_strain.png of a run folder");
+  auto* report = app.add_subcommand(
+      "report", "write report.html and its figures (report/*.png) for a run or sweep folder");
   std::string report_dir;
   report->add_option("folder", report_dir, "run folder")->required();
 
@@ -172,8 +174,21 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*report) {
-      if (!breccia::plot_run(report_dir)) return 1;
-      std::cout << report_dir << "/stress_strain.png" << std::endl;
+      namespace fs = std::filesystem;
+      if (!fs::exists(fs::path(report_dir) / "summary.json") &&
+          !fs::exists(fs::path(report_dir) / "sweep.json"))
+        throw breccia::InputError(report_dir, "summary.json", "(missing)",
+                                  "not a finished run or sweep folder");
+      const bool run_folder = fs::exists(fs::path(report_dir) / "summary.json");
+      if (run_folder && !breccia::plot_run(report_dir)) {
+        std::cerr << "error: stress_strain.png failed; see " << report_dir << "/plot.log\n";
+        return 1;
+      }
+      if (!breccia::write_report(report_dir)) {
+        std::cerr << "error: the report failed; see " << report_dir << "/report.log\n";
+        return 1;
+      }
+      std::cout << report_dir << "/report.html" << std::endl;
       return 0;
     }
     if (*check) {

@@ -50,3 +50,37 @@ def test_snapshots_and_plot_are_readable():
         png = os.path.join(folder, "stress_strain.png")
         with open(png, "rb") as f:
             assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def test_report_renders_every_figure():
+    """The report of a small run through the peak: every figure exists, is a real PNG of
+    reasonable size and is not blank, and report.html embeds them all."""
+    import matplotlib.image as mpimg
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [CLI, "run", "--quiet", "--output", out,
+               "--set", 'sample.source="file"',
+               "--set", f'sample.file="{SOURCE}/tests/data/ucs-small.geom"',
+               "--set", "engine.density_scaling=100", "--set", "output.plot=false",
+               "--set", "output.snapshot_strain_interval=0"]
+        folder = subprocess.run(cmd, capture_output=True, text=True,
+                                check=True).stdout.strip().splitlines()[-1]
+        r = subprocess.run([CLI, "report", folder], capture_output=True, text=True)
+        assert r.returncode == 0, r.stdout + r.stderr
+        expected = ["stress_strain.png", "crack_maps.png", "event_magnitudes.png",
+                    "b_value_d2.png", "gutenberg_richter.png", "hudson.png",
+                    "energy_budget.png", "indicators.png", "fragment_sizes.png"]
+        page = open(os.path.join(folder, "report.html")).read()
+        for name in expected:
+            path = os.path.join(folder, "report", name)
+            assert os.path.getsize(path) > 15000, name
+            img = mpimg.imread(path)
+            assert img.shape[0] > 300 and img.shape[1] > 400, name
+            assert img[..., :3].std() > 0.05, f"{name} looks blank"
+            assert f"alt='{name}'" in page, name
+        # The catalogue files the figures come from.
+        summary = json.load(open(os.path.join(folder, "summary.json")))
+        ae = summary["acoustic_emission"]
+        events = open(os.path.join(folder, "events.csv")).read().strip().splitlines()
+        assert len(events) - 1 == ae["events"] > 10
+        assert summary["energy_budget"]["classification"] in ("good", "warning")
+        assert summary["fragments"]["count"] >= 1

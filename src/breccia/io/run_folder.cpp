@@ -318,6 +318,8 @@ json nan_null(double v) {
 void make_plot(const fs::path& folder, const std::function<void(const std::string&)>& log) {
   if (!plot_run(folder.string()))
     log("warning: no stress_strain.png (see " + (folder / "plot.log").string() + ")");
+  if (!write_report(folder.string()))
+    log("warning: no report.html (see " + (folder / "report.log").string() + ")");
 }
 
 std::string mpa(const json& j, const char* key) {
@@ -341,6 +343,16 @@ std::string plain(const json& j, const char* key, const char* f = "{:.3g}") {
 bool plot_run(const std::string& folder) {
   const fs::path script = fs::path(BRECCIA_SOURCE_DIR) / "scripts" / "plot_run.py";
   const fs::path logf = fs::path(folder) / "plot.log";
+  const std::string cmd =
+      fmt::format("/usr/bin/python3 '{}' '{}' > '{}' 2>&1", script.string(), folder, logf.string());
+  if (std::system(cmd.c_str()) != 0) return false;
+  fs::remove(logf);
+  return true;
+}
+
+bool write_report(const std::string& folder) {
+  const fs::path script = fs::path(BRECCIA_SOURCE_DIR) / "scripts" / "report.py";
+  const fs::path logf = fs::path(folder) / "report.log";
   const std::string cmd =
       fmt::format("/usr/bin/python3 '{}' '{}' > '{}' 2>&1", script.string(), folder, logf.string());
   if (std::system(cmd.c_str()) != 0) return false;
@@ -412,6 +424,31 @@ std::string summarise_folder(const std::string& folder) {
   if (j.value("confining_stress_pa", 0.0) > 0.0)
     s += fmt::format("; confining error before peak {:.2f} %",
                      100 * j["confining_stress_error"].value("max_relative_before_peak", 0.0));
+  if (j.contains("acoustic_emission")) {
+    const json& ae = j["acoustic_emission"];
+    const json& b = ae["b_value"];
+    const json& d = ae["d2"];
+    const auto range = [&](const json& r) {
+      return r.is_array() && r.size() == 2 && r[0].is_number()
+                 ? fmt::format("{:.2f} to {:.2f}", r[0].get<double>(), r[1].get<double>())
+                 : std::string("n/a");
+    };
+    s += fmt::format(
+        "\n  AE: {} events (largest {} cracks), M_w {}, b = {} (windows {}), D2 = {} (windows "
+        "{}); shear fraction {}",
+        ae.value("events", 0), ae.value("largest_event_cracks", 0), range(ae["magnitude_range"]),
+        b["b"].is_number()
+            ? fmt::format("{:.2f} +- {:.2f}", b["b"].get<double>(), b["sigma"].get<double>())
+            : "n/a (" + b.value("flag", std::string()) + ")",
+        range(ae["b_value_window_range"]), plain(d, "d2", "{:.2f}"), range(ae["d2_window_range"]),
+        plain(ae, "shear_fraction", "{:.3f}"));
+  }
+  if (j.contains("energy_budget")) {
+    const json& eb = j["energy_budget"];
+    s += fmt::format("\n  energy balance: {} (largest relative residual {})",
+                     eb.value("classification", std::string("n/a")),
+                     plain(eb, "residual_relative_max_after_1pct_work", "{:.2e}"));
+  }
   s += fmt::format("\n  {} steps in {:.1f} s ({:.3g} particle-steps/s)\n", j.value("steps", 0),
                    j.value("wall_seconds", 0.0), j.value("particle_steps_per_second", 0.0));
   for (const json& w : j["warnings"]) s += "  warning: " + w.get<std::string>() + "\n";
@@ -813,6 +850,10 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
       make_plot(folder, log);
       if (fs::exists(folder / "stress_strain.png"))
         manifest["files"].push_back("stress_strain.png");
+      if (fs::exists(folder / "report.html")) {
+        manifest["files"].push_back("report.html");
+        manifest["files"].push_back("report/");
+      }
     }
     finish(status, stop);
   } catch (const std::exception& e) {
@@ -1059,6 +1100,8 @@ SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& con
                {"rms_residual_pa", hb.rms},
                {"flag", hb.flag}}}};
   write_json(fs::path(out.folder) / "sweep.json", sweep);
+  if (spec.plot && !write_report(out.folder) && opt.log)
+    opt.log("warning: no report.html (see " + out.folder + "/report.log)");
   return out;
 }
 

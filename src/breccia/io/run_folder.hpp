@@ -73,6 +73,9 @@ SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& con
 std::string summarise_folder(const std::string& folder);
 // Draws stress_strain.png in a run folder (scripts/plot_run.py); false with a message if not.
 bool plot_run(const std::string& folder);
+// Writes report.html and report/*.png of a run or sweep folder (scripts/report.py); false with the
+// script's messages in report.log if not.
+bool write_report(const std::string& folder);
 
 // A description of this machine for manifests and benchmark records.
 std::string machine_description();

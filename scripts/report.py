@@ -1,0 +1,471 @@
+#!/usr/bin/python3
+"""Self-contained report of a Breccia run or sweep folder: report.html with the figures embedded,
+and the figures as PNG under report/.
+
+Usage: report.py FOLDER
+Run folder: stress-strain with cracks by mode and stages, crack maps by stage (a central section
+for 3D samples), event magnitudes over strain, b-value and D2 over strain, Gutenberg-Richter plot,
+Hudson source-type plot, energy budget over strain, indicator series, fragment sizes.
+Sweep folder: Mohr-Coulomb envelope and trends with confinement.
+Needs Debian's python3-matplotlib (and numpy).
+"""
+import base64
+import csv
+import html
+import json
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+STAGE_COLOURS = {1: "#e8f4e8", 2: "#fff4d6", 3: "#fde2e2", 4: "#e4e4f4"}
+STAGE_NAMES = {1: "I initiation", 2: "II nucleation", 3: "III rupture", 4: "IV sliding"}
+MODE_COLOURS = {"tensile": "tab:orange", "shear": "tab:red"}
+
+
+def read_csv(path):
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def col(rows, name, scale=1.0):
+    out = []
+    for r in rows:
+        try:
+            out.append(float(r[name]) * scale)
+        except (ValueError, KeyError):
+            out.append(float("nan"))
+    return np.array(out)
+
+
+def save(fig, outdir, name, figures):
+    path = os.path.join(outdir, name)
+    fig.savefig(path + ".tmp.png", dpi=110)
+    os.replace(path + ".tmp.png", path)
+    plt.close(fig)
+    figures.append(name)
+
+
+def shade_stages(ax, summary):
+    st = summary.get("stages", {}).get("by_stage", [])
+    for k, s in enumerate(st, start=1):
+        a, b = s.get("axial_strain_from"), s.get("axial_strain_to")
+        if a is None or b is None or b <= a:
+            continue
+        ax.axvspan(a * 100, b * 100, color=STAGE_COLOURS[k], zorder=0, lw=0)
+        ax.text((a + b) / 2 * 100, 0.98, ["I", "II", "III", "IV"][k - 1], ha="center",
+                va="top", fontsize=7, transform=ax.get_xaxis_transform(), color="0.35")
+
+
+def stress_strain(folder, summary, hist, outdir, figures):
+    e = col(hist, "axial_strain", 100)
+    q = col(hist, "deviatoric_stress_pa", 1e-6)
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    shade_stages(ax, summary)
+    ax.plot(e, q, "k-", lw=1.6, label="q vs axial strain")
+    ax.plot(col(hist, "lateral_strain", 100), q, "b--", lw=0.9, label="q vs lateral strain")
+    ax.plot(col(hist, "volumetric_strain", 100), q, "g:", lw=0.9, label="q vs volumetric strain")
+    ax.set_xlabel("strain (%), compression positive")
+    ax.set_ylabel("deviatoric stress q (MPa)")
+    ax2 = ax.twinx()
+    ax2.plot(e, col(hist, "tensile_cracks"), color=MODE_COLOURS["tensile"], lw=1.2,
+             label="tensile cracks")
+    ax2.plot(e, col(hist, "shear_cracks"), color=MODE_COLOURS["shear"], lw=1.2,
+             label="shear cracks")
+    ax2.set_ylabel("cumulative microcracks")
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = ax2.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, loc="upper left", fontsize=7)
+    ax.set_title("Stress-strain curve, cracks by mode, deformation stages (shaded)", fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "stress_strain.png", figures)
+
+
+def crack_maps(summary, cracks, outdir, figures):
+    if not cracks:
+        return
+    dim = 2 if all(abs(float(c["z_m"])) < 1e-15 for c in cracks[:50]) and \
+        float(summary.get("sample_area_m2", 1)) > 0 and summary.get("test", "").startswith("bi") \
+        else 3
+    x = col(cracks, "x_m", 1e3)
+    y = col(cracks, "y_m", 1e3)
+    z = col(cracks, "z_m", 1e3)
+    stage = col(cracks, "stage")
+    mode = [c["mode"] for c in cracks]
+    if dim == 3:
+        yc = 0.5 * (np.nanmin(y) + np.nanmax(y))
+        half = 0.25 * (np.nanmax(y) - np.nanmin(y))
+        keep = np.abs(y - yc) <= half
+        horiz, vert = x, z
+        section = f"central section |y - {yc:.2f} mm| <= {half:.2f} mm (x-z plane)"
+    else:
+        keep = np.ones(len(x), bool)
+        horiz, vert = x, y
+        section = "x-y plane"
+    fig, axes = plt.subplots(1, 4, figsize=(11, 4.2), sharex=True, sharey=True)
+    for k, ax in enumerate(axes, start=1):
+        sel = keep & (stage == k)
+        for m in ("tensile", "shear"):
+            idx = [i for i in range(len(mode)) if sel[i] and mode[i] == m]
+            ax.scatter(horiz[idx], vert[idx], s=4, c=MODE_COLOURS[m], label=m)
+        ax.set_title(f"{STAGE_NAMES[k]} ({int(sel.sum())})", fontsize=8)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x (mm)")
+    axes[0].set_ylabel("axial coordinate (mm)")
+    axes[0].legend(fontsize=7, loc="lower left")
+    fig.suptitle(f"Microcracks by stage, coloured by mode; {section}", fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "crack_maps.png", figures)
+
+
+def magnitudes(summary, events, hist, outdir, figures):
+    if not events:
+        return
+    e = col(events, "axial_strain_first", 100)
+    mw = col(events, "mw")
+    fig, ax = plt.subplots(figsize=(7.5, 4))
+    shade_stages(ax, summary)
+    for m in ("tensile", "shear"):
+        idx = [i for i, r in enumerate(events) if r["dominant_mode"] == m]
+        ax.scatter(e[idx], mw[idx], s=10, c=MODE_COLOURS[m], label=f"{m}-dominated events")
+    mc = summary.get("acoustic_emission", {}).get("completeness_magnitude")
+    if mc is not None:
+        ax.axhline(mc, color="0.4", ls="--", lw=0.8, label=f"M_c = {mc:.2f}")
+    ax.set_xlabel("axial strain (%)")
+    ax.set_ylabel("moment magnitude M_w")
+    ax2 = ax.twinx()
+    ax2.plot(col(hist, "axial_strain", 100), col(hist, "deviatoric_stress_pa", 1e-6), "k-",
+             lw=0.8, alpha=0.6)
+    ax2.set_ylabel("q (MPa)")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title(f"Acoustic-emission events ({len(events)}) over strain", fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "event_magnitudes.png", figures)
+
+
+def b_and_d2(summary, bwin, dwin, ind, outdir, figures):
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 5.6), sharex=True)
+    for ax in (a1, a2):
+        shade_stages(ax, summary)
+    if bwin:
+        eb, b, sb = col(bwin, "axial_strain", 100), col(bwin, "b_value"), col(bwin, "sigma")
+        a1.errorbar(eb, b, yerr=sb, fmt="o-", ms=3, lw=0.8, label="event windows")
+    if ind:
+        a1.plot(col(ind, "axial_strain", 100), col(ind, "b_value"), "-", color="tab:purple",
+                lw=0.8, label="strain windows (extended to the minimum count)")
+    a1.set_ylabel("b-value")
+    a1.legend(fontsize=7)
+    if dwin:
+        a2.plot(col(dwin, "axial_strain", 100), col(dwin, "d2"), "o-", ms=3, lw=0.8,
+                label="crack-count windows")
+    if ind:
+        a2.plot(col(ind, "axial_strain", 100), col(ind, "d2"), "-", color="tab:green", lw=0.8,
+                label="strain windows")
+    a2.set_ylabel("correlation dimension D2")
+    a2.set_xlabel("axial strain (%)")
+    a2.legend(fontsize=7)
+    ae = summary.get("acoustic_emission", {})
+    b_all = ae.get("b_value", {})
+    d_all = ae.get("d2", {})
+    a1.set_title(
+        f"b-value (whole test {fmt(b_all.get('b'))} +- {fmt(b_all.get('sigma'))}, "
+        f"{b_all.get('flag') or 'ok'}) and D2 of crack midpoints (whole test "
+        f"{fmt(d_all.get('d2'))}); windows without enough events give no value", fontsize=8)
+    fig.tight_layout()
+    save(fig, outdir, "b_value_d2.png", figures)
+
+
+def fmt(v, f="{:.2f}"):
+    return "n/a" if v is None or (isinstance(v, float) and math.isnan(v)) else f.format(v)
+
+
+def gutenberg_richter(summary, events, outdir, figures):
+    mw = np.sort(col(events, "mw")[np.isfinite(col(events, "mw"))]) if events else np.array([])
+    if len(mw) == 0:
+        return
+    n_ge = len(mw) - np.arange(len(mw))
+    fig, ax = plt.subplots(figsize=(6, 4.4))
+    ax.semilogy(mw, n_ge, "ko", ms=3, label="N(>= M)")
+    bins = np.arange(math.floor(mw.min() * 10) / 10, mw.max() + 0.1, 0.1)
+    hist, edges = np.histogram(mw, bins=bins)
+    ax.semilogy(0.5 * (edges[1:] + edges[:-1]), np.where(hist > 0, hist, np.nan), "s",
+                color="0.6", ms=3, label="per 0.1 bin")
+    ae = summary.get("acoustic_emission", {})
+    b = ae.get("b_value", {})
+    mc = ae.get("completeness_magnitude")
+    if b.get("b") is not None and mc is not None:
+        m = np.linspace(mc, mw.max(), 20)
+        ax.semilogy(m, 10 ** (b["a"] - b["b"] * m), "r-",
+                    label=f"log N = {b['a']:.2f} - {b['b']:.2f} M (M >= {mc:.2f})")
+        ax.axvline(mc, color="0.4", ls="--", lw=0.8)
+    ax.set_xlabel("moment magnitude M_w")
+    ax.set_ylabel("number of events")
+    ax.legend(fontsize=7)
+    ax.set_title(f"Gutenberg-Richter plot ({len(mw)} events)", fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "gutenberg_richter.png", figures)
+
+
+def hudson(events, outdir, figures):
+    u, v = col(events, "hudson_u"), col(events, "hudson_v") if events else (None, None)
+    if not events or not np.isfinite(u).any():
+        return
+    fig, ax = plt.subplots(figsize=(5.6, 5.2))
+    frame = np.array([(0, 1), (4 / 3, 1 / 3), (0, -1), (-4 / 3, -1 / 3), (0, 1)])
+    ax.plot(frame[:, 0], frame[:, 1], "k-", lw=1)
+    ax.plot([-1, 1], [0, 0], "k-", lw=0.5)
+    ax.plot([0, 0], [-1, 1], "k-", lw=0.5)
+    refs = {"DC": (0, 0), "+ISO": (0, 1), "-ISO": (0, -1), "+CLVD": (-1, 0), "-CLVD": (1, 0),
+            "+crack": (-4 / 9, 5 / 9), "-crack": (4 / 9, -5 / 9), "+dipole": (-2 / 3, 1 / 3),
+            "-dipole": (2 / 3, -1 / 3)}
+    for name, (a, b) in refs.items():
+        ax.plot(a, b, "k+", ms=6)
+        ax.annotate(name, (a, b), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    for m in ("tensile", "shear"):
+        idx = [i for i, r in enumerate(events) if r["dominant_mode"] == m]
+        ax.scatter(u[idx], v[idx], s=9, c=MODE_COLOURS[m], alpha=0.7,
+                   label=f"{m}-dominated events")
+    ax.set_xlim(-1.45, 1.45)
+    ax.set_ylim(-1.1, 1.1)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    ax.legend(fontsize=7, loc="lower right")
+    ax.set_title("Hudson source-type plot (u, v); opening = upper left", fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "hudson.png", figures)
+
+
+def energy_budget(summary, hist, outdir, figures):
+    e = col(hist, "axial_strain", 100)
+    bond = sum(col(hist, f"bond_{c}_j") for c in
+               ("tension", "compression", "shear", "bending", "twisting"))
+    series = [("external work", col(hist, "boundary_work_j"), "k-"),
+              ("bond strain energy", bond, "tab:blue"),
+              ("contact strain energy", col(hist, "contact_strain_j"), "tab:cyan"),
+              ("kinetic", col(hist, "kinetic_j"), "tab:olive"),
+              ("friction", col(hist, "friction_j"), "tab:brown"),
+              ("damping", col(hist, "local_damping_j") + col(hist, "viscous_damping_j"),
+               "tab:gray"),
+              ("released by breaks", col(hist, "released_by_breaks_j"), "tab:red"),
+              ("deleted springs", col(hist, "deleted_springs_j"), "tab:pink"),
+              ("residual", col(hist, "energy_residual_j"), "m:")]
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    shade_stages(ax, summary)
+    for name, y, style in series:
+        if style.endswith(":") or style.endswith("-"):
+            ax.plot(e, y * 1e3, style, lw=1.2, label=name)
+        else:
+            ax.plot(e, y * 1e3, color=style, lw=1.2, label=name)
+    eb = summary.get("energy_budget", {})
+    ax.set_xlabel("axial strain (%)")
+    ax.set_ylabel("energy (mJ)")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title(f"Energy budget (balance: {eb.get('classification', 'n/a')}, largest relative "
+                 f"residual {fmt(eb.get('residual_relative_max_after_1pct_work'), '{:.2e}')})",
+                 fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "energy_budget.png", figures)
+
+
+def indicators(summary, ind, outdir, figures):
+    if not ind:
+        return
+    e = col(ind, "axial_strain", 100)
+    fig, axes = plt.subplots(4, 1, figsize=(7.5, 7.5), sharex=True)
+    panels = [("shear_fraction", "shear fraction"), ("mc_var", "MCvar (cracks^2)"),
+              ("ae_var_j2", "AEvar (J^2)"), ("damage_index", "damage index")]
+    for ax, (c, label) in zip(axes, panels):
+        shade_stages(ax, summary)
+        ax.plot(e, col(ind, c), "-", lw=1)
+        ax.set_ylabel(label, fontsize=8)
+    axes[-1].set_xlabel("axial strain (%)")
+    axes[0].set_title("Indicator series in trailing strain windows (NaN = too few cracks)",
+                      fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "indicators.png", figures)
+
+
+def fragment_sizes(summary, frags, outdir, figures):
+    if not frags:
+        return
+    m = np.sort(col(frags, "mass_kg") * 1e3)[::-1]
+    n_ge = np.arange(1, len(m) + 1)
+    fig, ax = plt.subplots(figsize=(6, 4.4))
+    ax.loglog(m, n_ge, "ko", ms=3)
+    if len(m):
+        ax.axvline(0.1 * m[0], color="tab:blue", ls="--", lw=0.8, label="0.1 x largest")
+        ax.axvline(0.9 * m[0], color="tab:red", ls="--", lw=0.8, label="0.9 x largest")
+    f = summary.get("fragments", {})
+    ax.set_xlabel("fragment mass (g)")
+    ax.set_ylabel("number of fragments N(>= m)")
+    ax.legend(fontsize=7)
+    ax.set_title(f"Fragments after the test: {f.get('count', len(m))} "
+                 f"({f.get('single_particle_debris', 'n/a')} single grains), largest "
+                 f"{fmt(100 * f.get('largest_fraction_of_total', float('nan')), '{:.1f}')} % of "
+                 "the mass", fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "fragment_sizes.png", figures)
+
+
+def table(rows):
+    out = "<table>"
+    for k, v in rows:
+        out += f"<tr><th>{html.escape(str(k))}</th><td>{html.escape(str(v))}</td></tr>"
+    return out + "</table>"
+
+
+def write_html(folder, title, intro_rows, figures, captions):
+    outdir = os.path.join(folder, "report")
+    parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
+             "</title><style>body{font-family:sans-serif;max-width:1100px;margin:auto}"
+             "table{border-collapse:collapse}th,td{border:1px solid #ccc;padding:3px 8px;"
+             "text-align:left;font-size:13px}img{max-width:100%}</style></head><body>",
+             f"<h1>{html.escape(title)}</h1>", table(intro_rows)]
+    for name in figures:
+        data = base64.b64encode(open(os.path.join(outdir, name), "rb").read()).decode()
+        parts.append(f"<h2>{html.escape(captions.get(name, name))}</h2>"
+                     f"<img src='data:image/png;base64,{data}' alt='{name}'>")
+    parts.append("<p>Generated by Breccia's report.py from the run folder's tables.</p>"
+                 "</body></html>")
+    path = os.path.join(folder, "report.html")
+    with open(path + ".tmp", "w") as f:
+        f.write("\n".join(parts))
+    os.replace(path + ".tmp", path)
+
+
+CAPTIONS = {
+    "stress_strain.png": "Stress-strain curve with cracks by mode",
+    "crack_maps.png": "Crack maps by deformation stage",
+    "event_magnitudes.png": "Event magnitudes over strain",
+    "b_value_d2.png": "b-value and correlation dimension over strain",
+    "gutenberg_richter.png": "Gutenberg-Richter (frequency-magnitude) plot",
+    "hudson.png": "Hudson source-type plot",
+    "energy_budget.png": "Energy budget over strain",
+    "indicators.png": "Indicator series",
+    "fragment_sizes.png": "Fragment size distribution",
+    "mohr_coulomb.png": "Mohr-Coulomb and Hoek-Brown envelopes",
+    "trends.png": "Trends with confinement",
+}
+
+
+def run_report(folder):
+    summary = json.load(open(os.path.join(folder, "summary.json")))
+    hist = read_csv(os.path.join(folder, "history.csv"))
+    if not hist:
+        sys.exit(f"{folder}/history.csv has no rows")
+    cracks = read_csv(os.path.join(folder, "cracks.csv"))
+    events = read_csv(os.path.join(folder, "events.csv"))
+    outdir = os.path.join(folder, "report")
+    os.makedirs(outdir, exist_ok=True)
+    figures = []
+    stress_strain(folder, summary, hist, outdir, figures)
+    crack_maps(summary, cracks if cracks and "stage" in cracks[0] else [], outdir, figures)
+    magnitudes(summary, events, hist, outdir, figures)
+    b_and_d2(summary, read_csv(os.path.join(folder, "b_value_windows.csv")),
+             read_csv(os.path.join(folder, "d2_windows.csv")),
+             read_csv(os.path.join(folder, "indicators.csv")), outdir, figures)
+    gutenberg_richter(summary, events, outdir, figures)
+    hudson(events, outdir, figures)
+    energy_budget(summary, hist, outdir, figures)
+    indicators(summary, read_csv(os.path.join(folder, "indicators.csv")), outdir, figures)
+    fragment_sizes(summary, read_csv(os.path.join(folder, "fragments.csv")), outdir, figures)
+    ae = summary.get("acoustic_emission", {})
+    eb = summary.get("energy_budget", {})
+    rows = [("test", f"{summary.get('test')} at sigma3 = "
+                     f"{summary.get('confining_stress_pa', 0) * 1e-6:g} MPa "
+                     f"({summary.get('status')}: {summary.get('stop_reason')})"),
+            ("particles / bonds", f"{summary.get('particles')} / {summary.get('bonds_initial')}"),
+            ("peak q", f"{fmt(summary.get('peak_deviatoric_stress_mpa'))} MPa at axial strain "
+                       f"{fmt(summary.get('axial_strain_at_peak'), '{:.5f}')}"),
+            ("E_t50 / Poisson", f"{fmt((summary.get('youngs_modulus_pa') or float('nan')) * 1e-9)}"
+                                f" GPa / {fmt(summary.get('poisson_ratio'), '{:.3f}')}"),
+            ("cracks", f"{summary.get('bonds_broken')} ({summary.get('cracks_tensile')} tensile, "
+                       f"{summary.get('cracks_shear')} shear)"),
+            ("AE events", f"{ae.get('events')} (largest {ae.get('largest_event_cracks')} "
+                          f"cracks); b = {fmt(ae.get('b_value', {}).get('b'))}; window b range "
+                          f"{[fmt(x) for x in ae.get('b_value_window_range', [])]}"),
+            ("D2 (crack midpoints)", f"{fmt(ae.get('d2', {}).get('d2'))}; window range "
+                                     f"{[fmt(x) for x in ae.get('d2_window_range', [])]}"),
+            ("energy balance", f"{eb.get('classification')} (largest relative residual "
+                               f"{fmt(eb.get('residual_relative_max_after_1pct_work'), '{:.2e}')})"),
+            ("quasi-static", str(summary.get("quasi_static", {}).get("ok")))]
+    for w in summary.get("warnings", []):
+        rows.append(("warning", w))
+    write_html(folder, f"Breccia report: {summary.get('experiment', '')}", rows, figures,
+               CAPTIONS)
+    return figures
+
+
+def sweep_report(folder):
+    sweep = json.load(open(os.path.join(folder, "sweep.json")))
+    runs = [r for r in sweep["runs"] if r.get("status") == "complete"]
+    outdir = os.path.join(folder, "report")
+    os.makedirs(outdir, exist_ok=True)
+    figures = []
+    s3 = np.array([r["confining_stress_pa"] for r in runs]) * 1e-6
+    s1 = np.array([r["sigma1_at_peak_pa"] for r in runs]) * 1e-6
+    fig, ax = plt.subplots(figsize=(6, 4.6))
+    ax.plot(s3, s1, "ko", label="tests (sigma1 at peak)")
+    x = np.linspace(0, max(s3.max() if len(s3) else 1, 1) * 1.1, 50)
+    mc = sweep.get("mohr_coulomb", {})
+    if mc.get("valid"):
+        ax.plot(x, mc["ucs_intercept_pa"] * 1e-6 + mc["k"] * x, "r-",
+                label=f"Mohr-Coulomb: c = {mc['cohesion_pa'] * 1e-6:.2f} MPa, "
+                      f"phi = {mc['friction_angle_deg']:.1f} deg")
+    hb = sweep.get("hoek_brown", {})
+    if hb.get("valid"):
+        sci, mi = hb["sigma_ci_pa"] * 1e-6, hb["m_i"]
+        ax.plot(x, x + sci * np.sqrt(mi * x / sci + 1), "b--",
+                label=f"Hoek-Brown: sigma_ci = {sci:.1f} MPa, m_i = {mi:.2f}")
+    ax.set_xlabel("sigma3 (MPa)")
+    ax.set_ylabel("sigma1 at peak (MPa)")
+    ax.legend(fontsize=7)
+    ax.set_title("Strength envelope", fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "mohr_coulomb.png", figures)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.8))
+    a1.plot(s3, [r["peak_deviatoric_stress_pa"] * 1e-6 for r in runs], "ko-")
+    a1.set_xlabel("sigma3 (MPa)")
+    a1.set_ylabel("peak q (MPa)")
+    a2.plot(s3, [(r.get("youngs_modulus_pa") or float("nan")) * 1e-9 for r in runs], "bo-",
+            label="E_t50 (GPa)")
+    a2.set_xlabel("sigma3 (MPa)")
+    a2.set_ylabel("E_t50 (GPa)")
+    a3 = a2.twinx()
+    a3.plot(s3, [r.get("cracks", 0) for r in runs], "r^-")
+    a3.set_ylabel("cracks", color="r")
+    fig.suptitle("Trends with confinement", fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "trends.png", figures)
+    rows = [("experiment", sweep.get("experiment")), ("tests", len(runs)),
+            ("Mohr-Coulomb", json.dumps({k: mc.get(k) for k in
+                                         ("cohesion_pa", "friction_angle_deg", "r2")})),
+            ("Hoek-Brown", json.dumps({k: hb.get(k) for k in ("sigma_ci_pa", "m_i", "rms_residual_pa")}))]
+    write_html(folder, f"Breccia sweep report: {sweep.get('experiment', '')}", rows, figures,
+               CAPTIONS)
+    return figures
+
+
+def main(folder):
+    if os.path.exists(os.path.join(folder, "sweep.json")):
+        figures = sweep_report(folder)
+    elif os.path.exists(os.path.join(folder, "summary.json")):
+        figures = run_report(folder)
+    else:
+        sys.exit(f"{folder}: neither summary.json nor sweep.json (not a finished run folder)")
+    print(os.path.join(folder, "report.html"))
+    for f in figures:
+        print(os.path.join(folder, "report", f))
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    main(sys.argv[1])
