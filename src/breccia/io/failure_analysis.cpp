@@ -266,7 +266,7 @@ json write_failure_analysis(const fs::path& folder, const FailureInputs& in) {
     std::string t =
         "axial_strain,cracks,tensile,shear,energy_j,cumulative_cracks,cumulative_tensile,"
         "cumulative_shear,shear_fraction,mc_var,ae_var_j2,b_value,b_events,b_window_strain,"
-        "d2,d2_points,d2_window_strain,porosity,damage_index,stage\n";
+        "d2,d2_points,d2_window_strain,porosity,damage_index,stage,missing\n";
     const double window = spec.ae_bin_width * static_cast<double>(spec.ae_window_bins);
     for (std::size_t j = 0; j < cs.bin_end.size(); ++j) {
       const double e1 = cs.bin_end[j];
@@ -304,14 +304,24 @@ json write_failure_analysis(const fs::path& folder, const FailureInputs& in) {
             static_cast<std::size_t>(it - s.axial_strain.begin()), s.axial_strain.size() - 1);
         n = 1.0 - (1.0 - in.initial_porosity) / (1.0 - s.volumetric_strain[r]);
       }
-      t += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", g(e1),
+      // Why a statistic of this bin is missing (analysis.md §0.3: NaN, never 0, with a reason).
+      std::string missing;
+      const auto why = [&](const std::string& w) { missing += (missing.empty() ? "" : ";") + w; };
+      if (!std::isfinite(cs.mc_var[j])) why("window_incomplete");
+      if (std::isfinite(cs.mc_var[j]) && !std::isfinite(cs.shear_fraction[j]))
+        why("shear_fraction:too_few_cracks");
+      if (!bj.valid()) why("b_value:" + (std::isfinite(mc.magnitude) ? bj.flag : mc.flag));
+      for (const auto& f : dj.flags)
+        if (!dj.valid()) why("d2:" + f);
+      if (thinned) why("d2:subsampled");
+      t += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", g(e1),
                        cs.count[j], cs.tensile[j], cs.shear[j], g(cs.energy[j]), cs.cumulative[j],
                        cs.cumulative_tensile[j], cs.cumulative_shear[j], g(cs.shear_fraction[j]),
                        g(cs.mc_var[j]), g(cs.ae_var[j]), g(bj.b), bj.events,
                        g(bj.valid() ? e1 - b_from : kNaN), g(dj.d2), dj.points,
                        g(first < last ? e1 - std::min(e1 - window, crack_strain[first]) : kNaN),
                        g(n), g((n - in.initial_porosity) / in.initial_porosity),
-                       stages.stage_of(e1 - 0.5 * css.bin_width));
+                       stages.stage_of(e1 - 0.5 * css.bin_width), missing);
     }
     put(folder / "indicators.csv", t);
   }
