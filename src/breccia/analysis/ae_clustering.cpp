@@ -176,50 +176,51 @@ void EventClusterer::close_all(const std::function<void(std::size_t)>& on_close)
   touch_index_.clear();
 }
 
-void EventClusterer::save(ArchiveWriter& a) const {
+template <class Archive>
+void EventClusterer::transfer(Archive& a) {
   a.label("event clusterer");
   a.value(s_);
   a.vector(parent_);
   a.vector(crack_event_);
   a.vector(deadline_);
   a.vector(open_);
+  if constexpr (Archive::reading) {
+    const std::size_t n = parent_.size();
+    bool ok = deadline_.size() == n;
+    for (std::size_t e : parent_) ok = ok && e < n;
+    for (std::size_t e : open_) ok = ok && e < n;
+    for (std::size_t e : crack_event_) ok = ok && (e < n || e == static_cast<std::size_t>(-1));
+    if (!ok) throw InputError(a.where(), "event clusterer", "indices", "the checkpoint is corrupt");
+    members_.assign(n, {});
+    touched_.assign(n, {});
+  }
   for (std::size_t e : open_) {
-    a.value(static_cast<std::uint64_t>(members_[e].size()));
-    for (const Member& m : members_[e]) {
-      a.value(static_cast<std::uint64_t>(m.crack));
+    a.sized(members_[e], sizeof(std::uint64_t) + sizeof(Vec3));
+    for (Member& m : members_[e]) {
+      std::uint64_t crack = m.crack;
+      a.value(crack);
+      m.crack = crack;
       a.value(m.x);
     }
     a.vector(touched_[e]);
+  }
+  if constexpr (Archive::reading) {
+    // The cell and grain indexes follow from the open events.
+    cells_.clear();
+    touch_index_.clear();
+    for (std::size_t e : open_) {
+      for (const Member& m : members_[e]) index(e, m.x);
+      for (std::uint32_t p : touched_[e]) touch_index_[p].push_back(e);
+    }
   }
 }
 
+void EventClusterer::save(ArchiveWriter& a) const {
+  const_cast<EventClusterer*>(this)->transfer(a);  // the writer only reads the fields
+}
+
 void EventClusterer::load(ArchiveReader& a) {
-  a.label("event clusterer");
-  a.value(s_);
-  a.vector(parent_);
-  a.vector(crack_event_);
-  a.vector(deadline_);
-  a.vector(open_);
-  const std::size_t n = parent_.size();
-  bool ok = deadline_.size() == n;
-  for (std::size_t e : parent_) ok = ok && e < n;
-  for (std::size_t e : open_) ok = ok && e < n;
-  for (std::size_t e : crack_event_) ok = ok && (e < n || e == static_cast<std::size_t>(-1));
-  if (!ok) throw InputError(a.where(), "event clusterer", "indices", "the checkpoint is corrupt");
-  members_.assign(n, {});
-  touched_.assign(n, {});
-  cells_.clear();
-  touch_index_.clear();
-  for (std::size_t e : open_) {
-    members_[e].resize(a.get<std::uint64_t>());
-    for (Member& m : members_[e]) {
-      m.crack = a.get<std::uint64_t>();
-      a.value(m.x);
-      index(e, m.x);
-    }
-    a.vector(touched_[e]);
-    for (std::uint32_t p : touched_[e]) touch_index_[p].push_back(e);
-  }
+  transfer(a);
 }
 
 std::vector<std::size_t> cluster_cracks(const std::vector<double>& time,

@@ -73,6 +73,8 @@ class EventClusterer {
 
  private:
   std::size_t find(std::size_t e) const;
+  template <class Archive>
+  void transfer(Archive& a);
   struct Member {
     std::size_t crack;
     Vec3 x;

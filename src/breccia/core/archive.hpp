@@ -15,8 +15,11 @@
 
 namespace breccia {
 
+// Both archives offer the same calls (value, vector, string, label, sized), so that one template
+// field list serves writing and reading (`reading` tells them apart where they must differ).
 class ArchiveWriter {
  public:
+  static constexpr bool reading = false;
   explicit ArchiveWriter(std::ostream& out) : out_(out) {}
 
   template <class T>
@@ -36,8 +39,14 @@ class ArchiveWriter {
     value(static_cast<std::uint64_t>(s.size()));
     out_.write(s.data(), static_cast<std::streamsize>(s.size()));
   }
+  // The element count of a container whose elements follow one by one.
+  template <class Container>
+  void sized(Container& c, std::size_t /*min_bytes_each*/) {
+    value(static_cast<std::uint64_t>(c.size()));
+  }
   // A section label, checked on reading: a mismatch says where the layouts diverge.
   void label(const char* name) { string(name); }
+  std::string where() const { return "checkpoint being written"; }
   bool good() const { return static_cast<bool>(out_); }
 
  private:
@@ -46,6 +55,7 @@ class ArchiveWriter {
 
 class ArchiveReader {
  public:
+  static constexpr bool reading = true;
   // `where` names the file in error messages.
   ArchiveReader(std::istream& in, std::string where) : in_(in), where_(std::move(where)) {
     const auto here = in_.tellg();
@@ -88,6 +98,12 @@ class ArchiveReader {
       throw InputError(where_, "section", got,
                        std::string("expected section '") + name +
                            "': the checkpoint was written by a different layout");
+  }
+  // Reads an element count and resizes `c`; each element takes at least `min_bytes_each` bytes
+  // in the file, so a corrupt count cannot trigger a huge allocation.
+  template <class Container>
+  void sized(Container& c, std::size_t min_bytes_each) {
+    c.resize(length(min_bytes_each));
   }
   const std::string& where() const { return where_; }
 

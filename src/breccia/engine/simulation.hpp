@@ -195,6 +195,8 @@ class Simulation {
  private:
   struct RestoreTag {};
   explicit Simulation(RestoreTag) {}
+  template <class Archive>
+  void transfer(Archive& a);  // the checkpoint's field list (engine/checkpoint.cpp)
   template <class CL>
   void step_impl(ContactSet<CL>& contacts);
   template <class CL>

@@ -339,25 +339,27 @@ std::string plain(const json& j, const char* key, const char* f = "{:.3g}") {
 
 }  // namespace
 
-// The plot script ships beside the sources and is installed nowhere: look in the source tree.
-bool plot_run(const std::string& folder) {
-  const fs::path script = fs::path(BRECCIA_SOURCE_DIR) / "scripts" / "plot_run.py";
-  const fs::path logf = fs::path(folder) / "plot.log";
+namespace {
+// The plotting scripts ship beside the sources and are installed nowhere: run them from the
+// source tree with Debian's interpreter; their output goes to `log_name` in the folder, which is
+// removed when they succeed.
+bool run_script(const char* script_name, const std::string& folder, const char* log_name) {
+  const fs::path script = fs::path(BRECCIA_SOURCE_DIR) / "scripts" / script_name;
+  const fs::path logf = fs::path(folder) / log_name;
   const std::string cmd =
       fmt::format("/usr/bin/python3 '{}' '{}' > '{}' 2>&1", script.string(), folder, logf.string());
   if (std::system(cmd.c_str()) != 0) return false;
   fs::remove(logf);
   return true;
 }
+}  // namespace
+
+bool plot_run(const std::string& folder) {
+  return run_script("plot_run.py", folder, "plot.log");
+}
 
 bool write_report(const std::string& folder) {
-  const fs::path script = fs::path(BRECCIA_SOURCE_DIR) / "scripts" / "report.py";
-  const fs::path logf = fs::path(folder) / "report.log";
-  const std::string cmd =
-      fmt::format("/usr/bin/python3 '{}' '{}' > '{}' 2>&1", script.string(), folder, logf.string());
-  if (std::system(cmd.c_str()) != 0) return false;
-  fs::remove(logf);
-  return true;
+  return run_script("report.py", folder, "report.log");
 }
 
 std::string summarise_folder(const std::string& folder) {
@@ -475,7 +477,8 @@ struct LoopState {
   double volume0 = 0.0, porosity0 = 0.0, length_min = 0.0;
   std::string wave_speed_method;
 
-  void save(ArchiveWriter& a) const {
+  template <class Archive>
+  void transfer(Archive& a) {
     a.label("loop");
     a.vector(series.axial_strain);
     a.vector(series.deviatoric);
@@ -490,34 +493,16 @@ struct LoopState {
     a.value(wall_seconds);
     a.value(consolidation_steps);
     a.value(bonds_initial);
-    a.value(static_cast<std::uint64_t>(warnings.size()));
-    for (const std::string& w : warnings) a.string(w);
-    a.value(volume0);
-    a.value(porosity0);
-    a.value(length_min);
-    a.string(wave_speed_method);
-  }
-  void load(ArchiveReader& a) {
-    a.label("loop");
-    a.vector(series.axial_strain);
-    a.vector(series.deviatoric);
-    a.vector(series.lateral_strain);
-    a.vector(series.volumetric_strain);
-    a.vector(series.broken_bonds);
-    a.value(series.confining_stress);
-    a.vector(imbalance);
-    a.vector(ke_ratio);
-    a.vector(confine_err);
-    a.value(next_snapshot);
-    a.value(wall_seconds);
-    a.value(consolidation_steps);
-    a.value(bonds_initial);
-    warnings.resize(a.get<std::uint64_t>());
+    a.sized(warnings, 8);
     for (std::string& w : warnings) a.string(w);
     a.value(volume0);
     a.value(porosity0);
     a.value(length_min);
     a.string(wave_speed_method);
+  }
+  void save(ArchiveWriter& a) const { const_cast<LoopState*>(this)->transfer(a); }
+  void load(ArchiveReader& a) {
+    transfer(a);
     const std::size_t rows = series.axial_strain.size();
     for (std::size_t m :
          {series.deviatoric.size(), series.lateral_strain.size(), series.volumetric_strain.size(),

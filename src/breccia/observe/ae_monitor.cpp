@@ -327,15 +327,31 @@ std::vector<std::size_t> AeMonitor::crack_events() const {
   return out;
 }
 
-void AeMonitor::save(ArchiveWriter& a) const {
+template <class Archive>
+void AeMonitor::transfer(Archive& a) {
   a.label("ae monitor");
   a.value(s_);
   a.value(duration_);
-  a.value(clusterer_.has_value());
-  if (clusterer_) clusterer_->save(a);
-  a.value(static_cast<std::uint64_t>(open_.size()));
-  for (const auto& [root, o] : open_) {
-    a.value(static_cast<std::uint64_t>(root));
+  bool has_clusterer = clusterer_.has_value();
+  a.value(has_clusterer);
+  if constexpr (Archive::reading) {
+    clusterer_.reset();
+    if (has_clusterer) configure(s_.shear_wave_speed);
+  }
+  if (has_clusterer) {
+    if constexpr (Archive::reading)
+      clusterer_->load(a);
+    else
+      clusterer_->save(a);
+  }
+  std::uint64_t n = open_.size();
+  a.value(n);
+  auto it = open_.begin();
+  for (std::uint64_t k = 0; k < n; ++k) {
+    std::uint64_t root = 0;
+    if constexpr (!Archive::reading) root = (it++)->first;
+    a.value(root);
+    Open& o = open_[root];
     a.value(o.ev);
     a.vector(o.source);
     a.vector(o.refs);
@@ -351,33 +367,14 @@ void AeMonitor::save(ArchiveWriter& a) const {
   a.value(steps_);
 }
 
+void AeMonitor::save(ArchiveWriter& a) const {
+  const_cast<AeMonitor*>(this)->transfer(a);  // the writer only reads the fields
+}
+
 void AeMonitor::load(ArchiveReader& a) {
-  a.label("ae monitor");
-  a.value(s_);
-  a.value(duration_);
-  clusterer_.reset();
-  if (a.get<bool>()) {
-    configure(s_.shear_wave_speed);
-    clusterer_->load(a);
-  }
   open_.clear();
-  const auto n = a.get<std::uint64_t>();
-  for (std::uint64_t k = 0; k < n; ++k) {
-    Open& o = open_[a.get<std::uint64_t>()];
-    a.value(o.ev);
-    a.vector(o.source);
-    a.vector(o.refs);
-    a.vector(o.watched);
-    a.value(o.ke_baseline);
-    a.value(o.created);
-  }
-  a.vector(done_);
-  a.vector(done_root_);
-  a.vector(context_);
-  a.value(seen_);
-  a.value(stamp_);
-  a.value(steps_);
-  if (done_root_.size() != done_.size())
+  transfer(a);
+  if (done_root_.size() != done_.size() || seen_ != context_.size())
     throw InputError(a.where(), "ae monitor", "events", "the checkpoint is corrupt");
 }
 

@@ -96,6 +96,8 @@ class AeMonitor {
     double ke_baseline = 0.0;
     std::uint64_t created = 0;  // monitor step of the first crack
   };
+  template <class Archive>
+  void transfer(Archive& a);
   void add_source(const Simulation& sim, Open& o, std::uint32_t p);
   void watch_near(const Simulation& sim, Open& o, const Vec3& x);
   void evaluate(const Simulation& sim, Open& o, double strain);

@@ -263,7 +263,8 @@ bool PlatenCompression::finished(const AxialState& s, std::size_t broken_bonds) 
   return false;
 }
 
-void PlatenCompression::save_state(ArchiveWriter& a) const {
+template <class Archive>
+void PlatenCompression::transfer(Archive& a) {
   a.label("platen compression");
   a.value(st_);
   a.value(lateral_);
@@ -274,7 +275,7 @@ void PlatenCompression::save_state(ArchiveWriter& a) const {
   a.value(top_);
   a.vector(side_);
   a.value(centre_);
-  for (const auto& f : face_) a.vector(f);
+  for (auto& f : face_) a.vector(f);
   a.value(h0_);
   a.value(area0_);
   a.value(w0_);
@@ -285,27 +286,13 @@ void PlatenCompression::save_state(ArchiveWriter& a) const {
   a.string(stop_reason_);
 }
 
+void PlatenCompression::save_state(ArchiveWriter& a) const {
+  const_cast<PlatenCompression*>(this)->transfer(a);  // the writer only reads the fields
+}
+
 PlatenCompression PlatenCompression::restore(ArchiveReader& a) {
   PlatenCompression t;
-  a.label("platen compression");
-  a.value(t.st_);
-  a.value(t.lateral_);
-  a.value(t.axis_);
-  a.value(t.planar_);
-  a.value(t.thickness_);
-  a.value(t.bottom_);
-  a.value(t.top_);
-  a.vector(t.side_);
-  a.value(t.centre_);
-  for (auto& f : t.face_) a.vector(f);
-  a.value(t.h0_);
-  a.value(t.area0_);
-  a.value(t.w0_);
-  a.value(t.peak_);
-  a.value(t.k_min_);
-  a.value(t.consolidated_);
-  a.value(t.servo_);
-  a.string(t.stop_reason_);
+  t.transfer(a);
   return t;
 }
 

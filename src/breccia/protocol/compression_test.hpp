@@ -76,6 +76,8 @@ class PlatenCompression {
 
  private:
   PlatenCompression() = default;
+  template <class Archive>
+  void transfer(Archive& a);
   double height(const Simulation& sim) const;
   // Current lateral extents (x, y widths; cylinder: diameter twice) from walls or particles.
   void widths(const Simulation& sim, double w[2]) const;

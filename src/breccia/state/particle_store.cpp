@@ -74,7 +74,9 @@ std::size_t ParticleStore::index_of(std::uint64_t t, const std::string& where) c
   return it->second;
 }
 
-void ParticleStore::save(ArchiveWriter& a) const {
+// One field list for writing and reading: a checkpoint cannot write what it does not read.
+template <class Archive>
+void ParticleStore::transfer(Archive& a) {
   a.label("particles");
   a.value(dim_);
   a.value(thickness_);
@@ -96,26 +98,12 @@ void ParticleStore::save(ArchiveWriter& a) const {
   a.vector(drive_angvel);
 }
 
+void ParticleStore::save(ArchiveWriter& a) const {
+  const_cast<ParticleStore*>(this)->transfer(a);  // the writer only reads the fields
+}
+
 void ParticleStore::load(ArchiveReader& a) {
-  a.label("particles");
-  a.value(dim_);
-  a.value(thickness_);
-  a.value(body_);
-  a.vector(pos_rad);
-  a.vector(vel);
-  a.vector(angvel);
-  a.vector(force);
-  a.vector(torque);
-  a.vector(mass);
-  a.vector(inertia);
-  a.vector(density);
-  a.vector(orientation);
-  a.vector(angle);
-  a.vector(displacement);
-  a.vector(tag);
-  a.vector(motion);
-  a.vector(drive_vel);
-  a.vector(drive_angvel);
+  transfer(a);
   const std::size_t n = tag.size();
   for (const std::size_t m :
        {pos_rad.size(), vel.size(), angvel.size(), force.size(), torque.size(), mass.size(),

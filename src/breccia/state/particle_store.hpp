@@ -82,6 +82,8 @@ class ParticleStore {
   std::vector<Vec3> drive_vel, drive_angvel;  // used when motion == Driven
 
  private:
+  template <class Archive>
+  void transfer(Archive& a);
   Dimension dim_ = Dimension::Three;
   double thickness_ = 1.0;
   PlanarBody body_ = PlanarBody::Disk;
