@@ -189,6 +189,14 @@ TEST(Samples, CylinderAndRectanglePack) {
   EXPECT_EQ(pr.geometry.dimension, Dimension::Two);
   for (const ParticleSpec& q : pr.geometry.particles) EXPECT_EQ(q.position.z, 0.0);
   EXPECT_NEAR(pr.report.locked_in_mean_stress, r.isotropic_stress, 0.01 * r.isotropic_stress);
+  // From the 3D-minded default porosity (0.37, looser than jammed disks): the packing grows on
+  // until it carries stress, then reaches p0 and bonds its neighbours.
+  r.porosity = 0.37;
+  const PackedSample loose = pack_sample(r);
+  EXPECT_TRUE(loose.report.converged);
+  EXPECT_NEAR(loose.report.locked_in_mean_stress, r.isotropic_stress, 0.01 * r.isotropic_stress);
+  EXPECT_LT(loose.report.porosity, 0.25);
+  EXPECT_GT(loose.report.bond_coordination_interior, 3.0);
 }
 
 TEST(Samples, BadPackingSettingsAreRefused) {

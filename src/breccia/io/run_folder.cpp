@@ -122,7 +122,8 @@ std::string sample_key(const ExperimentSpec& s) {
     if (!line.empty() && line[0] == '[') in = line == "[sample]";
     if (in || line.rfind("seed", 0) == 0 || line.rfind("dimension", 0) == 0) sample_part += line;
   }
-  sample_part += fmt::format("|{}", s.parallel_bond.modulus);
+  // The packing revision: a change of the algorithm must not reuse samples packed before it.
+  sample_part += fmt::format("|{}|packing-2", s.parallel_bond.modulus);
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : sample_part) h = (h ^ c) * 1099511628211ull;
   return fmt::format("{:016x}", h);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 #include <numeric>
+#include <tuple>
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
@@ -309,6 +310,20 @@ PackedSample pack_sample(const PackingSettings& s,
   // unjamming; later steps use the secant stiffness measured between relaxed states.
   // Friction is switched on for this stage: a frictionless packing near p0 creeps for a very
   // long time (its relaxation time diverges near jamming), a frictional one settles.
+  if (s.servo_to_stress && steady && p < 0.05 * s.isotropic_stress) {
+    // Grown to a porosity looser than jamming (disks jam near 0.16-0.20, so the 3D-minded
+    // default of 0.37 is loose in 2D), the packing carries no stress once relaxed, and the servo
+    // below has no stiffness to work with: grow on, frictionless, 1 % at a time as in step 4,
+    // until the relaxed packing carries some.
+    while (p < 0.05 * s.isotropic_stress && sim.step_count() < s.max_steps) {
+      for (int k = 0; k < 10; ++k) {
+        sim.scale_radii(1.001);
+        sim.run(check_every);
+      }
+      p = relax(2000).first;
+    }
+    std::tie(p, steady) = relax(s.max_steps - std::min(s.max_steps, sim.step_count()));
+  }
   if (s.servo_to_stress && steady) {
     sim.set_contact_friction(s.servo_friction);
     rep.converged = false;
