@@ -7,12 +7,14 @@
 #include <random>
 
 #include "breccia/analysis/ae_clustering.hpp"
+#include "breccia/analysis/compression.hpp"
 #include "breccia/analysis/correlation_dimension.hpp"
 #include "breccia/analysis/crack_series.hpp"
 #include "breccia/analysis/fragments.hpp"
 #include "breccia/analysis/gutenberg_richter.hpp"
 #include "breccia/analysis/moment_tensor.hpp"
 #include "breccia/analysis/stages.hpp"
+#include "breccia/observe/ae_monitor.hpp"
 
 using namespace breccia;
 using namespace breccia::analysis;
@@ -373,4 +375,30 @@ TEST(Clustering, GrainLinkageBySharedGrainsAndContacts) {
   c.close_all();
   EXPECT_EQ(c.event_of(5), 0u);
   EXPECT_EQ(c.event_of(3), 1u);
+}
+
+// ---- continuum energy estimates (§2.3) ----
+
+TEST(EnergyEstimates, ElasticEnergyDensityAndFractureEnergy) {
+  // E = 20 GPa, nu = 0.25, sigma_1 = 100 MPa, sigma_3 = 10 MPa.
+  EXPECT_NEAR(elastic_energy_density(100e6, 10e6, 20e9, 0.25), 228750.0, 1e-6);
+  EXPECT_NEAR(deviatoric_elastic_energy_density(90e6, 10e6, 20e9, 0.25), 225000.0, 1e-6);
+  EXPECT_NEAR(deviatoric_elastic_energy_density(90e6, 0.0, 20e9, 0.25), 202500.0, 1e-6);
+  // Tang & Kaiser per crack: sigma 50 MPa, bond radius 0.1 mm, L = R1 + R2 = 0.2 mm, E_b 20 GPa.
+  CrackRecord c;
+  c.R1 = c.R2 = 0.1e-3;
+  c.bond_radius = 0.1e-3;
+  c.sigma = 50e6;
+  c.tau = 0.0;
+  c.mode = CrackMode::Tensile;
+  EXPECT_NEAR(fracture_energy(c, 20e9, 2.5, false, 1.0), 3.93e-7, 0.005e-7);
+  // Shear: tau over G_b = E_b / kappa; 2D: bond volume 2 R t L.
+  c.mode = CrackMode::Shear;
+  c.sigma = 0.0;
+  c.tau = 50e6;
+  EXPECT_NEAR(fracture_energy(c, 20e9, 2.5, false, 1.0), 2.5 * 3.927e-7, 0.01e-7);
+  c.mode = CrackMode::Tensile;
+  c.sigma = 50e6;
+  // v = 2 x 0.1 mm x 1 mm x 0.2 mm = 4e-11 m^3: (50e6)^2 x 4e-11 / 4e10 = 2.5e-6 J.
+  EXPECT_NEAR(fracture_energy(c, 20e9, 2.5, true, 1e-3), 2.5e-6, 1e-15);
 }

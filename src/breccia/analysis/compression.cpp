@@ -235,4 +235,12 @@ HoekBrownFit fit_hoek_brown(const std::vector<double>& sigma3, const std::vector
   return f;
 }
 
+double elastic_energy_density(double s1, double s3, double e, double nu) {
+  return (s1 * s1 + 2 * s3 * s3 - 2 * nu * (2 * s1 * s3 + s3 * s3)) / (2 * e);
+}
+
+double deviatoric_elastic_energy_density(double q, double s3, double e, double nu) {
+  return (q * q + 2 * s3 * q * (1 - 2 * nu)) / (2 * e);
+}
+
 }  // namespace breccia::analysis

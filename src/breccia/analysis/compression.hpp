@@ -52,4 +52,12 @@ struct HoekBrownFit {
 // Intact Hoek-Brown (s = 1, a = 0.5), §1.9: linearised fit, then Levenberg-Marquardt.
 HoekBrownFit fit_hoek_brown(const std::vector<double>& sigma3, const std::vector<double>& sigma1);
 
+// Continuum energy estimates of the source papers (analysis.md §2.3), Pa in, J/m^3 out.
+// Elastic strain-energy density of isotropic linear elasticity under a triaxial state
+// (sigma_2 = sigma_3).
+double elastic_energy_density(double sigma1, double sigma3, double youngs, double poisson);
+// The part added by the deviatoric stage: u_e(sigma_1) - u_e(sigma_1 = sigma_3), q = sigma_1 -
+// sigma_3.
+double deviatoric_elastic_energy_density(double q, double sigma3, double youngs, double poisson);
+
 }  // namespace breccia::analysis

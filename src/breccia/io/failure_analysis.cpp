@@ -558,8 +558,8 @@ json write_failure_analysis(const fs::path& folder, const FailureInputs& in) {
     const double w_engine = hist.at(last, "boundary_work_j") - hist.at(0, "boundary_work_j");
     const double E = an.e_t50.valid ? an.e_t50.slope : kNaN, nu = an.poisson;
     const double s3 = spec.loading.confining_stress, s1 = an.sigma1_at_peak, q = an.peak_deviatoric;
-    const double ue = (s1 * s1 + 2 * s3 * s3 - 2 * nu * (2 * s1 * s3 + s3 * s3)) / (2 * E);
-    const double ue_dev = (q * q + 2 * s3 * q * (1 - 2 * nu)) / (2 * E);
+    const double ue = analysis::elastic_energy_density(s1, s3, E, nu);
+    const double ue_dev = analysis::deviatoric_elastic_energy_density(q, s3, E, nu);
     const auto stored = [&](std::size_t r) {
       return hist.at(r, "bond_tension_j") + hist.at(r, "bond_compression_j") +
              hist.at(r, "bond_shear_j") + hist.at(r, "bond_bending_j") +
