@@ -91,9 +91,7 @@ def stress_strain(folder, summary, hist, outdir, figures):
 def crack_maps(summary, cracks, outdir, figures):
     if not cracks:
         return
-    dim = 2 if all(abs(float(c["z_m"])) < 1e-15 for c in cracks[:50]) and \
-        float(summary.get("sample_area_m2", 1)) > 0 and summary.get("test", "").startswith("bi") \
-        else 3
+    dim = 2 if summary.get("test", "").startswith("biaxial") else 3
     x = col(cracks, "x_m", 1e3)
     y = col(cracks, "y_m", 1e3)
     z = col(cracks, "z_m", 1e3)
@@ -214,8 +212,10 @@ def gutenberg_richter(summary, events, outdir, figures):
 
 
 def hudson(events, outdir, figures):
-    u, v = col(events, "hudson_u"), col(events, "hudson_v") if events else (None, None)
-    if not events or not np.isfinite(u).any():
+    if not events:
+        return
+    u, v = col(events, "hudson_u"), col(events, "hudson_v")
+    if not np.isfinite(u).any():  # 2D: Hudson coordinates are undefined
         return
     fig, ax = plt.subplots(figsize=(5.6, 5.2))
     frame = np.array([(0, 1), (4 / 3, 1 / 3), (0, -1), (-4 / 3, -1 / 3), (0, 1)])
@@ -246,23 +246,20 @@ def energy_budget(summary, hist, outdir, figures):
     e = col(hist, "axial_strain", 100)
     bond = sum(col(hist, f"bond_{c}_j") for c in
                ("tension", "compression", "shear", "bending", "twisting"))
-    series = [("external work", col(hist, "boundary_work_j"), "k-"),
-              ("bond strain energy", bond, "tab:blue"),
-              ("contact strain energy", col(hist, "contact_strain_j"), "tab:cyan"),
-              ("kinetic", col(hist, "kinetic_j"), "tab:olive"),
-              ("friction", col(hist, "friction_j"), "tab:brown"),
+    series = [("external work", col(hist, "boundary_work_j"), "k", "-"),
+              ("bond strain energy", bond, "tab:blue", "-"),
+              ("contact strain energy", col(hist, "contact_strain_j"), "tab:cyan", "-"),
+              ("kinetic", col(hist, "kinetic_j"), "tab:olive", "-"),
+              ("friction", col(hist, "friction_j"), "tab:brown", "-"),
               ("damping", col(hist, "local_damping_j") + col(hist, "viscous_damping_j"),
-               "tab:gray"),
-              ("released by breaks", col(hist, "released_by_breaks_j"), "tab:red"),
-              ("deleted springs", col(hist, "deleted_springs_j"), "tab:pink"),
-              ("residual", col(hist, "energy_residual_j"), "m:")]
+               "tab:gray", "-"),
+              ("released by breaks", col(hist, "released_by_breaks_j"), "tab:red", "-"),
+              ("deleted springs", col(hist, "deleted_springs_j"), "tab:pink", "-"),
+              ("residual", col(hist, "energy_residual_j"), "m", ":")]
     fig, ax = plt.subplots(figsize=(7.5, 4.6))
     shade_stages(ax, summary)
-    for name, y, style in series:
-        if style.endswith(":") or style.endswith("-"):
-            ax.plot(e, y * 1e3, style, lw=1.2, label=name)
-        else:
-            ax.plot(e, y * 1e3, color=style, lw=1.2, label=name)
+    for name, y, colour, style in series:
+        ax.plot(e, y * 1e3, color=colour, ls=style, lw=1.2, label=name)
     eb = summary.get("energy_budget", {})
     ax.set_xlabel("axial strain (%)")
     ax.set_ylabel("energy (mJ)")
