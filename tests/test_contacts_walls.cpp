@@ -158,6 +158,36 @@ TEST(Wall, ShrinkingCylinderPushesTowardTheAxisAndDoesWork) {
   EXPECT_LE(std::abs(L.residual), k * std::pow(0.1 * sim.time_step(), 2));
 }
 
+TEST(Wall, CircleWallIn2DPushesADiskLikeAPlane) {
+  // 2D: a disk of thickness t overlapping a circular wall (axis z) by 1 um at 30 degrees gets the
+  // plane-wall force, k_n = E_c 2 R t / R = 2 E_c t (linear law, wall: r = L = R), toward the
+  // centre; a wall with its axis in the plane is refused.
+  const double R = 0.5e-3, Rc = 5e-3, t = 1e-3, delta = 1e-6;
+  const double a = std::numbers::pi / 6;
+  ParticleStore ps(Dimension::Two, t);
+  const double rho = Rc - R + delta;
+  ps.add({.tag = 1,
+          .position = {rho * std::cos(a), rho * std::sin(a), 0},
+          .radius = R,
+          .density = 2650});
+  EngineConfig cfg;
+  cfg.energy_interval = 0;
+  LinearContact::Params lp;
+  lp.modulus = 10e9;
+  Simulation sim(ParticleStore(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  sim.add_wall(Wall::cylinder("ring", {0, 0, 0}, {0, 0, 1}, Rc));
+  sim.initialise();
+  sim.step();
+  const double f = 2.0 * 10e9 * t * delta;
+  const Vec3 F = sim.particles().force[0];
+  EXPECT_NEAR(F.x, -f * std::cos(a), 1e-9 * f);
+  EXPECT_NEAR(F.y, -f * std::sin(a), 1e-9 * f);
+  EXPECT_EQ(F.z, 0.0);
+  EXPECT_NEAR(sim.walls()[0].radial_force, f, 1e-9 * f);
+  Simulation tilted(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  EXPECT_THROW(tilted.add_wall(Wall::cylinder("tilted", {}, {1, 0, 0}, Rc)), InputError);
+}
+
 TEST(Wall, RampFollowsTheCosineProfile) {
   const VelocityRamp r{1.0, 2.0};
   EXPECT_EQ(r.factor(0.5), 0.0);

@@ -104,10 +104,11 @@ std::size_t Simulation::add_wall(Wall w) {
     throw InputError("simulation", "wall", w.name, "walls must be added before initialise()");
   if (w.shape == WallShape::Cylinder && !(w.radius > 0.0))
     throw InputError("wall '" + w.name + "'", "radius", num(w.radius), "must be > 0 m");
-  if (p_.planar() && w.shape == WallShape::Cylinder)
-    throw InputError("wall '" + w.name + "'", "shape", "cylinder",
-                     "2D simulations use plane walls");
-  if (p_.planar() && (w.normal.z != 0.0 || w.target_velocity.z != 0.0))
+  if (p_.planar() && w.shape == WallShape::Cylinder && (w.axis.x != 0.0 || w.axis.y != 0.0))
+    throw InputError("wall '" + w.name + "'", "axis", "not along z",
+                     "in 2D a cylinder wall is a circle in the x-y plane: its axis must be z");
+  if (p_.planar() && w.shape == WallShape::Plane &&
+      (w.normal.z != 0.0 || w.target_velocity.z != 0.0))
     throw InputError("wall '" + w.name + "'", "normal/velocity", "out of plane",
                      "2D walls have normals and velocities in the x-y plane");
   walls_.push_back(std::move(w));
@@ -761,6 +762,39 @@ void Simulation::scale_radii(double factor) {
     p_.inertia[i] = p_.inertia_of(p_.mass[i], r);
   }
   radius_growth_ += std::max(grow, 0.0);
+  baseline_.reset();
+  sample_requested_ = true;
+}
+
+void Simulation::set_radius(std::size_t i, double radius) {
+  if (!(radius > 0.0) || !std::isfinite(radius) || i >= p_.size())
+    throw InputError("radius change", "radius", num(radius), "must be a finite number > 0");
+  if (intact_bonds() > 0)
+    throw InputError("radius change", "bonds", std::to_string(intact_bonds()),
+                     "radii can only be changed before bonds are installed");
+  double& r = p_.pos_rad[i].r;
+  radius_growth_ += std::max(radius - r, 0.0);
+  r = radius;
+  p_.mass[i] = p_.mass_of(r, p_.density[i]);
+  p_.inertia[i] = p_.inertia_of(p_.mass[i], r);
+  baseline_.reset();
+  sample_requested_ = true;
+}
+
+void Simulation::place_particle(std::size_t i, const Vec3& position, double radius) {
+  set_radius(i, radius);
+  p_.pos_rad[i].x = position;
+  p_.vel[i] = {};
+  p_.angvel[i] = {};
+  radius_growth_ = std::max(radius_growth_, skin_);  // the lists no longer cover it: rebuild
+}
+
+void Simulation::refresh_time_step() {
+  if (intact_bonds() > 0)
+    throw InputError("time step", "bonds", std::to_string(intact_bonds()),
+                     "the time step is only re-estimated before bonds are installed");
+  if (!initialised_) return;
+  estimate_time_step();
   baseline_.reset();
   sample_requested_ = true;
 }

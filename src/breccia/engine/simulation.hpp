@@ -152,6 +152,15 @@ class Simulation {
   // radius expansion (physics.md §7.2) only: it is refused once bonds exist, and the energy ledger
   // restarts its baseline because stored energy changes without work.
   void scale_radii(double factor);
+  // Sets one particle's radius at constant density (packing: growing floaters). Same rules as
+  // scale_radii.
+  void set_radius(std::size_t index, double radius);
+  // Moves one particle to `position` with `radius` (at rest), before bonds exist (packing: a
+  // floater placed snug in its cage). The neighbour lists are rebuilt before the next step.
+  void place_particle(std::size_t index, const Vec3& position, double radius);
+  // Estimates the time step again for the current geometry (packing stages, whose radii and
+  // contacts change a lot between the start and the end); refused once bonds exist.
+  void refresh_time_step();
   // Changes the particle-particle friction coefficient of the contact law (packing stages).
   void set_contact_friction(double mu) {
     std::visit([&](auto& c) { c.params.friction = mu; }, contact_);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -220,9 +221,10 @@ const std::vector<Key>& key_table() {
                            "gengeo: an ESyS-Particle GenGeo LSMGeometry 1.2 file; lattice: FCC "
                            "(3D) or hexagonal (2D) block of equal particles",
                            &ExperimentSpec::sample_source));
-    k.push_back(choice_key("sample", "shape", {"prism", "cylinder", "rectangle"},
+    k.push_back(choice_key("sample", "shape", {"prism", "cylinder", "rectangle", "disk"},
                            "generated sample shape: prism or cylinder (axis z) in 3D, rectangle "
-                           "in 2D; also chooses the confining boundary of triaxial tests",
+                           "or disk (diameter) in 2D; also chooses the confining boundary of "
+                           "triaxial tests",
                            &ExperimentSpec::shape));
     k.push_back(real_key("sample", "width", "m", 0, kInf, true, "prism/rectangle size along x",
                          &ExperimentSpec::width));
@@ -231,7 +233,7 @@ const std::vector<Key>& key_table() {
     k.push_back(real_key("sample", "height", "m", 0, kInf, true,
                          "size along the loading axis (z in 3D, y in 2D)",
                          &ExperimentSpec::height));
-    k.push_back(real_key("sample", "diameter", "m", 0, kInf, true, "cylinder diameter",
+    k.push_back(real_key("sample", "diameter", "m", 0, kInf, true, "cylinder or disk diameter",
                          &ExperimentSpec::diameter));
     k.push_back(choice_key("sample", "distribution", {"uniform", "lognormal", "classes"},
                            "radius distribution (physics.md §7.1): uniform on [radius_min, "
@@ -257,6 +259,15 @@ const std::vector<Key>& key_table() {
                             "target porosity: fixes the particle count; with packing_target = "
                             "\"porosity\" also the final state",
                             [](ExperimentSpec& s) -> double& { return s.porosity; }));
+    k.push_back(choice_key(
+        "sample", "packing", {"expansion", "insertion", "preconsolidation"},
+        "how a generated sample is packed: expansion: radius expansion in a rigid vessel to "
+        "isotropic_stress or porosity, floaters grown (PFC / Potyondy & Cundall 2004, "
+        "physics.md §7.2); insertion: GenGeo-style constructive packing, every grain fitted "
+        "tangent to its neighbours, stress-free, radii emergent in [radius_min, radius_max] "
+        "(§7.4); preconsolidation (2D): disks compacted between particle-row walls to "
+        "preconsolidation_stress and bonded in that state (RICEBAL practice, seed 002, §7.3)",
+        &ExperimentSpec::packing));
     k.push_back(choice_key("sample", "packing_target", {"stress", "porosity"},
                            "stress: radii servo to isotropic_stress after packing (low locked-in "
                            "stress, P&C 2004); porosity: packed at the target porosity, "
@@ -265,6 +276,23 @@ const std::vector<Key>& key_table() {
     k.push_back(real_key("sample", "isotropic_stress", "Pa", 0, kInf, true,
                          "installation stress p0 of the packing (about 1 % of the UCS or less)",
                          &ExperimentSpec::isotropic_stress));
+    k.push_back(real_key("sample", "preconsolidation_stress", "Pa", 0, kInf, true,
+                         "packing = \"preconsolidation\": stress the particle-row walls compact "
+                         "the disks to before bonding (seed 002: 10 MPa)",
+                         &ExperimentSpec::preconsolidation_stress));
+    k.push_back(int_key("sample", "floater_contacts", 1, 12,
+                        "N_f: generated grains with fewer bonded neighbours are floaters and are "
+                        "placed snug in their cages, touching N_f or more (P&C 2004: 3 contacts; "
+                        "vessel walls do not count here)",
+                        [](ExperimentSpec& s) -> std::int64_t& { return s.floater_contacts; }));
+    k.push_back(real_key("sample", "floater_max_growth", "", 0, 1, false,
+                         "largest relative radius growth of a floater (P&C 2004: 0.2); 0 = "
+                         "floaters are counted, not grown",
+                         &ExperimentSpec::floater_max_growth));
+    k.push_back(int_key("sample", "insertion_failures", 10, 100000000,
+                        "packing = \"insertion\": consecutive failed fits that end the packing "
+                        "(GenGeo's numFails; more gives a denser packing)",
+                        [](ExperimentSpec& s) -> std::int64_t& { return s.insertion_failures; }));
     k.push_back(int_key("sample", "max_particles", 1, 100000000,
                         "refuse to generate samples with more particles than this",
                         [](ExperimentSpec& s) -> std::int64_t& { return s.max_particles; }));
@@ -322,29 +350,16 @@ const std::vector<Key>& key_table() {
                          &ExperimentSpec::wall_friction));
     k.push_back(
         choice_key("bond", "law", {"parallel_bond"}, "bond law", &ExperimentSpec::bond_law));
-    // [loading]
-    k.push_back(nested_real("loading", "platen_speed", "m/s", 0, kInf, true, true,
-                            "speed of each platen toward the other",
-                            [](ExperimentSpec& s) -> double& { return s.loading.platen_speed; }));
-    k.push_back(nested_real("loading", "ramp_time", "s", 0, kInf, false, true,
-                            "cosine ramp of the platen speed; 0 = 10 bar-wave transit times",
-                            [](ExperimentSpec& s) -> double& { return s.loading.ramp_time; }));
-    k.push_back(nested_real("loading", "max_strain", "", 0, 1, true, false,
-                            "stop at this axial strain",
-                            [](ExperimentSpec& s) -> double& { return s.loading.max_strain; }));
-    k.push_back(nested_real("loading", "stop_fraction", "", 0, 1, false, true,
-                            "after the peak, stop once the deviatoric stress is below this "
-                            "fraction of it",
-                            [](ExperimentSpec& s) -> double& { return s.loading.stop_fraction; }));
-    k.push_back(nested_real(
-        "loading", "confining_stress", "Pa", 0, kInf, false, true,
-        "0: uniaxial (UCS); > 0: triaxial (3D) or biaxial (2D) with servo-controlled lateral "
-        "walls (a cylindrical wall for cylinders) held at this stress",
-        [](ExperimentSpec& s) -> double& { return s.loading.confining_stress; }));
-    k.push_back(
-        nested_real("loading", "servo_relaxation", "", 0, 1, true, false,
-                    "alpha_s of the wall servo (physics.md §6.2)",
-                    [](ExperimentSpec& s) -> double& { return s.loading.servo_relaxation; }));
+    // [test]: the kind here, its keys from the test's own table (see apply_table).
+    {
+      std::vector<std::string> kinds;
+      std::string doc = "the lab test (protocol/registry.hpp): ";
+      for_each_lab_test([&]<class T>() {
+        kinds.emplace_back(T::name);
+        doc += "`" + std::string(T::name) + "`: " + std::string(T::summary) + " ";
+      });
+      k.push_back(choice_key("test", "kind", kinds, doc, &ExperimentSpec::test_kind));
+    }
     // [output]
     k.push_back(
         string_key("output", "directory",
@@ -441,6 +456,57 @@ std::string law_key_list() {
   return s;
 }
 
+// The layout before the test registry: [loading] with platen_speed, ramp_time, max_strain,
+// stop_fraction, confining_stress and servo_relaxation. Still read, as the test "ucs" when
+// confining_stress is 0 (or absent), else "triaxial" (3D) or "biaxial" (2D); its keys keep their
+// names in messages. Returns the kind ("" without [loading]).
+std::string legacy_loading_kind(const toml::table& root, const std::string& source) {
+  const toml::node* node = root.get("loading");
+  if (!node) return {};
+  const toml::table* loading = node->as_table();
+  if (!loading)
+    throw InputError(where_of(source, *node), "loading", show(*node), "must be a table");
+  if (root.contains("test"))
+    throw InputError(where_of(source, *node), "[loading]", "",
+                     "the old [loading] table and [test] cannot both be given: move its keys "
+                     "into [test] (with kind = \"ucs\", \"triaxial\", \"biaxial\" or "
+                     "\"brazilian\")");
+  double sigma3 = 0.0;
+  if (const auto* c = loading->get("confining_stress"))
+    sigma3 = get_real(*c, where_of(source, *c), "loading.confining_stress");
+  std::int64_t dim = 3;
+  if (const auto* e = root["engine"]["dimension"].node(); e && e->is_integer())
+    dim = e->as_integer()->get();
+  return sigma3 > 0.0 ? (dim == 2 ? "biaxial" : "triaxial") : "ucs";
+}
+
+// The keys of an old [loading] table onto the test it maps to (see legacy_loading_kind).
+void apply_legacy_loading(ExperimentSpec& spec, const toml::table& tbl, const std::string& source) {
+  static const std::vector<std::string> known{"platen_speed",     "ramp_time",
+                                              "max_strain",       "stop_fraction",
+                                              "confining_stress", "servo_relaxation"};
+  for (const auto& [kk, value] : tbl) {
+    const std::string item(kk.str()), full = "loading." + item;
+    const std::string where = where_of(source, value);
+    if (std::find(known.begin(), known.end(), item) == known.end())
+      throw InputError(where, full, show(value),
+                       "unknown key; allowed in the old [loading] table: platen_speed, ramp_time, "
+                       "max_strain, stop_fraction, confining_stress, servo_relaxation (the [test] "
+                       "table replaces it)");
+    bool found = false;
+    with_lab_test(spec.test_kind, [&]<class T>() {
+      set_law_key<T>(std::get<typename T::Params>(spec.test), item, value, where, full, found);
+    });
+    // A UCS has no confinement: its confining_stress (0) and servo gain are not used.
+    if (!found && spec.test_kind == "ucs" &&
+        (item == "confining_stress" || item == "servo_relaxation"))
+      continue;
+    if (!found)
+      throw InputError(where, full, show(value),
+                       "not a key of test kind \"" + spec.test_kind + "\"");
+  }
+}
+
 void apply_table(ExperimentSpec& spec, const toml::table& root, const std::string& source) {
   const auto& keys = key_table();
   auto find_key = [&](const std::string& section, const std::string& name) -> const Key* {
@@ -460,6 +526,16 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
       if (const auto* law = t->get("law"))
         find_key(sec, "law")->set(spec, *law, where_of(source, *law), std::string(sec) + ".law");
   }
+  if (const auto* t = root["test"].as_table())
+    if (const auto* kind = t->get("kind")) {
+      find_key("test", "kind")->set(spec, *kind, where_of(source, *kind), "test.kind");
+      with_lab_test(spec.test_kind, [&]<class T>() { spec.test = typename T::Params{}; });
+    }
+  const std::string legacy = legacy_loading_kind(root, source);
+  if (!legacy.empty()) {
+    spec.test_kind = legacy;
+    with_lab_test(legacy, [&]<class T>() { spec.test = typename T::Params{}; });
+  }
   for (const auto& [k, node] : root) {
     const std::string name(k.str());
     if (!node.is_table()) {
@@ -467,22 +543,27 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
       if (!key)
         throw InputError(where_of(source, node), name, show(node),
                          "unknown top-level key; allowed: name, and the tables [engine], "
-                         "[material], [sample], [contact], [bond], [loading], [output], [ae]");
+                         "[material], [sample], [contact], [bond], [test], [output], [ae]");
       key->set(spec, node, where_of(source, node), name);
       continue;
     }
     const toml::table& tbl = *node.as_table();
+    if (name == "loading") {
+      apply_legacy_loading(spec, tbl, source);
+      continue;
+    }
     bool section_known = false;
     for (const Key& key : keys) section_known |= key.section == name;
     if (!section_known)
       throw InputError(where_of(source, node), "[" + name + "]", "",
                        "unknown table; allowed: [engine], [material], [sample], [contact], "
-                       "[bond], [loading], [output], [ae]");
+                       "[bond], [test], [output], [ae]");
     for (const auto& [kk, value] : tbl) {
       const std::string item(kk.str());
       const std::string full = name + "." + item;
       const std::string where = where_of(source, value);
       if (item == "law" && (name == "contact" || name == "bond")) continue;
+      if (item == "kind" && name == "test") continue;
       if (item == "preset" && name == "material") continue;
       if (const Key* key = find_key(name, item)) {
         key->set(spec, value, where, full);
@@ -502,6 +583,11 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
       } else if (name == "bond") {
         set_law_key<ParallelBond>(spec.parallel_bond, item, value, where, full, found);
         allowed = "law, " + law_key_list<ParallelBond>();
+      } else if (name == "test") {
+        with_lab_test(spec.test_kind, [&]<class T>() {
+          set_law_key<T>(std::get<typename T::Params>(spec.test), item, value, where, full, found);
+          allowed = "kind, " + law_key_list<T>();
+        });
       } else {
         for (const Key& key : keys)
           if (key.section == name) allowed += (allowed.empty() ? "" : ", ") + key.name;
@@ -512,7 +598,8 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
             "unknown key" +
                 (name == "contact" || name == "bond"
                      ? " for law \"" + (name == "contact" ? spec.contact_law : spec.bond_law) + "\""
-                     : std::string()) +
+                 : name == "test" ? " for test kind \"" + spec.test_kind + "\""
+                                  : std::string()) +
                 "; allowed: " + allowed);
     }
   }
@@ -554,12 +641,16 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
     throw InputError(source, "contact.law", "\"hertz_mindlin\"",
                      "2D disks use \"linear\" contacts (Hertz has no disk form, physics.md §3.4)");
   if (s.sample_source == "generate") {
-    if (s.dimension == 2 && s.shape != "rectangle")
+    if (s.dimension == 2 && s.shape != "rectangle" && s.shape != "disk")
       throw InputError(source, "sample.shape", "\"" + s.shape + "\"",
-                       "2D samples are generated as \"rectangle\"");
-    if (s.dimension == 3 && s.shape == "rectangle")
-      throw InputError(source, "sample.shape", "\"rectangle\"",
+                       "2D samples are generated as \"rectangle\" or \"disk\"");
+    if (s.dimension == 3 && (s.shape == "rectangle" || s.shape == "disk"))
+      throw InputError(source, "sample.shape", "\"" + s.shape + "\"",
                        "3D samples are \"prism\" or \"cylinder\"");
+    if (s.packing == "preconsolidation" && s.shape != "rectangle")
+      throw InputError(source, "sample.packing", "\"preconsolidation\"",
+                       "preconsolidation between particle rows is a 2D procedure (seed 002): it "
+                       "needs engine.dimension = 2 and sample.shape = \"rectangle\"");
     if (s.distribution != "classes" && s.radius_min > s.radius_max)
       throw InputError(source, "sample.radius_max", num(s.radius_max),
                        "must be >= sample.radius_min = " + num(s.radius_min) + " m");
@@ -574,6 +665,8 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
                        std::to_string(s.class_radii.size()) + " radii",
                        "classes need one sample.class_mass_fractions entry per radius");
   }
+  visit_lab_test(
+      s.test, [&]<class T>(const typename T::Params& p) { T::check(p, sample_info(s), source); });
   if (s.density_scaling > 1.0 && s.gravity > 0.0)
     throw InputError(source, "engine.density_scaling", num(s.density_scaling),
                      "must be 1 when gravity is on: scaled masses would scale the weight");
@@ -645,7 +738,9 @@ void apply_preset(ExperimentSpec& s, const std::string& name, const std::string&
   throw InputError(where, "material.preset", "\"" + name + "\"", allowed);
 }
 
-// The built-in default: a UCS test on a small Berea-analog prism (about 2,300 grains).
+// The built-in default: a UCS test on a small Berea-analog prism (8 x 8 x 16 mm, about 5,900
+// grains of 0.22-0.36 mm: 27 mean grain diameters along the axis, the fewest for which the end
+// eighths pass the homogeneity bars, see ARCHITECTURE.md "Samples").
 ExperimentSpec default_experiment() {
   ExperimentSpec s;
   s.engine.local_damping = 0.7;
@@ -653,11 +748,77 @@ ExperimentSpec default_experiment() {
   s.preset = "berea_analog";
   apply_preset(s, s.preset, "built-in default");
   s.density_scaling = 10.0;
-  s.loading.platen_speed = 0.02;  // quasi-static: kinetic/strain energy below 1e-3 before the peak
-  s.loading.max_strain = 0.03;
-  s.loading.stop_fraction = 0.6;
+  s.radius_min = 0.22e-3;
+  s.radius_max = 0.36e-3;
+  s.radius_mean = 0.29e-3;  // lognormal: within the bounds
+  s.radius_sd = 0.04e-3;
+  // Unlubricated steel platens (rock on steel, about 0.3): with frictionless platens the grains
+  // against them, loaded at one point each and free to slide, break first and the test crushes
+  // an end (ARCHITECTURE.md, "Samples").
+  s.wall_friction = 0.3;
+  s.test_kind = "ucs";
+  // 0.03 m/s keeps kinetic/strain energy below 1e-3 before the peak on this sample (8.2e-4).
+  s.test = UcsTest::Params{.platen_speed = 0.03};
   s.source = "built-in default";
   return s;
+}
+
+double confining_stress(const ExperimentSpec& spec) {
+  return std::visit(
+      [](const auto& p) {
+        if constexpr (requires { p.confining_stress; })
+          return p.confining_stress;
+        else
+          return 0.0;
+      },
+      spec.test);
+}
+
+void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string& where) {
+  double speed = 0, ramp = 0, strain = 0, stop = 0, relax = 0.5;
+  bool compression = false;
+  std::visit(
+      [&](const auto& p) {
+        using P = std::decay_t<decltype(p)>;
+        compression = std::is_same_v<P, UcsTest::Params> ||
+                      std::is_same_v<P, TriaxialTest::Params> ||
+                      std::is_same_v<P, BiaxialTest::Params>;
+        speed = p.platen_speed;
+        ramp = p.ramp_time;
+        strain = p.max_strain;
+        stop = p.stop_fraction;
+        if constexpr (requires { p.servo_relaxation; }) relax = p.servo_relaxation;
+      },
+      spec.test);
+  if (!compression)
+    throw InputError(where, "test.kind", "\"" + spec.test_kind + "\"",
+                     "a confining-stress sweep needs a compression test (\"ucs\", \"triaxial\" "
+                     "or \"biaxial\")");
+  if (!(sigma3 > 0.0)) {
+    spec.test_kind = "ucs";
+    spec.test = UcsTest::Params{speed, ramp, strain, stop};
+  } else if (spec.dimension == 2) {
+    spec.test_kind = "biaxial";
+    spec.test = BiaxialTest::Params{speed, ramp, strain, stop, sigma3, relax};
+  } else {
+    spec.test_kind = "triaxial";
+    spec.test = TriaxialTest::Params{speed, ramp, strain, stop, sigma3, relax};
+  }
+}
+
+SampleInfo sample_info(const ExperimentSpec& s) {
+  SampleInfo info;
+  info.dimension = static_cast<int>(s.dimension);
+  info.thickness = s.thickness;
+  if (s.sample_source == "generate") {
+    info.shape = s.shape;
+    info.diameter = s.diameter;
+    info.height = s.height;
+    info.r_max = s.distribution == "classes" && !s.class_radii.empty()
+                     ? *std::max_element(s.class_radii.begin(), s.class_radii.end())
+                     : s.radius_max;
+  }
+  return info;
 }
 
 ExperimentSpec parse_experiment(const std::string& text, const std::string& source,
@@ -708,15 +869,20 @@ std::string to_toml(const ExperimentSpec& spec) {
       for (const auto& f : ParallelBond::fields())
         out += std::string(f.key) + " = " + f.default_text(spec.parallel_bond) + "\n";
     }
+    if (k.section == "test" && k.name == "kind")
+      visit_lab_test(spec.test, [&]<class T>(const typename T::Params& p) {
+        for (const auto& f : T::fields())
+          out += std::string(f.key) + " = " + f.default_text(p) + "\n";
+      });
   }
   return out;
 }
 
 namespace {
 template <class Law>
-std::string law_docs(const std::string& section) {
+std::string law_docs(const std::string& section, const char* what = "law") {
   std::string s =
-      fmt::format("\n#### `{}` law `\"{}\"`\n\n{}\n\n", section, Law::name, Law::summary);
+      fmt::format("\n#### `{}` {} `\"{}\"`\n\n{}\n\n", section, what, Law::name, Law::summary);
   s += "| key | unit | default | allowed | meaning |\n|---|---|---|---|---|\n";
   static const typename Law::Params d{};
   for (const auto& f : Law::fields())
@@ -746,6 +912,13 @@ std::string experiment_docs() {
     if (k.section == "contact" && k.name == "wall_friction")
       s += law_docs<LinearContact>("contact") + law_docs<HertzMindlin>("contact");
     if (k.section == "bond" && k.name == "law") s += law_docs<ParallelBond>("bond");
+    if (k.section == "test" && k.name == "kind") {
+      for_each_lab_test([&]<class T>() { s += law_docs<T>("test", "kind"); });
+      s += "\nThe old `[loading]` table (platen_speed, ramp_time, max_strain, stop_fraction, "
+           "confining_stress, servo_relaxation) is still read: it becomes `[test]` with kind "
+           "`\"ucs\"` when confining_stress is 0 or absent, else `\"triaxial\"` (3D) or "
+           "`\"biaxial\"` (2D). `--set loading.confining_stress=...` works the same way.\n";
+    }
   }
   return s;
 }

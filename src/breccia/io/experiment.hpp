@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "breccia/engine/simulation.hpp"
-#include "breccia/protocol/compression_test.hpp"
+#include "breccia/protocol/registry.hpp"
 
 namespace breccia {
 
@@ -32,8 +32,13 @@ struct ExperimentSpec {
   double radius_min = 0.3e-3, radius_max = 0.5e-3, radius_mean = 0.4e-3, radius_sd = 0.05e-3;
   std::vector<double> class_radii, class_mass_fractions;
   double porosity = 0.37;
+  std::string packing = "expansion";      // expansion | insertion | preconsolidation (2D)
   std::string packing_target = "stress";  // "stress" (servo to isotropic_stress) or "porosity"
   double isotropic_stress = 0.1e6;
+  double preconsolidation_stress = 10e6;
+  std::int64_t floater_contacts = 3;
+  double floater_max_growth = 0.2;
+  std::int64_t insertion_failures = 5000;
   std::int64_t max_particles = 2'000'000;
   bool cache = true;                            // reuse a generated sample with the same settings
   std::array<std::int64_t, 3> cells{6, 6, 12};  // lattice
@@ -52,8 +57,9 @@ struct ExperimentSpec {
   // [bond]
   std::string bond_law = "parallel_bond";
   ParallelBond::Params parallel_bond;
-  // [loading]
-  PlatenCompressionSettings loading;
+  // [test] (the old [loading] table is still read and mapped onto it)
+  std::string test_kind = "ucs";
+  TestParams test = UcsTest::Params{};
   // [output]
   std::string output_directory = "runs";
   std::int64_t history_interval = 200;      // steps
@@ -78,6 +84,14 @@ struct ExperimentSpec {
 };
 
 ExperimentSpec default_experiment();
+
+// sigma_3 of the experiment's test (0 for tests without confinement).
+double confining_stress(const ExperimentSpec& spec);
+// The compression test of the same loading at confining stress `sigma3`: "ucs" at 0, "triaxial"
+// (3D) or "biaxial" (2D) above (sweeps). Throws InputError for tests that are not compression.
+void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string& where);
+// What the test knows about the sample before it is built.
+SampleInfo sample_info(const ExperimentSpec& spec);
 
 // Material presets: names, and a one-line description of each (with its provenance).
 std::vector<std::pair<std::string, std::string>> material_presets();

@@ -557,7 +557,7 @@ json write_failure_analysis(const fs::path& folder, const FailureInputs& in) {
     w_cont *= in.volume0;
     const double w_engine = hist.at(last, "boundary_work_j") - hist.at(0, "boundary_work_j");
     const double E = an.e_t50.valid ? an.e_t50.slope : kNaN, nu = an.poisson;
-    const double s3 = spec.loading.confining_stress, s1 = an.sigma1_at_peak, q = an.peak_deviatoric;
+    const double s3 = confining_stress(spec), s1 = an.sigma1_at_peak, q = an.peak_deviatoric;
     const double ue = analysis::elastic_energy_density(s1, s3, E, nu);
     const double ue_dev = analysis::deviatoric_elastic_energy_density(q, s3, E, nu);
     const auto stored = [&](std::size_t r) {

@@ -12,9 +12,11 @@
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <thread>
 
 #include "breccia/analysis/compression.hpp"
+#include "breccia/analysis/crack_pattern.hpp"
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
@@ -79,7 +81,7 @@ fs::path make_folder(const ExperimentSpec& spec) {
 
 struct Built {
   Simulation sim;
-  PlatenCompression protocol;
+  std::unique_ptr<Protocol> protocol;
   double bar_wave_speed = 0.0;
   json sample_report;
   std::uint64_t consolidation_steps = 0;
@@ -92,22 +94,67 @@ std::string resolve(const ExperimentSpec& s, const std::string& file) {
 }
 
 json packing_json(const PackingReport& r) {
-  return json{{"particles", r.particles},
-              {"bonds", r.bonds},
-              {"porosity", r.porosity},
-              {"mean_coordination", r.mean_coordination},
-              {"bonds_per_interior_particle", r.bond_coordination_interior},
-              {"locked_in_mean_stress_pa", r.locked_in_mean_stress},
-              {"locked_in_stress_diagonal_pa", {r.locked_in_xx, r.locked_in_yy, r.locked_in_zz}},
-              {"radius_mean_m", r.radius_mean},
-              {"radius_sd_m", r.radius_sd},
-              {"radius_min_m", r.radius_min},
-              {"radius_max_m", r.radius_max},
-              {"floaters_fewer_than_3_contacts", r.floaters},
-              {"packing_steps", r.steps},
-              {"converged", r.converged},
-              {"size_m", {r.width, r.depth, r.height}},
-              {"packing_seconds", r.wall_seconds}};
+  const SampleStructure& ss = r.structure;
+  json profile = json::array();
+  for (const ProfileSlice& sl : ss.profile)
+    profile.push_back({{"from_m", sl.lo},
+                       {"to_m", sl.hi},
+                       {"grains", sl.grains},
+                       {"bonds_per_grain", sl.bonds_per_grain},
+                       {"solid_fraction", sl.solid_fraction}});
+  const HomogeneityCheck& h = ss.homogeneity;
+  json stages = json::array();
+  for (const PackingStage& st : r.stages)
+    stages.push_back(
+        {{"stage", st.name}, {"steps", st.steps}, {"seconds", st.seconds}, {"note", st.note}});
+  const double n = static_cast<double>(std::max<std::size_t>(ss.particles, 1));
+  return json{
+      {"method", r.method},
+      {"particles", ss.particles},
+      {"bonds", ss.bonds},
+      {"porosity", ss.porosity},
+      {"contact_coordination", ss.contact_coordination},
+      {"bond_coordination", ss.bond_coordination},
+      {"bonds_per_interior_particle", ss.bonds_per_interior_particle},
+      {"floaters",
+       {{"definition",
+         fmt::format("grains with fewer than {} contacts: bonded neighbours plus vessel walls "
+                     "within the bond gap tolerance (Potyondy & Cundall 2004)",
+                     ss.floater_contacts)},
+        {"count", ss.floaters},
+        {"fraction", static_cast<double>(ss.floaters) / n},
+        {"grains_with_fewer_bonds", ss.few_bonds},
+        {"grains_with_fewer_bonds_fraction", static_cast<double>(ss.few_bonds) / n},
+        {"unbonded_grains", ss.unbonded},
+        {"grown", r.floaters_grown},
+        {"largest_growth", r.largest_floater_growth}}},
+      {"locked_in_stress",
+       {{"contact_law", r.contact_law},
+        {"mean_pa", r.locked_in_mean_stress},
+        {"diagonal_pa", {r.locked_in_xx, r.locked_in_yy, r.locked_in_zz}}}},
+      {"profile_along_axis", profile},
+      {"homogeneity",
+       {{"passes", h.passes()},
+        {"bars",
+         "interior eighths within 3 % of their mean; end eighths within 3 % of each other "
+         "and 8 % of the interior mean (bonds per grain and solid fraction)"},
+        {"interior_bonds_spread", h.interior_bonds_spread},
+        {"interior_solid_spread", h.interior_solid_spread},
+        {"end_bonds_difference", h.end_bonds_difference},
+        {"end_solid_difference", h.end_solid_difference},
+        {"end_bonds_deficit", h.end_bonds_deficit},
+        {"end_solid_deficit", h.end_solid_deficit}}},
+      {"preconsolidation_stress_reached_pa", r.preconsolidation_stress_reached},
+      {"radius_mean_m", r.radius_mean},
+      {"radius_sd_m", r.radius_sd},
+      {"radius_min_m", r.radius_min},
+      {"radius_max_m", r.radius_max},
+      {"packing_steps", r.steps},
+      {"converged", r.converged},
+      {"size_m", {r.width, r.depth, r.height}},
+      {"stages", stages},
+      {"warnings", r.warnings},
+      {"packing_seconds", r.wall_seconds}};
 }
 
 // A short stable hash of the settings that define a generated sample (the cache key).
@@ -123,7 +170,10 @@ std::string sample_key(const ExperimentSpec& s) {
     if (in || line.rfind("seed", 0) == 0 || line.rfind("dimension", 0) == 0) sample_part += line;
   }
   // The packing revision: a change of the algorithm must not reuse samples packed before it.
-  sample_part += fmt::format("|{}|packing-2", s.parallel_bond.modulus);
+  // The packing cycles with the test's contact law: its parameters define the sample too.
+  const std::size_t c0 = text.find("\n[contact]"), c1 = text.find("\n[bond]");
+  if (c0 != std::string::npos && c1 != std::string::npos) sample_part += text.substr(c0, c1 - c0);
+  sample_part += "|packing-4";
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : sample_part) h = (h ^ c) * 1099511628211ull;
   return fmt::format("{:016x}", h);
@@ -131,10 +181,22 @@ std::string sample_key(const ExperimentSpec& s) {
 
 }  // namespace
 
+ContactModel contact_model(const ExperimentSpec& s) {
+  if (s.contact_law == "linear") {
+    LinearContact::Params w = s.linear;
+    w.friction = s.wall_friction;
+    return make_contact_model<LinearContact>(s.linear, w);
+  }
+  HertzMindlin::Params w = s.hertz;
+  w.friction = s.wall_friction;
+  return make_contact_model<HertzMindlin>(s.hertz, w);
+}
+
 PackingSettings packing_settings(const ExperimentSpec& s) {
   PackingSettings p;
   p.shape = s.shape == "cylinder"    ? SampleShape::Cylinder
             : s.shape == "rectangle" ? SampleShape::Rectangle
+            : s.shape == "disk"      ? SampleShape::Disk
                                      : SampleShape::Prism;
   p.width = s.width;
   p.depth = s.depth;
@@ -149,13 +211,18 @@ PackingSettings packing_settings(const ExperimentSpec& s) {
   p.radii.class_radius = s.class_radii;
   p.radii.class_mass_fraction = s.class_mass_fractions;
   p.density = s.density;
+  p.method = s.packing == "insertion"          ? PackingMethod::Insertion
+             : s.packing == "preconsolidation" ? PackingMethod::Preconsolidation
+                                               : PackingMethod::Expansion;
   p.porosity = s.porosity;
   p.servo_to_stress = s.packing_target == "stress";
   p.isotropic_stress = s.isotropic_stress;
-  // Packing contacts get the bond modulus: what matters is the stress-overlap scale of the
-  // sample that the bonds will hold.
-  p.contact_modulus = s.parallel_bond.modulus;
+  p.preconsolidation_stress = s.preconsolidation_stress;
+  p.contact = contact_model(s);
   p.bond_gap_tolerance = s.bond_gap_tolerance;
+  p.floater_contacts = static_cast<int>(s.floater_contacts);
+  p.floater_max_growth = s.floater_max_growth;
+  p.insertion_failures = static_cast<std::uint64_t>(s.insertion_failures);
   p.seed = s.engine.seed;
   p.max_particles = static_cast<std::size_t>(s.max_particles);
   return p;
@@ -179,13 +246,12 @@ GeneratedSample generate_sample(const ExperimentSpec& s, const std::string& path
 
 namespace {
 
-GeometryData load_sample(const ExperimentSpec& s, json& report, LateralBoundary& lateral,
+GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info,
                          const std::function<void(const std::string&)>& log) {
   const Dimension want = s.dimension == 2 ? Dimension::Two : Dimension::Three;
-  lateral = LateralBoundary::Prism;
+  info = sample_info(s);
   GeometryData g;
   if (s.sample_source == "generate") {
-    lateral = s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism;
     const fs::path cache = fs::path(s.output_directory) / "samples" /
                            fmt::format("{}-{}.geom", s.shape, sample_key(s));
     if (s.cache && fs::exists(cache) && fs::exists(cache.string() + ".json")) {
@@ -207,9 +273,12 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, LateralBoundary&
     if (fs::exists(p + ".json")) {
       std::ifstream in(p + ".json");
       report = json::parse(in, nullptr, false);
-      if (report.contains("settings") && report["settings"].is_string() &&
-          report["settings"].get<std::string>().find("shape = \"cylinder\"") != std::string::npos)
-        lateral = LateralBoundary::Cylinder;
+      // A sample written by `breccia generate` says its shape in its settings.
+      if (report.contains("settings") && report["settings"].is_string())
+        for (const char* shape : {"prism", "cylinder", "rectangle", "disk"})
+          if (report["settings"].get<std::string>().find(fmt::format("shape = \"{}\"", shape)) !=
+              std::string::npos)
+            info.shape = shape;
     }
     report["file"] = p;
   } else if (s.sample_source == "table") {
@@ -241,30 +310,24 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, LateralBoundary&
 
 Built build(const ExperimentSpec& s, const std::function<void(const std::string&)>& log) {
   json report;
-  LateralBoundary lateral;
-  GeometryData g = load_sample(s, report, lateral, log);
+  SampleInfo info;
+  GeometryData g = load_sample(s, report, info, log);
   // Density scaling (physics.md §1.5): masses and inertias grow, so does the stable time step.
   for (ParticleSpec& q : g.particles) q.density *= s.density_scaling;
   ParticleStore ps = g.make_store();
   EngineConfig cfg = s.engine;
   cfg.gravity = s.dimension == 2 ? Vec3{0, -s.gravity, 0} : Vec3{0, 0, -s.gravity};
-  ContactModel contact;
-  if (s.contact_law == "linear") {
-    LinearContact::Params w = s.linear;
-    w.friction = s.wall_friction;
-    contact = make_contact_model<LinearContact>(s.linear, w);
-  } else {
-    HertzMindlin::Params w = s.hertz;
-    w.friction = s.wall_friction;
-    contact = make_contact_model<HertzMindlin>(s.hertz, w);
-  }
-  Simulation sim(std::move(ps), cfg, std::move(contact));
+  Simulation sim(std::move(ps), cfg, contact_model(s));
   sim.set_bond_params<ParallelBond>(s.parallel_bond);
   if (!g.bonds.empty())
     for (auto [a, b] : g.bonds) sim.add_bond<ParallelBond>(a, b);
   else
     sim.bond_touching_pairs<ParallelBond>(s.bond_gap_tolerance);
-  PlatenCompression protocol(sim, s.loading, lateral);
+  std::unique_ptr<Protocol> protocol;
+  visit_lab_test(s.test, [&]<class T>(const typename T::Params& p) {
+    T::check(p, info, s.source);
+    protocol = T::create(sim, p, info);
+  });
   sim.initialise();
   // Bar-wave speed for the ramp (§2.3, §6.1): E estimated by the bond modulus, bulk density from
   // the (scaled) particle mass in the sample's bounding box.
@@ -284,7 +347,7 @@ Built build(const ExperimentSpec& s, const std::function<void(const std::string&
   const double volume = (hi - lo) * (footprint_hi[0] - footprint_lo[0]) *
                         (s.dimension == 2 ? s.thickness : footprint_hi[1] - footprint_lo[1]);
   const double v_bar = std::sqrt(s.parallel_bond.modulus / (mass / volume));
-  const std::uint64_t consolidation = protocol.start(sim, v_bar);
+  const std::uint64_t consolidation = protocol->start(sim, v_bar);
   return Built{std::move(sim), std::move(protocol), v_bar, report, consolidation};
 }
 
@@ -410,15 +473,28 @@ std::string summarise_folder(const std::string& folder) {
   std::string s =
       fmt::format("{}: {}, sigma3 = {} ({}; {})\n", j.value("experiment", ""), j.value("test", ""),
                   mpa(j, "confining_stress_pa"), j.value("status", ""), j.value("stop_reason", ""));
-  s += fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
-                   mpa(j, "peak_deviatoric_stress_pa"), plain(j, "axial_strain_at_peak", "{:.5f}"),
-                   gpa(j, "youngs_modulus_pa"), plain(j, "poisson_ratio"));
+  if (j.contains("tensile_strength_pa"))
+    s += fmt::format("  tensile strength sigma_t = 2F/(pi D t) {} (peak force {} N) at strain {}\n",
+                     mpa(j, "tensile_strength_pa"), plain(j, "peak_force_n", "{:.4g}"),
+                     plain(j, "axial_strain_at_peak", "{:.5f}"));
+  else
+    s +=
+        fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
+                    mpa(j, "peak_deviatoric_stress_pa"), plain(j, "axial_strain_at_peak", "{:.5f}"),
+                    gpa(j, "youngs_modulus_pa"), plain(j, "poisson_ratio"));
   s += fmt::format("  crack initiation {}, crack damage {}, residual {}\n",
                    mpa(j, "crack_initiation_stress_pa"), mpa(j, "crack_damage_stress_pa"),
                    mpa(j, "residual_strength_pa"));
   s += fmt::format("  {} particles, {} bonds; {} cracks ({} tensile, {} shear)\n",
                    j.value("particles", 0), j.value("bonds_initial", 0), j.value("bonds_broken", 0),
                    j.value("cracks_tensile", 0), j.value("cracks_shear", 0));
+  if (j.contains("crack_pattern") && j["crack_pattern"].contains("quarter_shares_along_axis")) {
+    const json& q = j["crack_pattern"]["quarter_shares_along_axis"];
+    if (q.is_array() && q.size() == 4 && q[0].is_number())
+      s += fmt::format("  cracks per quarter along the axis: {:.2f} {:.2f} {:.2f} {:.2f}\n",
+                       q[0].get<double>(), q[1].get<double>(), q[2].get<double>(),
+                       q[3].get<double>());
+  }
   const json& qs = j["quasi_static"];
   s += fmt::format("  quasi-static: {} (platen imbalance {}, kinetic/strain {})",
                    qs.value("ok", false) ? "yes" : "NO",
@@ -517,7 +593,7 @@ struct LoopState {
 // One run in progress: everything a checkpoint holds.
 struct Session {
   Simulation sim;
-  PlatenCompression test;
+  std::unique_ptr<Protocol> test;
   HistoryRecorder history;
   CrackRecorder cracks;
   SnapshotWriter snaps;
@@ -539,7 +615,7 @@ void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Sessio
     a.string(to_toml(spec));
     s.loop.save(a);
     s.sim.save_state(a);
-    s.test.save_state(a);
+    s.test->save_state(a);
     s.history.save_state(a);
     s.cracks.save_state(a);
     s.snaps.save_state(a);
@@ -582,6 +658,39 @@ void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
   ae.configure(vs);
 }
 
+// Where the cracks are: shares per quarter along the loading axis (between the platens as they
+// stood when loading began) and, for a Brazilian disc, how close they lie to the loaded diameter.
+json crack_pattern_json(const Protocol& test, const Simulation& sim) {
+  std::vector<double> axial, offset;
+  std::vector<bool> tensile;
+  for (const CrackRecord& c : sim.cracks()) {
+    axial.push_back(c.position[test.axis()]);
+    tensile.push_back(c.mode == CrackMode::Tensile);
+  }
+  const auto q = analysis::quarter_shares(axial, test.origin0(), test.origin0() + test.length0());
+  json j{{"quarter_shares_along_axis", {q[0], q[1], q[2], q[3]}},
+         {"largest_end_quarter_share", std::max(q[0], q[3])},
+         {"quarters",
+          "cracks per quarter of the initial length along the loading axis, from the "
+          "bottom platen; a test that fails through its body has no end quarter "
+          "above 0.40"}};
+  if (const auto* b = dynamic_cast<const BrazilianTest*>(&test)) {
+    for (const CrackRecord& c : sim.cracks()) offset.push_back(c.position.x - b->centre().x);
+    const analysis::SplitPattern sp = analysis::split_pattern(offset, tensile, 0.5 * b->diameter());
+    j["brazilian"] = {
+        {"band_half_width_fraction_of_radius", sp.band},
+        {"early_cracks", sp.early},
+        {"early_tensile_share", sp.early_tensile_share},
+        {"early_in_band_share", sp.early_in_band},
+        {"all_in_band_share", sp.all_in_band},
+        {"early_mean_offset_fraction_of_radius", sp.early_mean_offset},
+        {"note",
+         "cracks within +-band x R of the loaded diameter (x = disc centre); the first 20 % "
+         "by time are the early ones; a uniform scatter would put 31 % in the band"}};
+  }
+  return j;
+}
+
 // Loads the loop, runs it to its end (or the next interruption), and writes the summary and the
 // final manifest. `t_start` is when this session began.
 RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& manifest, Session& ss,
@@ -617,12 +726,12 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
 
   try {
     Simulation& sim = ss.sim;
-    PlatenCompression& test = ss.test;
+    Protocol& test = *ss.test;
     LoopState& L = ss.loop;
     analysis::CompressionSeries& series = L.series;
     result.particles = sim.particles().size();
     result.bonds = L.bonds_initial;
-    result.confining_stress = spec.loading.confining_stress;
+    result.confining_stress = test.confining_stress();
     const auto interval = static_cast<std::uint64_t>(spec.history_interval);
     std::string stop = "";
     std::string status = "complete";
@@ -664,9 +773,9 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
       const double stored = sim.ledger().bond.total() + sim.ledger().contact;
       L.imbalance.push_back(fbar > 0.0 ? std::abs(a.force_top - a.force_bottom) / fbar : 0.0);
       L.ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
-      if (test.confined())
-        L.confine_err.push_back(std::abs(a.confining_stress - spec.loading.confining_stress) /
-                                spec.loading.confining_stress);
+      if (test.confining_stress() > 0.0)
+        L.confine_err.push_back(std::abs(a.confining_stress - test.confining_stress()) /
+                                test.confining_stress());
       if (spec.snapshot_strain_interval > 0.0 && a.strain >= L.next_snapshot) {
         ss.snaps.write(sim);
         while (L.next_snapshot <= a.strain) L.next_snapshot += spec.snapshot_strain_interval;
@@ -684,7 +793,7 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
       }
       if (opt.show_progress && now - last_bar > std::chrono::milliseconds(250)) {
         last_bar = now;
-        const double frac = std::clamp(a.strain / spec.loading.max_strain, 1e-9, 1.0);
+        const double frac = std::clamp(a.strain / test.max_strain(), 1e-9, 1.0);
         const double el = wall();
         const int width = 30, fill = static_cast<int>(frac * width);
         std::fprintf(stderr,
@@ -740,26 +849,21 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
           imbalance_pre, ke_ratio_pre, ke_ratio_intact,
           crack_release ? "the loading was quasi-static until bonds broke: the excess is kinetic "
                           "energy released by breaking bonds near the peak"
-                        : "lower loading.platen_speed"));
+                        : "lower test.platen_speed"));
     }
-    if (test.confined() && confine_err_pre > 0.02)
+    if (test.confining_stress() > 0.0 && confine_err_pre > 0.02)
       warnings.push_back(fmt::format(
           "the confining stress left its 2 % band before the peak (largest error {:.3g} %)",
           100 * confine_err_pre));
     for (std::size_t k = logged; k < warnings.size(); ++k) log("warning: " + warnings[k]);
-    const char* test_kind = !test.confined()      ? "uniaxial compression (UCS)"
-                            : spec.dimension == 2 ? "biaxial compression"
-                                                  : "triaxial compression";
     json summary{
         {"status", status},
         {"stop_reason", stop},
         {"experiment", spec.name},
-        {"test", test_kind},
-        {"confining_stress_pa", spec.loading.confining_stress},
-        {"lateral_boundary", !test.confined() ? "none"
-                             : test.lateral() == LateralBoundary::Cylinder
-                                 ? "cylindrical servo wall"
-                                 : "servo-controlled plane walls"},
+        {"test", test.label()},
+        {"test_kind", test.kind()},
+        {"confining_stress_pa", test.confining_stress()},
+        {"lateral_boundary", test.lateral_boundary()},
         {"particles", result.particles},
         {"bonds_initial", result.bonds},
         {"bonds_broken", result.cracks},
@@ -804,15 +908,26 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
         {"confining_stress_error",
          {{"max_relative_before_peak", confine_err_pre},
           {"max_relative_overall", confine_err_all}}},
-        {"platen_speed_m_per_s", spec.loading.platen_speed},
-        {"strain_rate_per_s", 2.0 * spec.loading.platen_speed / test.height0()},
-        {"sample_height_m", test.height0()},
-        {"sample_area_m2", test.area()},
+        {"platen_speed_m_per_s", test.platen_speed()},
+        {"strain_rate_per_s", 2.0 * test.platen_speed() / test.length0()},
+        {"sample_height_m", test.length0()},
+        {"sample_area_m2", test.area0()},
         {"sample", manifest.value("sample", json::object())},
         {"energy", ledger_json(sim.ledger())},
         {"snapshots", ss.snaps.count()},
         {"warnings", warnings}};
     if (manifest.contains("resumed")) summary["resumed"] = manifest["resumed"];
+    summary["crack_pattern"] = crack_pattern_json(test, sim);
+    if (const auto* b = dynamic_cast<const BrazilianTest*>(&test)) {
+      summary["tensile_strength_pa"] = an.peak_deviatoric;
+      summary["tensile_strength_mpa"] = an.peak_deviatoric * 1e-6;
+      summary["tensile_strength_method"] =
+          "sigma_t = 2 F / (pi D t) at the largest mean platen force F (ISRM Brazilian test)";
+      summary["peak_force_n"] =
+          0.5 * an.peak_deviatoric * std::numbers::pi * b->diameter() * b->thickness();
+      summary["disc_diameter_m"] = b->diameter();
+      summary["disc_thickness_m"] = b->thickness();
+    }
     // Failure analysis: events, indicators, stages, fragments, energy budget (analysis.md §2-§9).
     const json failure = write_failure_analysis(
         folder, FailureInputs{spec, sim, ss.ae, series, an, L.volume0, L.porosity0, L.length_min,
@@ -881,31 +996,32 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   write_json(folder / "manifest.json", manifest);
 
   Simulation& sim = b.sim;
-  PlatenCompression& test = b.protocol;
+  Protocol& test = *b.protocol;
   LoopState loop;
   AeSettings ae_settings;
   loop.warnings = sim.warnings();
   loop.consolidation_steps = b.consolidation_steps;
   loop.bonds_initial = sim.intact_bonds();
-  loop.series.confining_stress = spec.loading.confining_stress;
+  loop.series.confining_stress = test.confining_stress();
   loop.next_snapshot = spec.snapshot_strain_interval;
-  if (test.confined() && !test.consolidated())
+  if (test.confining_stress() > 0.0 && !test.consolidated())
     loop.warnings.push_back(fmt::format(
         "consolidation to {} MPa did not settle within {} steps; loading started anyway",
-        spec.loading.confining_stress * 1e-6, b.consolidation_steps));
+        test.confining_stress() * 1e-6, b.consolidation_steps));
   for (const std::string& w : loop.warnings) log("warning: " + w);
   manifest["time_step_s"] = sim.time_step();
   manifest["critical_time_step_s"] = sim.critical_time_step();
   manifest["particles"] = sim.particles().size();
   manifest["bonds"] = sim.intact_bonds();
   manifest["consolidation_steps"] = b.consolidation_steps;
-  manifest["strain_rate_per_s"] = 2.0 * spec.loading.platen_speed / test.height0();
+  manifest["strain_rate_per_s"] = 2.0 * test.platen_speed() / test.length0();
   write_json(folder / "manifest.json", manifest);
-  log(fmt::format(
-      "sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s){}",
-      sim.particles().size(), sim.intact_bonds(), sim.time_step(), sim.critical_time_step(),
-      test.confined() ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
-                                    spec.loading.confining_stress * 1e-6, b.consolidation_steps)
+  log(fmt::format("sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s){}",
+                  sim.particles().size(), sim.intact_bonds(), sim.time_step(),
+                  sim.critical_time_step(),
+                  test.confining_stress() > 0.0
+                      ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
+                                    test.confining_stress() * 1e-6, b.consolidation_steps)
                       : ""));
   // Reference state for porosity and D2, and the acoustic-emission monitor.
   {
@@ -915,11 +1031,11 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
       solid += p.mass[i] / p.density[i];
       r_max = std::max(r_max, p.pos_rad[i].r);
     }
-    loop.volume0 = test.height0() * test.area();
+    loop.volume0 = test.length0() * test.area0();
     loop.porosity0 = 1.0 - solid / loop.volume0;
     loop.length_min = spec.dimension == 2
-                          ? std::min(test.height0(), test.width0())
-                          : std::min({test.height0(), test.width0(), test.depth0()});
+                          ? std::min(test.length0(), test.width0())
+                          : std::min({test.length0(), test.width0(), test.depth0()});
     ae_settings.source_radius =
         spec.ae_source_radius > 0.0 ? spec.ae_source_radius : 3.0 * (2.0 * r_max);
   }
@@ -992,8 +1108,10 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   LoopState loop;
   loop.load(a);
   Simulation sim = Simulation::restore(a);
-  PlatenCompression test = PlatenCompression::restore(a);
-  test.check_restored(sim, cpath.string());
+  std::unique_ptr<Protocol> test;
+  if (!with_lab_test(spec.test_kind, [&]<class T>() { test = T::restore(a); }))
+    throw InputError(cpath.string(), "test.kind", spec.test_kind, "not a registered test");
+  test->check_restored(sim, cpath.string());
   HistoryRecorder history((folder / "history.csv").string(), a);
   CrackRecorder cracks((folder / "cracks.csv").string(), a);
   SnapshotWriter snaps((folder / "snapshots").string(), a, sim);
@@ -1031,6 +1149,10 @@ SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& con
     if (!(c >= 0.0))
       throw InputError("sweep", "--confining", num(c), "each confining stress must be >= 0 Pa");
   ExperimentSpec base = spec;
+  {
+    ExperimentSpec probe = spec;  // a test that cannot be swept fails before any folder exists
+    set_confining_stress(probe, confining.front(), "sweep");
+  }
   const fs::path folder = make_folder(spec);
   fs::rename(folder, folder.string() + "-sweep");
   SweepResult out;
@@ -1042,7 +1164,7 @@ SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& con
   out.status = "complete";
   for (double c : confining) {
     ExperimentSpec one = base;
-    one.loading.confining_stress = c;
+    set_confining_stress(one, c, "sweep");
     one.name = fmt::format("{}-confining-{}MPa", spec.name, c * 1e-6);
     if (opt.log) opt.log(fmt::format("sweep: confining stress {} MPa", c * 1e-6));
     RunResult r = run_experiment(one, opt);

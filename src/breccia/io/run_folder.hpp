@@ -54,6 +54,8 @@ struct GeneratedSample {
   nlohmann::json report;
 };
 PackingSettings packing_settings(const ExperimentSpec& spec);
+// The contact law of the experiment (particles and walls).
+ContactModel contact_model(const ExperimentSpec& spec);
 // Packs the sample of `spec` ([sample] keys) and, when `path` is not empty, writes it there as a
 // breccia-geometry file with the report beside it (`path`.json).
 GeneratedSample generate_sample(const ExperimentSpec& spec, const std::string& path,

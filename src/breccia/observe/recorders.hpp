@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "breccia/engine/simulation.hpp"
-#include "breccia/protocol/compression_test.hpp"
+#include "breccia/protocol/protocol.hpp"
 
 namespace breccia {
 

@@ -13,8 +13,8 @@
 namespace breccia {
 
 PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings s,
-                                     LateralBoundary lateral)
-    : st_(s), lateral_(lateral) {
+                                     LateralBoundary lateral, const char* kind)
+    : st_(s), kind_(kind), lateral_(lateral) {
   const ParticleStore& p = sim.particles();
   planar_ = p.planar();
   thickness_ = p.thickness();
@@ -205,6 +205,7 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
   }
   // Axial loading from here: the reference state of analysis.md §1.1.
   h0_ = height(sim);
+  z0_ = sim.walls()[bottom_].point[axis_];
   widths(sim, w0_);
   area0_ = current_area(sim);
   Vec3 up{};
@@ -263,10 +264,28 @@ bool PlatenCompression::finished(const AxialState& s, std::size_t broken_bonds) 
   return false;
 }
 
+const char* PlatenCompression::kind() const noexcept {
+  for (const char* k : {"ucs", "triaxial", "biaxial"})
+    if (kind_ == k) return k;
+  return "ucs";
+}
+
+std::string PlatenCompression::label() const {
+  if (!confined()) return "uniaxial compression (UCS)";
+  return planar_ ? "biaxial compression" : "triaxial compression";
+}
+
+std::string PlatenCompression::lateral_boundary() const {
+  if (!confined()) return "none";
+  return lateral_ == LateralBoundary::Cylinder ? "cylindrical servo wall"
+                                               : "servo-controlled plane walls";
+}
+
 template <class Archive>
 void PlatenCompression::transfer(Archive& a) {
   a.label("platen compression");
   a.value(st_);
+  a.string(kind_);
   a.value(lateral_);
   a.value(axis_);
   a.value(planar_);
@@ -277,6 +296,7 @@ void PlatenCompression::transfer(Archive& a) {
   a.value(centre_);
   for (auto& f : face_) a.vector(f);
   a.value(h0_);
+  a.value(z0_);
   a.value(area0_);
   a.value(w0_);
   a.value(peak_);
@@ -290,9 +310,9 @@ void PlatenCompression::save_state(ArchiveWriter& a) const {
   const_cast<PlatenCompression*>(this)->transfer(a);  // the writer only reads the fields
 }
 
-PlatenCompression PlatenCompression::restore(ArchiveReader& a) {
-  PlatenCompression t;
-  t.transfer(a);
+std::unique_ptr<PlatenCompression> PlatenCompression::restore(ArchiveReader& a) {
+  std::unique_ptr<PlatenCompression> t(new PlatenCompression());
+  t->transfer(a);
   return t;
 }
 
@@ -306,6 +326,53 @@ void PlatenCompression::check_restored(const Simulation& sim, const std::string&
     throw InputError(
         where, "platen compression", "wall or particle index",
         "refers to a wall or particle the simulation lacks: the checkpoint is corrupt");
+}
+
+// --- registered tests ---
+
+namespace {
+template <class P>
+PlatenCompressionSettings settings_of(const P& p) {
+  PlatenCompressionSettings s;
+  s.platen_speed = p.platen_speed;
+  s.ramp_time = p.ramp_time;
+  s.max_strain = p.max_strain;
+  s.stop_fraction = p.stop_fraction;
+  if constexpr (requires { p.confining_stress; }) {
+    s.confining_stress = p.confining_stress;
+    s.servo_relaxation = p.servo_relaxation;
+  }
+  return s;
+}
+LateralBoundary lateral_of(const SampleInfo& s) {
+  return s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism;
+}
+}  // namespace
+
+std::unique_ptr<Protocol> UcsTest::create(Simulation& sim, const Params& p, const SampleInfo& s) {
+  return std::make_unique<PlatenCompression>(sim, settings_of(p), lateral_of(s), "ucs");
+}
+
+void TriaxialTest::check(const Params&, const SampleInfo& s, const std::string& where) {
+  if (s.dimension != 3)
+    throw InputError(where, "test.kind", "\"triaxial\"",
+                     "a triaxial test needs a 3D sample; 2D samples take \"biaxial\"");
+}
+
+std::unique_ptr<Protocol> TriaxialTest::create(Simulation& sim, const Params& p,
+                                               const SampleInfo& s) {
+  return std::make_unique<PlatenCompression>(sim, settings_of(p), lateral_of(s), "triaxial");
+}
+
+void BiaxialTest::check(const Params&, const SampleInfo& s, const std::string& where) {
+  if (s.dimension != 2)
+    throw InputError(where, "test.kind", "\"biaxial\"",
+                     "a biaxial test needs a 2D sample; 3D samples take \"triaxial\"");
+}
+
+std::unique_ptr<Protocol> BiaxialTest::create(Simulation& sim, const Params& p,
+                                              const SampleInfo& s) {
+  return std::make_unique<PlatenCompression>(sim, settings_of(p), lateral_of(s), "biaxial");
 }
 
 }  // namespace breccia

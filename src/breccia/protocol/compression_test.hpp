@@ -6,12 +6,16 @@
 // loading at a prescribed platen speed reached through a cosine ramp, stopping at a maximum strain
 // or once the stress has fallen to a fraction of the peak. Axis: z in 3D, y in 2D.
 // Stresses and strains follow analysis.md §1.1, referred to the start of axial loading.
+#include <array>
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "breccia/boundary/servo.hpp"
 #include "breccia/engine/simulation.hpp"
+#include "breccia/law/param_table.hpp"
+#include "breccia/protocol/protocol.hpp"
 
 namespace breccia {
 
@@ -29,50 +33,49 @@ struct PlatenCompressionSettings {
   std::uint64_t max_consolidation_steps = 200000;
 };
 
-struct AxialState {
-  double strain = 0.0;
-  double stress = 0.0;                         // Pa, sigma_1: mean platen force / current area
-  double stress_nominal = 0.0;                 // Pa, over the area at the start of loading
-  double force_bottom = 0.0, force_top = 0.0;  // N, compression-positive
-  double lateral_strain = 0.0;                 // compression-positive (negative = expansion)
-  double volumetric_strain = 0.0;
-  double confining_stress = 0.0;  // Pa, measured on the lateral walls (0 when unconfined)
-  double deviatoric = 0.0;        // q = sigma_1 - sigma_3 (target sigma_3)
-};
-
-class PlatenCompression {
+class PlatenCompression final : public Protocol {
  public:
   // Adds the platens (and lateral walls when confined) around the sample's extremes. Call before
-  // Simulation::initialise().
+  // Simulation::initialise(). `kind` is the registry name it runs as.
   PlatenCompression(Simulation& sim, PlatenCompressionSettings settings,
-                    LateralBoundary lateral = LateralBoundary::Prism);
+                    LateralBoundary lateral = LateralBoundary::Prism, const char* kind = "ucs");
   // Consolidates to the confining stress (if any), then sets the platen ramp. Call after
   // Simulation::initialise(). Returns the consolidation steps taken.
-  std::uint64_t start(Simulation& sim, double bar_wave_speed);
+  std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   // Servo update of the lateral walls; call before every step during loading.
-  void control(Simulation& sim);
+  void control(Simulation& sim) override;
 
-  AxialState measure(const Simulation& sim) const;
+  AxialState measure(const Simulation& sim) const override;
   // Updates the peak tracking; true when the test should stop. The post-peak rule applies only
   // once bonds have started to break, so that ramp-up oscillations cannot end a test.
-  bool finished(const AxialState& s, std::size_t broken_bonds);
-  std::string stop_reason() const { return stop_reason_; }
+  bool finished(const AxialState& s, std::size_t broken_bonds) override;
+  const std::string& stop_reason() const noexcept override { return stop_reason_; }
 
+  const char* kind() const noexcept override;
+  std::string label() const override;
   bool confined() const noexcept { return st_.confining_stress > 0.0; }
+  double confining_stress() const noexcept override { return st_.confining_stress; }
+  double max_strain() const noexcept override { return st_.max_strain; }
+  double platen_speed() const noexcept override { return st_.platen_speed; }
+  double length0() const noexcept override { return h0_; }
+  double area0() const noexcept override { return area0_; }
+  double width0() const noexcept override { return w0_[0]; }
+  double depth0() const noexcept override { return w0_[1]; }  // 2D: the thickness
+  std::string lateral_boundary() const override;
+  int axis() const noexcept override { return axis_; }
+  double origin0() const noexcept override { return z0_; }
   double height0() const noexcept { return h0_; }
   double area() const noexcept { return area0_; }
-  double width0() const noexcept { return w0_[0]; }
-  double depth0() const noexcept { return w0_[1]; }  // 2D: the thickness
   double peak_stress() const noexcept { return peak_; }
-  bool consolidated() const noexcept { return consolidated_; }
+  bool consolidated() const noexcept override { return consolidated_; }
   LateralBoundary lateral() const noexcept { return lateral_; }
   const PlatenCompressionSettings& settings() const noexcept { return st_; }
 
   // Checkpoints: the protocol's state (its walls live in the simulation's state).
-  void save_state(ArchiveWriter& a) const;
-  static PlatenCompression restore(ArchiveReader& a);
+  void save_state(ArchiveWriter& a) const override;
+  static std::unique_ptr<PlatenCompression> restore(ArchiveReader& a);
   // Throws InputError naming `where` unless the restored walls and particles exist in `sim`.
-  void check_restored(const Simulation& sim, const std::string& where) const;
+  void check_restored(const Simulation& sim, const std::string& where) const override;
 
  private:
   PlatenCompression() = default;
@@ -86,6 +89,7 @@ class PlatenCompression {
   double lateral_stress(const Simulation& sim) const;
 
   PlatenCompressionSettings st_;
+  std::string kind_ = "ucs";
   LateralBoundary lateral_ = LateralBoundary::Prism;
   int axis_ = 2;
   bool planar_ = false;
@@ -95,11 +99,97 @@ class PlatenCompression {
   Vec3 centre_;                    // cylinder axis foot (x, y)
   // Unconfined: boundary particles that measure the lateral strain (analysis.md §1.1).
   std::vector<std::uint32_t> face_[4];  // x-, x+, y-, y+ (prism) or face_[0] = outer shell
-  double h0_ = 0.0, area0_ = 0.0, w0_[2] = {0.0, 0.0};
+  double h0_ = 0.0, area0_ = 0.0, w0_[2] = {0.0, 0.0}, z0_ = 0.0;
   double peak_ = 0.0, k_min_ = 0.0;
   bool consolidated_ = true;
   StressServo servo_;
   std::string stop_reason_;
+};
+
+// --- the registered tests that run on PlatenCompression (protocol/registry.hpp) ---
+
+// Fields every compression test shares (platen speed, ramp, stop rules), then `extra`.
+template <class P, std::size_t N = 0>
+constexpr std::array<ParamField<P>, 4 + N> compression_fields(
+    const std::array<ParamField<P>, N>& extra = {}) {
+  std::array<ParamField<P>, 4 + N> f{{
+      {"platen_speed", "m/s", &P::platen_speed, 0, kInf, false, true,
+       "speed of each platen toward the other"},
+      {"ramp_time", "s", &P::ramp_time, 0, kInf, true, true,
+       "cosine ramp of the platen speed; 0 = 10 bar-wave transit times"},
+      {"max_strain", "-", &P::max_strain, 0, 1, false, true, "stop at this axial strain"},
+      {"stop_fraction", "-", &P::stop_fraction, 0, 1, true, false,
+       "after the peak, stop once the deviatoric stress is below this fraction of it"},
+  }};
+  for (std::size_t k = 0; k < N; ++k) f[4 + k] = extra[k];
+  return f;
+}
+
+// sigma_3 and the servo gain of the confined tests.
+template <class P>
+constexpr std::array<ParamField<P>, 2> confining_fields(std::string_view walls) {
+  return {{{"confining_stress", "Pa", &P::confining_stress, 0, kInf, false, true, walls},
+           {"servo_relaxation", "-", &P::servo_relaxation, 0, 1, false, true,
+            "alpha_s of the wall servo (physics.md §6.2)"}}};
+}
+
+struct UcsTest {
+  static constexpr std::string_view name = "ucs";
+  static constexpr std::string_view summary =
+      "Uniaxial compression between two frictionless rigid platens (physics.md §6.1, analysis.md "
+      "§1), 3D or 2D; the unconfined compressive strength and the ISRM moduli.";
+  struct Params {
+    double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
+  };
+  static constexpr std::array<ParamField<Params>, 4> fields() {
+    return compression_fields<Params>();
+  }
+  static void check(const Params&, const SampleInfo&, const std::string&) {}
+  static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s);
+  static std::unique_ptr<Protocol> restore(ArchiveReader& a) {
+    return PlatenCompression::restore(a);
+  }
+};
+
+struct TriaxialTest {
+  static constexpr std::string_view name = "triaxial";
+  static constexpr std::string_view summary =
+      "Triaxial compression (3D): the sample is consolidated to sigma_3 with the platens and "
+      "lateral walls servo-controlled (four plane walls around a prism, a cylindrical wall around "
+      "a cylinder; physics.md §6.2), then loaded axially while the lateral walls hold sigma_3.";
+  struct Params {
+    double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
+    double confining_stress = 5e6, servo_relaxation = 0.5;
+  };
+  static constexpr std::array<ParamField<Params>, 6> fields() {
+    return compression_fields<Params, 2>(
+        confining_fields<Params>("sigma_3 held by the lateral walls"));
+  }
+  static void check(const Params& p, const SampleInfo& s, const std::string& where);
+  static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s);
+  static std::unique_ptr<Protocol> restore(ArchiveReader& a) {
+    return PlatenCompression::restore(a);
+  }
+};
+
+struct BiaxialTest {
+  static constexpr std::string_view name = "biaxial";
+  static constexpr std::string_view summary =
+      "Biaxial compression (2D): consolidation to sigma_3 by servo-controlled side walls and "
+      "platens, then axial loading with the side walls holding sigma_3 (physics.md §6.2).";
+  struct Params {
+    double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
+    double confining_stress = 5e6, servo_relaxation = 0.5;
+  };
+  static constexpr std::array<ParamField<Params>, 6> fields() {
+    return compression_fields<Params, 2>(
+        confining_fields<Params>("sigma_3 held by the side walls"));
+  }
+  static void check(const Params& p, const SampleInfo& s, const std::string& where);
+  static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s);
+  static std::unique_ptr<Protocol> restore(ArchiveReader& a) {
+    return PlatenCompression::restore(a);
+  }
 };
 
 }  // namespace breccia

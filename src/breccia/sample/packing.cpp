@@ -3,17 +3,16 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <numbers>
 #include <numeric>
-#include <tuple>
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
-#include "breccia/core/rng.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
-#include "breccia/engine/simulation.hpp"
+#include "breccia/sample/packing_methods.hpp"
 
 namespace breccia {
 
@@ -25,64 +24,66 @@ const char* shape_name(SampleShape s) {
       return "cylinder";
     case SampleShape::Rectangle:
       return "rectangle";
+    case SampleShape::Disk:
+      return "disk";
   }
   return "?";
 }
 
+const char* method_name(PackingMethod m) {
+  switch (m) {
+    case PackingMethod::Expansion:
+      return "expansion";
+    case PackingMethod::Insertion:
+      return "insertion";
+    case PackingMethod::Preconsolidation:
+      return "preconsolidation";
+  }
+  return "?";
+}
+
+Region packing_region(const PackingSettings& s) {
+  Region r;
+  r.shape = s.shape;
+  r.thickness = r.planar() ? s.thickness : 1.0;
+  switch (s.shape) {
+    case SampleShape::Prism:
+      r.lx = s.width;
+      r.ly = s.depth;
+      r.lz = s.height;
+      break;
+    case SampleShape::Cylinder:
+      r.radius = 0.5 * s.diameter;
+      r.lz = s.height;
+      break;
+    case SampleShape::Rectangle:
+      r.lx = s.width;
+      r.ly = s.height;
+      break;
+    case SampleShape::Disk:
+      r.radius = 0.5 * s.diameter;
+      break;
+  }
+  return r;
+}
+
+namespace packing {
+
 namespace {
-
 constexpr std::uint64_t kPlaceStream = 0x706c616365000000ull;  // "place"
+}
 
-struct Region {
-  SampleShape shape;
-  double lx, ly, lz, radius;  // prism/rectangle extents; cylinder radius and height (lz)
-  bool planar() const { return shape == SampleShape::Rectangle; }
-  double volume(double thickness) const {
-    switch (shape) {
-      case SampleShape::Prism:
-        return lx * ly * lz;
-      case SampleShape::Cylinder:
-        return std::numbers::pi * radius * radius * lz;
-      case SampleShape::Rectangle:
-        return lx * ly * thickness;
-    }
-    return 0.0;
-  }
-  // Random centre for a particle of radius r fully inside the region.
-  Vec3 draw(double r, std::uint64_t seed, std::uint64_t& counter) const {
-    auto u = [&] { return uniform01(seed, kPlaceStream, counter++); };
-    switch (shape) {
-      case SampleShape::Prism:
-        return {r + u() * (lx - 2 * r), r + u() * (ly - 2 * r), r + u() * (lz - 2 * r)};
-      case SampleShape::Cylinder: {
-        const double rho = (radius - r) * std::sqrt(u());
-        const double phi = 2.0 * std::numbers::pi * u();
-        return {rho * std::cos(phi), rho * std::sin(phi), r + u() * (lz - 2 * r)};
-      }
-      case SampleShape::Rectangle:
-        return {r + u() * (lx - 2 * r), r + u() * (ly - 2 * r), 0.0};
-    }
-    return {};
-  }
-  // Distance from a point to the nearest vessel wall.
-  double wall_distance(const Vec3& x) const {
-    switch (shape) {
-      case SampleShape::Prism:
-        return std::min({x.x, lx - x.x, x.y, ly - x.y, x.z, lz - x.z});
-      case SampleShape::Cylinder:
-        return std::min({radius - std::hypot(x.x, x.y), x.z, lz - x.z});
-      case SampleShape::Rectangle:
-        return std::min({x.x, lx - x.x, x.y, ly - x.y});
-    }
-    return 0.0;
-  }
-  Vec3 lower() const { return shape == SampleShape::Cylinder ? Vec3{-radius, -radius, 0} : Vec3{}; }
-  Vec3 upper() const {
-    if (shape == SampleShape::Cylinder) return {radius, radius, lz};
-    return {lx, ly, planar() ? 0.0 : lz};
-  }
-};
+std::vector<double> draw_radii(const PackingSettings& s, const Region& region) {
+  RadiusDistribution dist = s.radii;
+  dist.planar = region.planar();
+  std::vector<double> radii =
+      draw_radii_for_volume(dist, s.seed, (1.0 - s.porosity) * region.volume(), region.planar(),
+                            region.thickness, s.max_particles);
+  std::sort(radii.begin(), radii.end(), std::greater<>());
+  return radii;
+}
 
+namespace {
 // Uniform grid of particle indices for overlap tests during random placement.
 class PlacementGrid {
  public:
@@ -130,6 +131,127 @@ class PlacementGrid {
   int n_[3];
   std::vector<int> head_, next_;
 };
+}  // namespace
+
+std::vector<PosRad> place_at_random(const std::vector<double>& radii, double shrink,
+                                    const Region& region, std::uint64_t seed, int strata) {
+  std::vector<PosRad> placed;
+  placed.reserve(radii.size());
+  PlacementGrid grid(region.lower(), region.upper(), 2.0 * radii.front() * shrink, region.planar());
+  std::uint64_t counter = 0;
+  const double band = 1.0 / std::max(1, strata);
+  for (std::size_t i = 0; i < radii.size(); ++i) {
+    const double r = radii[i] * shrink;
+    const double lo = static_cast<double>(i % static_cast<std::size_t>(std::max(1, strata))) * band;
+    bool ok = false;
+    for (int attempt = 0; attempt < 20000 && !ok; ++attempt) {
+      // After many misses in its stratum a particle may go anywhere (never happens at the
+      // solid fractions used, but placement must not fail for it).
+      const Vec3 x = attempt < 1000 ? region.draw(r, seed, kPlaceStream, counter, lo, lo + band)
+                                    : region.draw(r, seed, kPlaceStream, counter);
+      if (grid.overlaps(x, r, placed)) continue;
+      grid.insert(x, static_cast<int>(placed.size()));
+      placed.push_back({x, r});
+      ok = true;
+    }
+    if (!ok)
+      throw InputError("sample generation", "sample.porosity", "",
+                       fmt::format("could not place particle {} of {} without overlap; the "
+                                   "vessel is too small for the size distribution",
+                                   i + 1, radii.size()));
+  }
+  return placed;
+}
+
+void sort_spatially(std::vector<PosRad>& p, const Region& region) {
+  double r_max = 0.0;
+  for (const PosRad& q : p) r_max = std::max(r_max, q.r);
+  const double cell = 4.0 * r_max;
+  const Vec3 lo = region.lower();
+  const int axis = region.axis();
+  auto key = [&](const PosRad& q) {
+    return std::array<long, 3>{static_cast<long>(std::floor((q.x[axis] - lo[axis]) / cell)),
+                               static_cast<long>(std::floor((q.x.y - lo.y) / cell)),
+                               static_cast<long>(std::floor((q.x.x - lo.x) / cell))};
+  };
+  std::stable_sort(p.begin(), p.end(),
+                   [&](const PosRad& a, const PosRad& b) { return key(a) < key(b); });
+}
+
+ContactModel frictionless(const ContactModel& m) {
+  ContactModel out = m;
+  std::visit(
+      [](auto& c) {
+        c.params.friction = 0.0;
+        c.wall_params.friction = 0.0;
+      },
+      out);
+  return out;
+}
+
+const char* contact_law_name(const ContactModel& m) {
+  return std::visit([]<class CL>(const ContactSet<CL>&) { return CL::name.data(); }, m);
+}
+
+Simulation vessel_simulation(const std::vector<PosRad>& particles, const Region& region,
+                             const PackingSettings& s) {
+  const bool planar = region.planar();
+  ParticleStore store(planar ? Dimension::Two : Dimension::Three, region.thickness);
+  for (std::size_t i = 0; i < particles.size(); ++i)
+    store.add(
+        {.tag = i + 1, .position = particles[i].x, .radius = particles[i].r, .density = s.density});
+  EngineConfig cfg;
+  cfg.local_damping = 0.7;
+  cfg.energy_interval = 0;
+  cfg.seed = s.seed;
+  double rsum = 0.0;
+  for (const PosRad& q : particles) rsum += q.r;
+  cfg.skin = 0.4 * rsum / static_cast<double>(particles.size());
+  Simulation sim(std::move(store), cfg, frictionless(s.contact));
+  const Vec3 lo = region.lower(), hi = region.upper();
+  if (region.round()) {
+    sim.add_wall(Wall::cylinder("vessel_side", {}, {0, 0, 1}, region.radius));
+  } else {
+    sim.add_wall(Wall::plane("vessel_x0", lo, {1, 0, 0}));
+    sim.add_wall(Wall::plane("vessel_x1", hi, {-1, 0, 0}));
+    sim.add_wall(Wall::plane("vessel_y0", lo, {0, 1, 0}));
+    sim.add_wall(Wall::plane("vessel_y1", hi, {0, -1, 0}));
+  }
+  if (!planar) {
+    sim.add_wall(Wall::plane("vessel_z0", lo, {0, 0, 1}));
+    sim.add_wall(Wall::plane("vessel_z1", hi, {0, 0, -1}));
+  }
+  sim.initialise();
+  return sim;
+}
+
+double kinetic_energy(const Simulation& sim) {
+  const ParticleStore& p = sim.particles();
+  double e = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    e += 0.5 * (p.mass[i] * norm2(p.vel[i]) + p.inertia[i] * norm2(p.angvel[i]));
+  return e;
+}
+
+StageClock::StageClock(const Simulation* sim)
+    : sim_(sim),
+      step0_(sim ? sim->step_count() : 0),
+      t0_(std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+              .count()) {}
+
+PackingStage StageClock::done(std::string name, std::string note) {
+  const double now =
+      std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  PackingStage st{std::move(name), sim_ ? sim_->step_count() - step0_ : 0, now - t0_,
+                  std::move(note)};
+  step0_ = sim_ ? sim_->step_count() : 0;
+  t0_ = now;
+  return st;
+}
+
+}  // namespace packing
+
+namespace {
 
 void check_settings(const PackingSettings& s) {
   const std::string w = "sample generation";
@@ -151,41 +273,78 @@ void check_settings(const PackingSettings& s) {
       positive(s.height, "sample.height");
       positive(s.thickness, "sample.thickness");
       break;
+    case SampleShape::Disk:
+      positive(s.diameter, "sample.diameter");
+      positive(s.thickness, "sample.thickness");
+      break;
   }
   s.radii.validate(w);
   if (!(s.porosity > 0.0 && s.porosity < 1.0))
     throw InputError(w, "sample.porosity", num(s.porosity), "allowed: 0 < value < 1");
-  if (s.servo_to_stress && !(s.isotropic_stress > 0.0))
+  if (s.method == PackingMethod::Expansion && s.servo_to_stress && !(s.isotropic_stress > 0.0))
     throw InputError(w, "sample.isotropic_stress", num(s.isotropic_stress), "must be > 0 Pa");
+  if (s.method == PackingMethod::Preconsolidation && s.shape != SampleShape::Rectangle)
+    throw InputError(w, "sample.packing", "\"preconsolidation\"",
+                     "preconsolidation between particle rows is a 2D procedure (seed 002): use "
+                     "shape = \"rectangle\" with engine.dimension = 2");
+  if (s.method == PackingMethod::Preconsolidation && !(s.preconsolidation_stress > 0.0))
+    throw InputError(w, "sample.preconsolidation_stress", num(s.preconsolidation_stress),
+                     "must be > 0 Pa");
   const double rmax =
       s.radii.kind == RadiusDistribution::Kind::Classes
           ? *std::max_element(s.radii.class_radius.begin(), s.radii.class_radius.end())
           : s.radii.r_max;
-  const double smallest =
-      s.shape == SampleShape::Cylinder
-          ? std::min(s.diameter, s.height)
-          : (s.shape == SampleShape::Prism ? std::min({s.width, s.depth, s.height})
-                                           : std::min(s.width, s.height));
+  const double smallest = packing_region(s).smallest_extent();
   if (smallest < 4.0 * rmax)
     throw InputError(w, "sample size", num(smallest) + " m across",
                      "must be at least 4 maximum radii (" + num(4 * rmax) +
                          " m); physics.md §7.1 recommends 20-30 particles across");
 }
 
-// Lens volume (3D) or area times thickness (2D) shared by two overlapping particles (§7.7).
-double lens(double r1, double r2, double d, bool planar, double t) {
-  if (d >= r1 + r2 || d <= 0.0) return 0.0;
-  if (!planar) {
-    const double h = r1 + r2 - d;
-    return std::numbers::pi * h * h * (d * d + 2 * d * (r1 + r2) - 3 * (r1 - r2) * (r1 - r2)) /
-           (12.0 * d);
+// Radius moments of the packed particles.
+void radius_moments(const std::vector<PosRad>& p, PackingReport& rep) {
+  double rs = 0.0, rs2 = 0.0;
+  rep.radius_min = p.front().r;
+  rep.radius_max = 0.0;
+  for (const PosRad& q : p) {
+    rs += q.r;
+    rs2 += q.r * q.r;
+    rep.radius_min = std::min(rep.radius_min, q.r);
+    rep.radius_max = std::max(rep.radius_max, q.r);
   }
-  const double a =
-      r1 * r1 * std::acos(std::clamp((d * d + r1 * r1 - r2 * r2) / (2 * d * r1), -1.0, 1.0)) +
-      r2 * r2 * std::acos(std::clamp((d * d + r2 * r2 - r1 * r1) / (2 * d * r2), -1.0, 1.0)) -
-      0.5 *
-          std::sqrt(std::max(0.0, (-d + r1 + r2) * (d + r1 - r2) * (d - r1 + r2) * (d + r1 + r2)));
-  return a * t;
+  const double n = static_cast<double>(p.size());
+  rep.radius_mean = rs / n;
+  rep.radius_sd = std::sqrt(std::max(0.0, rs2 / n - rep.radius_mean * rep.radius_mean));
+}
+
+// Bonds every pair with a gap within the tolerance (§7.6); index pairs, sorted.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> bond_pairs(const std::vector<PosRad>& p,
+                                                                bool planar, double tol) {
+  PairList near;
+  build_neighbour_pairs(p, tol * 1.0001 + 1e-300, planar, near);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+  for (std::size_t k = 0; k < near.size(); ++k) {
+    const PosRad& a = p[near.first[k]];
+    const PosRad& b = p[near.second[k]];
+    if (norm(b.x - a.x) - a.r - b.r <= tol) out.emplace_back(near.first[k], near.second[k]);
+  }
+  return out;
+}
+
+// Sum of l (x) F over the contacts of the packed grains with the test's contact law, computed
+// from the positions as they are written (the forces of the first step of a simulation built from
+// them; nothing moves before they are computed): the stress the test starts from (§6.5).
+std::array<double, 9> contact_stress_sum(const std::vector<PosRad>& p, const Region& region,
+                                         const PackingSettings& s) {
+  ParticleStore store(region.planar() ? Dimension::Two : Dimension::Three, region.thickness);
+  for (std::size_t i = 0; i < p.size(); ++i)
+    store.add({.tag = i + 1, .position = p[i].x, .radius = p[i].r, .density = s.density});
+  EngineConfig cfg;
+  cfg.energy_interval = 0;
+  Simulation sim(std::move(store), cfg, packing::frictionless(s.contact));
+  sim.initialise();
+  sim.step();
+  return sim.pair_stress().lf;
 }
 
 }  // namespace
@@ -197,247 +356,64 @@ PackedSample pack_sample(const PackingSettings& s,
   };
   check_settings(s);
   const auto t0 = std::chrono::steady_clock::now();
-  const bool planar = s.shape == SampleShape::Rectangle;
-  const int dim = planar ? 2 : 3;
-  const Region region{s.shape, s.width, planar ? s.height : s.depth, planar ? 0.0 : s.height,
-                      0.5 * s.diameter};
-  const double volume = region.volume(s.thickness);
-
-  // 1. Radii for the target porosity (§7.1), largest first: big grains are placed while there is
-  // still room.
-  RadiusDistribution dist = s.radii;
-  dist.planar = planar;
-  std::vector<double> radii = draw_radii_for_volume(dist, s.seed, (1.0 - s.porosity) * volume,
-                                                    planar, s.thickness, s.max_particles);
-  std::sort(radii.begin(), radii.end(), std::greater<>());
-  const std::size_t n = radii.size();
-
-  // 2. Random placement without overlap at a reduced size (§7.2 step 2): random sequential
-  // insertion jams near a solid fraction of 0.38 (3D) or 0.55 (2D), so start well below.
-  const double start_fraction = planar ? 0.45 : 0.30;
-  const double shrink = std::min(1.0, std::pow(start_fraction / (1.0 - s.porosity), 1.0 / dim));
-  std::vector<PosRad> placed;
-  placed.reserve(n);
-  PlacementGrid grid(region.lower(), region.upper(), 2.0 * radii.front() * shrink, planar);
-  std::uint64_t counter = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double r = radii[i] * shrink;
-    bool ok = false;
-    for (int attempt = 0; attempt < 20000 && !ok; ++attempt) {
-      const Vec3 x = region.draw(r, s.seed, counter);
-      if (grid.overlaps(x, r, placed)) continue;
-      grid.insert(x, static_cast<int>(placed.size()));
-      placed.push_back({x, r});
-      ok = true;
-    }
-    if (!ok)
-      throw InputError("sample generation", "sample.porosity", num(s.porosity),
-                       fmt::format("could not place particle {} of {} without overlap; the "
-                                   "vessel is too small for the size distribution",
-                                   i + 1, n));
+  packing::PackedState st;
+  switch (s.method) {
+    case PackingMethod::Expansion:
+      st = packing::pack_by_expansion(s, log);
+      break;
+    case PackingMethod::Insertion:
+      st = packing::pack_by_insertion(s, log);
+      break;
+    case PackingMethod::Preconsolidation:
+      st = packing::pack_by_preconsolidation(s, log);
+      break;
   }
-  log(fmt::format("packing: {} particles placed at {:.0f} % of their radii in a {} of {:.4g} m^3",
-                  n, 100 * shrink, shape_name(s.shape), volume));
-
-  // 3. Cycling in a rigid frictionless vessel with strong local damping.
-  ParticleStore store(planar ? Dimension::Two : Dimension::Three, s.thickness);
-  LinearContact::Params cp;
-  cp.modulus = s.contact_modulus;
-  cp.stiffness_ratio = s.contact_stiffness_ratio;
-  cp.friction = 0.0;
-  EngineConfig cfg;
-  cfg.local_damping = 0.7;
-  cfg.energy_interval = 0;
-  cfg.seed = s.seed;
-  double rsum = 0.0;
-  for (double r : radii) rsum += r;
-  const double r_mean = rsum / static_cast<double>(n);
-  cfg.skin = 0.4 * r_mean;
-  // Particles are placed shrunk in the vessel of the requested size, then grown to full size.
-  for (std::size_t i = 0; i < n; ++i)
-    store.add({.tag = i + 1, .position = placed[i].x, .radius = placed[i].r, .density = s.density});
-  Simulation sim(std::move(store), cfg, make_contact_model<LinearContact>(cp, cp));
-  // The vessel stays where it is: the servo acts on the radii (§7.2), not on the walls.
-  const Vec3 lo = region.lower(), hi = region.upper();
-  if (s.shape == SampleShape::Cylinder) {
-    sim.add_wall(Wall::cylinder("vessel_side", {}, {0, 0, 1}, region.radius));
-  } else {
-    sim.add_wall(Wall::plane("vessel_x0", lo, {1, 0, 0}));
-    sim.add_wall(Wall::plane("vessel_x1", hi, {-1, 0, 0}));
-    sim.add_wall(Wall::plane("vessel_y0", lo, {0, 1, 0}));
-    sim.add_wall(Wall::plane("vessel_y1", hi, {0, -1, 0}));
-  }
-  if (!planar) {
-    sim.add_wall(Wall::plane("vessel_z0", lo, {0, 0, 1}));
-    sim.add_wall(Wall::plane("vessel_z1", hi, {0, 0, -1}));
-  }
-  sim.initialise();
-
-  // 4. Grow the radii to size, 0.1 % per 20 steps, then relax until the mean stress is steady
-  // (the 200-step mean changes by less than 0.5 % from one window to the next).
-  PackingReport rep;
-  const std::uint64_t check_every = 20;
-  auto mean_stress = [&] { return sim.pair_stress().mean(dim, volume); };
-  double applied = 1.0;
-  while (applied < 1.0 / shrink && sim.step_count() < s.max_steps) {
-    const double f = std::min(1.001, 1.0 / shrink / applied);
-    sim.scale_radii(f);
-    applied *= f;
-    sim.run(check_every);
-  }
-  auto relax = [&](std::uint64_t max_steps) {
-    double prev = -1.0;
-    const std::uint64_t stop = std::min(s.max_steps, sim.step_count() + max_steps);
-    while (sim.step_count() < stop) {
-      double sum = 0.0;
-      for (int k = 0; k < 10; ++k) {
-        sim.run(check_every);
-        sum += mean_stress();
-      }
-      const double avg = 0.1 * sum;
-      if (prev >= 0.0 && std::abs(avg - prev) <= 0.005 * std::abs(prev))
-        return std::pair{avg, true};
-      prev = avg;
-    }
-    return std::pair{prev, false};
-  };
-  auto [p, steady] = relax(s.max_steps);
-  rep.converged = steady;
-
-  // 5. Stress mode: bring the relaxed mean stress to p0 by scaling all radii (physics.md §7.2
-  // step 4), one relaxed step at a time. The first step uses the affine stiffness S, which
-  // overstates the response of a packing that rearranges, so it approaches p0 from above without
-  // unjamming; later steps use the secant stiffness measured between relaxed states.
-  // Friction is switched on for this stage: a frictionless packing near p0 creeps for a very
-  // long time (its relaxation time diverges near jamming), a frictional one settles.
-  if (s.servo_to_stress && steady && p < 0.05 * s.isotropic_stress) {
-    // Grown to a porosity looser than jamming (disks jam near 0.16-0.20, so the 3D-minded
-    // default of 0.37 is loose in 2D), the packing carries no stress once relaxed, and the servo
-    // below has no stiffness to work with: grow on, frictionless, 1 % at a time as in step 4,
-    // until the relaxed packing carries some.
-    while (p < 0.05 * s.isotropic_stress && sim.step_count() < s.max_steps) {
-      for (int k = 0; k < 10; ++k) {
-        sim.scale_radii(1.001);
-        sim.run(check_every);
-      }
-      p = relax(2000).first;
-    }
-    std::tie(p, steady) = relax(s.max_steps - std::min(s.max_steps, sim.step_count()));
-  }
-  if (s.servo_to_stress && steady) {
-    sim.set_contact_friction(s.servo_friction);
-    rep.converged = false;
-    double p_last = p, eps_last = 0.0;
-    for (int it = 0; it < 40 && sim.step_count() < s.max_steps; ++it) {
-      if (std::abs(p - s.isotropic_stress) < 0.01 * s.isotropic_stress) {
-        rep.converged = true;
-        break;
-      }
-      double slope = sim.pair_stress().radius_stiffness / (dim * volume);
-      if (eps_last != 0.0 && (p - p_last) / eps_last > 0.0) slope = (p - p_last) / eps_last;
-      const double eps = std::clamp(0.8 * (s.isotropic_stress - p) / slope, -2e-3, 2e-3);
-      sim.scale_radii(1.0 + eps);
-      p_last = p;
-      eps_last = eps;
-      p = relax(5000).first;
-    }
-  }
-  if (!rep.converged)
-    log(
-        fmt::format("warning: packing did not settle within {} steps (sample.max_steps); the "
-                    "locked-in stress below is what it reached",
-                    s.max_steps));
-
-  // 6. Report (§7.2, §7.7) and the bonded sample (§7.6), stored in spatial order.
-  const ParticleStore& P = sim.particles();
-  const PairStress ps = sim.pair_stress();
-  rep.particles = n;
-  rep.volume = volume;
-  rep.width = s.shape == SampleShape::Cylinder ? s.diameter : s.width;
-  rep.depth = planar ? 0.0 : (s.shape == SampleShape::Cylinder ? s.diameter : s.depth);
-  rep.height = s.height;
-  rep.steps = sim.step_count();
-  rep.locked_in_mean_stress = ps.mean(dim, volume);
-  rep.locked_in_xx = ps.lf[0] / volume;
-  rep.locked_in_yy = ps.lf[4] / volume;
-  rep.locked_in_zz = ps.lf[8] / volume;
-  rep.mean_coordination = 2.0 * static_cast<double>(ps.touching) / static_cast<double>(n);
-  for (std::uint32_t c : ps.coordination) rep.floaters += c < 3 ? 1 : 0;
-  double solid = 0.0, rs = 0.0, rs2 = 0.0;
-  rep.radius_min = P.pos_rad[0].r;
-  for (const PosRad& q : P.pos_rad) {
-    solid += planar ? std::numbers::pi * q.r * q.r * s.thickness
-                    : 4.0 / 3.0 * std::numbers::pi * q.r * q.r * q.r;
-    rs += q.r;
-    rs2 += q.r * q.r;
-    rep.radius_min = std::min(rep.radius_min, q.r);
-    rep.radius_max = std::max(rep.radius_max, q.r);
-  }
-  rep.radius_mean = rs / static_cast<double>(n);
-  rep.radius_sd =
-      std::sqrt(std::max(0.0, rs2 / static_cast<double>(n) - rep.radius_mean * rep.radius_mean));
-
-  // Spatial order: cells of two maximum diameters, z then y then x.
-  const double cell = 4.0 * rep.radius_max;
-  std::vector<std::size_t> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  auto key = [&](std::size_t i) {
-    const Vec3& x = P.pos_rad[i].x;
-    return std::array<long, 4>{static_cast<long>(std::floor((x.z - lo.z) / cell)),
-                               static_cast<long>(std::floor((x.y - lo.y) / cell)),
-                               static_cast<long>(std::floor((x.x - lo.x) / cell)),
-                               static_cast<long>(i)};
-  };
-  std::sort(order.begin(), order.end(),
-            [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
+  // The sample, stored in spatial order (tags follow it), with its bonds.
+  packing::StageClock clock;
+  packing::sort_spatially(st.particles, st.region);
+  const bool planar = st.region.planar();
   PackedSample out;
   GeometryData& g = out.geometry;
   g.dimension = planar ? Dimension::Two : Dimension::Three;
   g.thickness = planar ? s.thickness : 1.0;
-  std::vector<std::uint64_t> tag_of(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t i = order[k];
-    tag_of[i] = k + 1;
-    g.particles.push_back(
-        {.tag = k + 1, .position = P.pos_rad[i].x, .radius = P.pos_rad[i].r, .density = s.density});
-  }
-  PairList near;
-  build_neighbour_pairs(P.pos_rad, s.bond_gap_tolerance * 1.0001 + 1e-300, planar, near);
-  std::vector<std::uint32_t> bonds_of(n, 0);
-  double overlap = 0.0;
-  for (std::size_t k = 0; k < near.size(); ++k) {
-    const std::uint32_t i = near.first[k], j = near.second[k];
-    const PosRad& a = P.pos_rad[i];
-    const PosRad& b = P.pos_rad[j];
-    const double d = norm(b.x - a.x);
-    overlap += lens(a.r, b.r, d, planar, s.thickness);
-    if (d - a.r - b.r <= s.bond_gap_tolerance) {
-      g.bonds.emplace_back(std::min(tag_of[i], tag_of[j]), std::max(tag_of[i], tag_of[j]));
-      ++bonds_of[i];
-      ++bonds_of[j];
-    }
-  }
-  std::sort(g.bonds.begin(), g.bonds.end());
-  rep.bonds = g.bonds.size();
-  rep.porosity = 1.0 - (solid - overlap) / volume;
-  double interior_bonds = 0.0;
-  std::size_t interior = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    if (region.wall_distance(P.pos_rad[i].x) > 2.0 * rep.radius_max) {
-      interior_bonds += bonds_of[i];
-      ++interior;
-    }
-  rep.bond_coordination_interior =
-      interior ? interior_bonds / static_cast<double>(interior)
-               : 2.0 * static_cast<double>(rep.bonds) / static_cast<double>(n);
+  for (std::size_t k = 0; k < st.particles.size(); ++k)
+    g.particles.push_back({.tag = k + 1,
+                           .position = st.particles[k].x,
+                           .radius = st.particles[k].r,
+                           .density = s.density});
+  const auto bonds = bond_pairs(st.particles, planar, s.bond_gap_tolerance);
+  for (auto [i, j] : bonds) g.bonds.emplace_back(i + 1, j + 1);
+
+  PackingReport& rep = st.report;
+  rep.method = method_name(s.method);
+  rep.contact_law = packing::contact_law_name(s.contact);
+  rep.structure =
+      describe_structure(st.particles, bonds, st.region, s.bond_gap_tolerance, s.floater_contacts);
+  radius_moments(st.particles, rep);
+  rep.volume = st.region.volume();
+  rep.width = st.region.round() ? 2 * st.region.radius : st.region.lx;
+  rep.depth = planar ? 0.0 : (st.region.round() ? 2 * st.region.radius : st.region.ly);
+  rep.height = st.region.height();
+  const int dim = st.region.dimension();
+  const std::array<double, 9> lf = contact_stress_sum(st.particles, st.region, s);
+  rep.locked_in_xx = lf[0] / rep.volume;
+  rep.locked_in_yy = lf[4] / rep.volume;
+  rep.locked_in_zz = lf[8] / rep.volume;
+  rep.locked_in_mean_stress =
+      (rep.locked_in_xx + rep.locked_in_yy + (dim == 3 ? rep.locked_in_zz : 0.0)) / dim;
+  rep.stages.push_back(clock.done("bond and report"));
   rep.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  log(
-      fmt::format("packing: {} steps, porosity {:.4f}, locked-in mean stress {:.4g} MPa, "
-                  "coordination {:.2f}, {} bonds ({:.2f} per interior particle), {} floaters, "
-                  "{:.1f} s",
-                  rep.steps, rep.porosity, rep.locked_in_mean_stress * 1e-6, rep.mean_coordination,
-                  rep.bonds, rep.bond_coordination_interior, rep.floaters, rep.wall_seconds));
-  out.report = rep;
+  const SampleStructure& ss = rep.structure;
+  log(fmt::format(
+      "packing ({}): {} particles, {} steps, porosity {:.4f}, locked-in mean stress {:.4g} MPa "
+      "({}), contact coordination {:.2f}, {} bonds ({:.2f} per interior grain), {} floaters "
+      "({:.2f} %), homogeneity {}, {:.1f} s",
+      rep.method, ss.particles, rep.steps, ss.porosity, rep.locked_in_mean_stress * 1e-6,
+      rep.contact_law, ss.contact_coordination, ss.bonds, ss.bonds_per_interior_particle,
+      ss.floaters, 100.0 * static_cast<double>(ss.floaters) / static_cast<double>(ss.particles),
+      ss.homogeneity.passes() ? "passes" : "FAILS", rep.wall_seconds));
+  for (const std::string& w : rep.warnings) log("warning: " + w);
+  out.report = std::move(rep);
   return out;
 }
 

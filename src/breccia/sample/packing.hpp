@@ -1,20 +1,34 @@
 #pragma once
-// Dense random packings by radius expansion in a rigid vessel (physics.md §7.2, the PFC /
-// Potyondy & Cundall 2004 material genesis): draw radii for a target porosity, place them shrunk
-// at random without overlap, grow them to size frictionless while cycling with strong damping and
-// relax; then either servo all radii to a target isotropic stress with friction on (default, low
-// locked-in stress) or keep the target porosity. Finally every pair with a gap within the
-// tolerance is bonded (§7.6).
+// Synthetic rock samples (physics.md §7): a packing of spheres (3D) or disks (2D) in a vessel,
+// then bonds between every pair with a gap within the tolerance (§7.6). Three ways to pack:
+//
+//  - expansion (default; PFC / Potyondy & Cundall 2004 material genesis, §7.2): radii drawn for a
+//    target porosity, placed shrunk at random, grown frictionless in a rigid vessel, servoed to a
+//    low isotropic stress (or held at the target porosity), floaters grown until they have N_f
+//    contacts;
+//  - insertion (GenGeo / Place & Mora style, §7.4): no dynamics, every new grain is fitted tangent
+//    to its neighbours and the vessel; dense, stress-free, radii emergent within [r_min, r_max];
+//  - preconsolidation (2D, RICEBAL practice, §7.3, seed 002): disks between particle-row walls,
+//    the rows pushed in by servos until the sample carries a given stress (10 MPa), bonded in that
+//    state; the test then unloads it, leaving the locked-in stress of a cemented rock.
+//
+// The packing cycles with the contact law the test will use (friction off), so the locked-in
+// stress it reports is what the test starts from. How the samples are kept homogeneous is told in
+// ARCHITECTURE.md ("Samples").
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
+#include "breccia/engine/simulation.hpp"
 #include "breccia/io/geometry_file.hpp"
 #include "breccia/sample/radius_distribution.hpp"
+#include "breccia/sample/region.hpp"
+#include "breccia/sample/structure.hpp"
 
 namespace breccia {
 
-enum class SampleShape { Prism, Cylinder, Rectangle };
+enum class PackingMethod { Expansion, Insertion, Preconsolidation };
 
 struct PackingSettings {
   SampleShape shape = SampleShape::Prism;
@@ -24,34 +38,51 @@ struct PackingSettings {
   double thickness = 1.0;  // 2D disk thickness
   RadiusDistribution radii;
   double density = 2650.0;
-  double porosity = 0.36;                // target porosity: fixes the particle count
-  bool servo_to_stress = true;           // true: servo to isotropic_stress; false: porosity only
-  double isotropic_stress = 0.1e6;       // Pa, p0 of §7.2 (low: about 1 % of the UCS or less)
-  double contact_modulus = 10e9;         // Pa, E_c of the linear packing contacts
-  double contact_stiffness_ratio = 2.5;  // k_n / k_s
-  double servo_friction = 0.5;           // contact friction while servoing to p0
-  double bond_gap_tolerance = 0.0;       // m, bond pairs with gap <= this
+  PackingMethod method = PackingMethod::Expansion;
+  double porosity = 0.36;           // expansion: fixes the particle count
+  bool servo_to_stress = true;      // expansion: true: servo to isotropic_stress; false: porosity
+  double isotropic_stress = 0.1e6;  // Pa, p0 of §7.2 (low: about 1 % of the UCS or less)
+  double preconsolidation_stress = 10e6;  // Pa, 2D preconsolidation (seed 002: 10 MPa)
+  // Contact law of the packing: the test's law and parameters (friction is switched off while
+  // packing). Defaults to linear contacts with E_c = 10 GPa.
+  ContactModel contact = make_contact_model<LinearContact>({}, {});
+  double bond_gap_tolerance = 0.0;  // m, bond pairs with gap <= this
+  int floater_contacts = 3;         // N_f: grains with fewer contacts are grown (expansion)
+  double floater_max_growth = 0.2;  // largest relative radius growth of a floater (P&C: 20 %)
   std::uint64_t seed = 1;
   std::size_t max_particles = 2'000'000;
-  std::uint64_t max_steps = 400'000;  // cycling limit of the whole packing
+  std::uint64_t max_steps = 400'000;         // cycling limit of the whole packing
+  std::uint64_t insertion_failures = 5'000;  // insertion: consecutive failed fits that end it
+};
+
+struct PackingStage {
+  std::string name;
+  std::uint64_t steps = 0;
+  double seconds = 0.0;
+  std::string note;
 };
 
 struct PackingReport {
-  std::size_t particles = 0, bonds = 0;
-  double porosity = 0.0;                    // with lens corrections (§7.7)
-  double mean_coordination = 0.0;           // contacts per particle, all particles
-  double bond_coordination_interior = 0.0;  // bonds per particle, > 2 r_max from the walls
-  double locked_in_mean_stress = 0.0;       // Pa, trace/D of the pair-force stress (§6.5)
+  std::string method;  // "expansion", "insertion", "preconsolidation"
+  std::string contact_law;
+  SampleStructure structure;  // porosity, coordination, floaters, profile, homogeneity
+  // Stress carried by the contacts in the packed state, from the test's contact law (§6.5),
+  // compression-positive, over the vessel volume. Bonds are installed stress-free on top of it.
+  double locked_in_mean_stress = 0.0;
   double locked_in_xx = 0.0, locked_in_yy = 0.0, locked_in_zz = 0.0;
   double radius_mean = 0.0, radius_sd = 0.0, radius_min = 0.0, radius_max = 0.0;
-  std::size_t floaters = 0;  // particles with fewer than 3 contacts (reported, not removed)
+  double preconsolidation_stress_reached = 0.0;  // Pa, on the side rows (preconsolidation)
+  std::size_t floaters_grown = 0;       // expansion: floaters enlarged (each at most by the cap)
+  double largest_floater_growth = 0.0;  // relative
   std::uint64_t steps = 0;
   bool converged = false;
   double wall_seconds = 0.0;
   double volume = 0.0;  // vessel volume (2D: area x thickness)
-  // Vessel size (the requested one): width (x, or diameter), depth (y, or diameter; 0 in 2D),
-  // height (z, or y in 2D).
+  // Vessel size (the requested one, or after preconsolidation the compacted one): width (x, or
+  // diameter), depth (y, or diameter; 0 in 2D), height (z, or y in 2D).
   double width = 0.0, depth = 0.0, height = 0.0;
+  std::vector<PackingStage> stages;
+  std::vector<std::string> warnings;
 };
 
 struct PackedSample {
@@ -64,5 +95,8 @@ PackedSample pack_sample(const PackingSettings& settings,
                          const std::function<void(const std::string&)>& log = {});
 
 const char* shape_name(SampleShape s);
+const char* method_name(PackingMethod m);
+// The vessel of the settings.
+Region packing_region(const PackingSettings& s);
 
 }  // namespace breccia

@@ -1,0 +1,93 @@
+#pragma once
+// The Brazilian test (indirect tensile strength; ISRM suggested method, 1978): a disc loaded
+// across a diameter between two rigid platens until it splits. With the peak platen force F, the
+// disc diameter D and thickness t, the tensile strength is sigma_t = 2 F / (pi D t), the tensile
+// stress at the centre of an elastic disc under two opposite line loads (Hertz 1883; Hondros
+// 1959). 3D: a cylinder with its axis along z (the disc's thickness), loaded along y; 2D: a disk
+// in the x-y plane of thickness t, loaded along y. The platens approach at a constant speed
+// reached through the cosine ramp of physics.md §6.1.
+//
+// Rows: strain = platen approach / D, stress = 2 F / (pi D t) with F the mean platen force,
+// lateral strain from the grains at the x extremes (the disc's horizontal diameter).
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "breccia/law/param_table.hpp"
+#include "breccia/protocol/protocol.hpp"
+
+namespace breccia {
+
+class BrazilianTest final : public Protocol {
+ public:
+  static constexpr std::string_view name = "brazilian";
+  static constexpr std::string_view summary =
+      "Brazilian test (indirect tensile strength, ISRM): a disc (3D: a cylinder of thickness "
+      "about half its diameter, axis along z; 2D: a disk) loaded across its diameter along y "
+      "between two rigid platens; sigma_t = 2 F / (pi D t) at the peak force F.";
+  struct Params {
+    double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.05, stop_fraction = 0.6;
+  };
+  static constexpr std::array<ParamField<Params>, 4> fields() {
+    return {{
+        {"platen_speed", "m/s", &Params::platen_speed, 0, kInf, false, true,
+         "speed of each platen toward the other"},
+        {"ramp_time", "s", &Params::ramp_time, 0, kInf, true, true,
+         "cosine ramp of the platen speed; 0 = 10 bar-wave transit times across the disc"},
+        {"max_strain", "-", &Params::max_strain, 0, 1, false, true,
+         "stop when the platens have approached by this fraction of the diameter"},
+        {"stop_fraction", "-", &Params::stop_fraction, 0, 1, true, false,
+         "after the peak, stop once the stress is below this fraction of it"},
+    }};
+  }
+  // Shapes and proportions a Brazilian disc must have (from the experiment, before packing).
+  static void check(const Params& p, const SampleInfo& s, const std::string& where);
+  // Also checks the disc actually built (imported samples are only known here).
+  static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s);
+  static std::unique_ptr<BrazilianTest> restore(ArchiveReader& a);
+
+  BrazilianTest(Simulation& sim, const Params& p, const SampleInfo& s);
+
+  const char* kind() const noexcept override { return "brazilian"; }
+  std::string label() const override { return "Brazilian (indirect tensile)"; }
+  std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
+  void control(Simulation&) override {}
+  AxialState measure(const Simulation& sim) const override;
+  bool finished(const AxialState& s, std::size_t broken_bonds) override;
+  const std::string& stop_reason() const noexcept override { return stop_reason_; }
+
+  double confining_stress() const noexcept override { return 0.0; }
+  bool consolidated() const noexcept override { return true; }
+  double max_strain() const noexcept override { return p_.max_strain; }
+  double platen_speed() const noexcept override { return p_.platen_speed; }
+  double length0() const noexcept override { return d0_; }
+  // Such that length x area is the disc's volume (pi D^2 t / 4).
+  double area0() const noexcept override { return 0.25 * 3.141592653589793 * d0_ * t_; }
+  double width0() const noexcept override { return d0_; }
+  double depth0() const noexcept override { return t_; }
+  std::string lateral_boundary() const override { return "none"; }
+  int axis() const noexcept override { return 1; }
+  double origin0() const noexcept override { return y0_; }
+  double thickness() const noexcept { return t_; }
+  double diameter() const noexcept { return d0_; }
+  // The loaded diameter: the line x = centre.x (3D: the plane), along y.
+  Vec3 centre() const noexcept { return centre_; }
+
+  void save_state(ArchiveWriter& a) const override;
+  void check_restored(const Simulation& sim, const std::string& where) const override;
+
+ private:
+  BrazilianTest() = default;
+  template <class Archive>
+  void transfer(Archive& a);
+
+  Params p_;
+  std::size_t bottom_ = 0, top_ = 0;
+  std::vector<std::uint32_t> left_, right_;  // grains at the x extremes (horizontal diameter)
+  Vec3 centre_;
+  double d0_ = 0.0, t_ = 0.0, w0_ = 0.0, y0_ = 0.0, peak_ = 0.0;
+  std::string stop_reason_;
+};
+
+}  // namespace breccia

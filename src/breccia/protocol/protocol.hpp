@@ -1,0 +1,77 @@
+#pragma once
+// A lab test, as the run loop sees it: it adds its boundaries to the simulation before
+// Simulation::initialise(), prepares the sample after (consolidation), steers its walls before
+// every step, measures one row of the test's state, and says when to stop. Each registered test
+// (protocol/registry.hpp) is a type with a `Params` table that drives parsing, validation and the
+// generated docs, and `create` / `restore` functions that make one of these.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "breccia/engine/simulation.hpp"
+
+namespace breccia {
+
+class ArchiveWriter;
+class ArchiveReader;
+
+// One row of a test's state. "Axial" is the loading direction: the sample axis of a compression
+// test, the loaded diameter of a Brazilian test. Compression-positive.
+struct AxialState {
+  double strain = 0.0;                         // platen approach / initial length along the load
+  double stress = 0.0;                         // Pa, the test's stress measure (current area)
+  double stress_nominal = 0.0;                 // Pa, over the area at the start of loading
+  double force_bottom = 0.0, force_top = 0.0;  // N, compression-positive
+  double lateral_strain = 0.0;                 // compression-positive (negative = expansion)
+  double volumetric_strain = 0.0;
+  double confining_stress = 0.0;  // Pa, measured on the lateral walls (0 when unconfined)
+  double deviatoric = 0.0;        // q = stress - sigma_3 (target sigma_3)
+};
+
+// What a test needs to know about the sample it is given.
+struct SampleInfo {
+  int dimension = 3;
+  std::string shape;       // "prism", "cylinder", "rectangle", "disk", or "" (imported, unknown)
+  double thickness = 1.0;  // 2D disk thickness
+  // Generated samples: the requested size and the largest grain radius (0 when not known
+  // before the sample is built).
+  double diameter = 0.0, height = 0.0, r_max = 0.0;
+};
+
+class Protocol {
+ public:
+  virtual ~Protocol() = default;
+
+  virtual const char* kind() const noexcept = 0;  // its registry name
+  virtual std::string label() const = 0;          // "uniaxial compression (UCS)", ...
+  // After Simulation::initialise(): consolidation and the loading ramp. Returns the steps taken.
+  virtual std::uint64_t start(Simulation& sim, double bar_wave_speed) = 0;
+  // Before every loading step (servo walls).
+  virtual void control(Simulation& sim) = 0;
+  virtual AxialState measure(const Simulation& sim) const = 0;
+  // Updates the peak tracking; true when the test should stop.
+  virtual bool finished(const AxialState& s, std::size_t broken_bonds) = 0;
+  virtual const std::string& stop_reason() const noexcept = 0;
+
+  virtual double confining_stress() const noexcept = 0;  // target sigma_3; 0 when unconfined
+  virtual bool consolidated() const noexcept = 0;
+  virtual double max_strain() const noexcept = 0;
+  virtual double platen_speed() const noexcept = 0;  // m/s, each platen
+  // Reference geometry at the start of loading: length along the load, loaded area, and the
+  // extents across it (2D: depth is the thickness).
+  virtual double length0() const noexcept = 0;
+  virtual double area0() const noexcept = 0;
+  virtual double width0() const noexcept = 0;
+  virtual double depth0() const noexcept = 0;
+  virtual std::string lateral_boundary() const = 0;
+  // The loading axis (2: z in 3D, 1: y) and where the bottom platen stood when loading began.
+  virtual int axis() const noexcept = 0;
+  virtual double origin0() const noexcept = 0;
+
+  // Checkpoints: the test's own state (its walls live in the simulation's state).
+  virtual void save_state(ArchiveWriter& a) const = 0;
+  // Throws InputError naming `where` unless the restored walls and particles exist in `sim`.
+  virtual void check_restored(const Simulation& sim, const std::string& where) const = 0;
+};
+
+}  // namespace breccia
