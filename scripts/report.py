@@ -92,12 +92,18 @@ def crack_maps(summary, cracks, outdir, figures):
     if not cracks:
         return
     dim = 2 if summary.get("test", "").startswith("biaxial") else 3
+    brazilian = summary.get("test_kind") == "brazilian"
     x = col(cracks, "x_m", 1e3)
     y = col(cracks, "y_m", 1e3)
     z = col(cracks, "z_m", 1e3)
     stage = col(cracks, "stage")
     mode = [c["mode"] for c in cracks]
-    if dim == 3:
+    if brazilian:
+        # The disc's face (x-y), loaded along y; every crack through the thickness projected.
+        keep = np.ones(len(x), bool)
+        horiz, vert = x, y
+        section = "disc face (x-y plane), all cracks through the thickness; load along y"
+    elif dim == 3:
         yc = 0.5 * (np.nanmin(y) + np.nanmax(y))
         half = 0.25 * (np.nanmax(y) - np.nanmin(y))
         keep = np.abs(y - yc) <= half
@@ -114,6 +120,12 @@ def crack_maps(summary, cracks, outdir, figures):
             idx = [i for i in range(len(mode)) if sel[i] and mode[i] == m]
             ax.scatter(horiz[idx], vert[idx], s=4, c=MODE_COLOURS[m], label=m)
         ax.set_title(f"{STAGE_NAMES[k]} ({int(sel.sum())})", fontsize=8)
+        if brazilian:  # the disc's outline, centred on the cracks' mid-range
+            r = 0.5e3 * summary.get("disc_diameter_m", 0.0)
+            xc = 0.5 * (np.nanmin(x) + np.nanmax(x))
+            yc = 0.5 * (np.nanmin(y) + np.nanmax(y))
+            t = np.linspace(0, 2 * np.pi, 200)
+            ax.plot(xc + r * np.cos(t), yc + r * np.sin(t), color="0.6", lw=0.8)
         ax.set_aspect("equal")
         ax.set_xlabel("x (mm)")
     axes[0].set_ylabel("axial coordinate (mm)")
@@ -380,7 +392,13 @@ def run_report(folder):
                      f"({summary.get('status')}: {summary.get('stop_reason')})"),
             ("particles / bonds", f"{summary.get('particles')} / {summary.get('bonds_initial')}"),
             ("peak q", f"{fmt(summary.get('peak_deviatoric_stress_mpa'))} MPa at axial strain "
-                       f"{fmt(summary.get('axial_strain_at_peak'), '{:.5f}')}"),
+                       f"{fmt(summary.get('axial_strain_at_peak'), '{:.5f}')}")
+            if "tensile_strength_mpa" not in summary else
+            ("tensile strength", f"sigma_t = 2F/(pi D t) = "
+                                 f"{fmt(summary.get('tensile_strength_mpa'))} MPa (peak force "
+                                 f"{fmt(summary.get('peak_force_n'), '{:.1f}')} N, D = "
+                                 f"{fmt(summary.get('disc_diameter_m', 0) * 1e3)} mm, t = "
+                                 f"{fmt(summary.get('disc_thickness_m', 0) * 1e3)} mm)"),
             ("E_t50 / Poisson", f"{fmt((summary.get('youngs_modulus_pa') or float('nan')) * 1e-9)}"
                                 f" GPa / {fmt(summary.get('poisson_ratio'), '{:.3f}')}"),
             ("cracks", f"{summary.get('bonds_broken')} ({summary.get('cracks_tensile')} tensile, "
@@ -393,6 +411,18 @@ def run_report(folder):
             ("energy balance", f"{eb.get('classification')} (largest relative residual "
                                f"{fmt(eb.get('residual_relative_max_after_1pct_work'), '{:.2e}')})"),
             ("quasi-static", str(summary.get("quasi_static", {}).get("ok")))]
+    cp = summary.get("crack_pattern", {})
+    if cp.get("quarter_shares_along_axis"):
+        rows.append(("cracks per quarter along the load",
+                     " / ".join(fmt(v) for v in cp["quarter_shares_along_axis"]) +
+                     " (from the bottom platen)"))
+    if cp.get("brazilian"):
+        b = cp["brazilian"]
+        rows.append(("split", f"{fmt(100 * b.get('all_in_band_share', 0), '{:.0f}')} % of the "
+                              f"cracks within {fmt(b.get('band_half_width_fraction_of_radius'))} R "
+                              f"of the loaded diameter (first 20 %: "
+                              f"{fmt(100 * b.get('early_in_band_share', 0), '{:.0f}')} %, "
+                              f"{fmt(100 * b.get('early_tensile_share', 0), '{:.0f}')} % tensile)"))
     for w in summary.get("warnings", []):
         rows.append(("warning", w))
     write_html(folder, f"Breccia report: {summary.get('experiment', '')}", rows, figures,

@@ -14,45 +14,13 @@
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/io/experiment.hpp"
+#include "cli_harness.hpp"
 
 namespace fs = std::filesystem;
 using namespace breccia;
+using namespace breccia::testing;
 
 namespace {
-
-struct Result {
-  int code;
-  std::string out;
-};
-
-Result run_with_prefix(const std::string& prefix, const std::string& args) {
-  const std::string cmd = prefix + std::string(BRECCIA_CLI) + " " + args + " 2>&1";
-  Result r{0, {}};
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[4096];
-  while (std::size_t n = fread(buf, 1, sizeof buf, p)) r.out.append(buf, n);
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-Result run(const std::string& args) {
-  return run_with_prefix("", args);
-}
-
-std::string last_line(const std::string& s) {
-  std::string t = s;
-  while (!t.empty() && t.back() == '\n') t.pop_back();
-  const auto nl = t.rfind('\n');
-  return nl == std::string::npos ? t : t.substr(nl + 1);
-}
-
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 void expect_input_error(const std::string& toml, std::initializer_list<const char*> fragments) {
   try {
@@ -125,7 +93,7 @@ TEST(App, SmallUcsWritesACompleteRunFolder) {
   const fs::path out = fs::temp_directory_path() / "breccia_app_test";
   fs::remove_all(out);
   std::string f;
-  const auto summary = run_small(out, " --set loading.platen_speed=0.1", &f);
+  const auto summary = run_small(out, " --set test.platen_speed=0.1", &f);
   const fs::path folder = f;
   for (const char* name : {"manifest.json", "summary.json", "history.csv", "cracks.csv",
                            "experiment.toml", "snapshots/particles.pvd", "snapshots/bonds.pvd",

@@ -313,9 +313,9 @@ TEST(Packing, PreconsolidationReachesItsStressIn2D) {
   const PackedSample p = pack_sample(s);
   EXPECT_TRUE(p.report.converged);
   ASSERT_FALSE(p.report.stages.empty());
-  // The side rows carry 10 MPa within 1 % (the servo's stopping rule); the locked-in mean stress
+  // The side rows carry 10 MPa within 2 % (the servo's stopping rule); the locked-in mean stress
   // of the sample's own contacts is of that order.
-  EXPECT_NEAR(p.report.preconsolidation_stress_reached, 10e6, 0.01 * 10e6);
+  EXPECT_NEAR(p.report.preconsolidation_stress_reached, 10e6, 0.02 * 10e6);
   EXPECT_GT(p.report.locked_in_mean_stress, 5e6);
   EXPECT_LT(p.report.structure.porosity, 0.22);
   EXPECT_GT(p.report.structure.porosity, 0.10);

@@ -18,7 +18,15 @@ namespace {
 constexpr double kMinThicknessRatio = 0.2, kMaxThicknessRatio = 1.0;
 constexpr double kMinGrainsThrough = 3.0, kMinGrainsAcross = 10.0;
 
-void check_disc(double diameter, double thickness, double r_max, const std::string& where) {
+// In 2D the thickness only scales forces: its proportions are not checked.
+void check_disc(double diameter, double thickness, double r_max, bool planar,
+                const std::string& where) {
+  if (r_max > 0.0 && diameter < kMinGrainsAcross * 2.0 * r_max)
+    throw InputError(where, "sample diameter", num(diameter) + " m",
+                     "the disc is too small for its grains: at least 10 largest grain diameters "
+                     "(" +
+                         num(kMinGrainsAcross * 2.0 * r_max) + " m) are needed");
+  if (planar) return;
   const double ratio = thickness / diameter;
   if (!(ratio >= kMinThicknessRatio && ratio <= kMaxThicknessRatio))
     throw InputError(where, "sample thickness / diameter", num(ratio),
@@ -44,7 +52,8 @@ void BrazilianTest::check(const Params&, const SampleInfo& s, const std::string&
     throw InputError(where, "sample.shape", "\"" + s.shape + "\"",
                      "a 2D Brazilian test needs a \"disk\"");
   if (s.diameter > 0.0)
-    check_disc(s.diameter, s.dimension == 2 ? s.thickness : s.height, s.r_max, where);
+    check_disc(s.diameter, s.dimension == 2 ? s.thickness : s.height, s.r_max, s.dimension == 2,
+               where);
 }
 
 BrazilianTest::BrazilianTest(Simulation& sim, const Params& p, const SampleInfo& s) : p_(p) {
@@ -61,7 +70,7 @@ BrazilianTest::BrazilianTest(Simulation& sim, const Params& p, const SampleInfo&
   }
   centre_ = (lo + hi) * 0.5;
   t_ = ps.planar() ? ps.thickness() : hi.z - lo.z;
-  check_disc(hi.y - lo.y, t_, r_max, "brazilian test");
+  check_disc(hi.y - lo.y, t_, r_max, ps.planar(), "brazilian test");
   (void)s;
   bottom_ = sim.add_wall(Wall::plane("platen_bottom", lo, {0, 1, 0}));
   top_ = sim.add_wall(Wall::plane("platen_top", hi, {0, -1, 0}));

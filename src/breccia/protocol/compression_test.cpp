@@ -330,49 +330,14 @@ void PlatenCompression::check_restored(const Simulation& sim, const std::string&
 
 // --- registered tests ---
 
-namespace {
-template <class P>
-PlatenCompressionSettings settings_of(const P& p) {
-  PlatenCompressionSettings s;
-  s.platen_speed = p.platen_speed;
-  s.ramp_time = p.ramp_time;
-  s.max_strain = p.max_strain;
-  s.stop_fraction = p.stop_fraction;
-  if constexpr (requires { p.confining_stress; }) {
-    s.confining_stress = p.confining_stress;
-    s.servo_relaxation = p.servo_relaxation;
-  }
-  return s;
-}
-LateralBoundary lateral_of(const SampleInfo& s) {
-  return s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism;
-}
-}  // namespace
-
 std::unique_ptr<Protocol> UcsTest::create(Simulation& sim, const Params& p, const SampleInfo& s) {
-  return std::make_unique<PlatenCompression>(sim, settings_of(p), lateral_of(s), "ucs");
-}
-
-void TriaxialTest::check(const Params&, const SampleInfo& s, const std::string& where) {
-  if (s.dimension != 3)
-    throw InputError(where, "test.kind", "\"triaxial\"",
-                     "a triaxial test needs a 3D sample; 2D samples take \"biaxial\"");
-}
-
-std::unique_ptr<Protocol> TriaxialTest::create(Simulation& sim, const Params& p,
-                                               const SampleInfo& s) {
-  return std::make_unique<PlatenCompression>(sim, settings_of(p), lateral_of(s), "triaxial");
-}
-
-void BiaxialTest::check(const Params&, const SampleInfo& s, const std::string& where) {
-  if (s.dimension != 2)
-    throw InputError(where, "test.kind", "\"biaxial\"",
-                     "a biaxial test needs a 2D sample; 3D samples take \"triaxial\"");
-}
-
-std::unique_ptr<Protocol> BiaxialTest::create(Simulation& sim, const Params& p,
-                                              const SampleInfo& s) {
-  return std::make_unique<PlatenCompression>(sim, settings_of(p), lateral_of(s), "biaxial");
+  PlatenCompressionSettings st;
+  st.platen_speed = p.platen_speed;
+  st.ramp_time = p.ramp_time;
+  st.max_strain = p.max_strain;
+  st.stop_fraction = p.stop_fraction;
+  return std::make_unique<PlatenCompression>(
+      sim, st, s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism, "ucs");
 }
 
 }  // namespace breccia

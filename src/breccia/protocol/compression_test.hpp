@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "breccia/boundary/servo.hpp"
+#include "breccia/core/error.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/law/param_table.hpp"
 #include "breccia/protocol/protocol.hpp"
@@ -151,45 +152,59 @@ struct UcsTest {
   }
 };
 
-struct TriaxialTest {
-  static constexpr std::string_view name = "triaxial";
+// Confined compression: triaxial in 3D, biaxial in 2D (Dim). The two are one test with the
+// lateral boundary of the sample's dimension and shape; they are registered apart so that an
+// experiment says which it means and a sample of the other dimension is refused.
+template <int Dim>
+struct ConfinedCompressionTest {
+  static constexpr std::string_view name = Dim == 3 ? "triaxial" : "biaxial";
   static constexpr std::string_view summary =
-      "Triaxial compression (3D): the sample is consolidated to sigma_3 with the platens and "
-      "lateral walls servo-controlled (four plane walls around a prism, a cylindrical wall around "
-      "a cylinder; physics.md §6.2), then loaded axially while the lateral walls hold sigma_3.";
+      Dim == 3 ? "Triaxial compression (3D): the sample is consolidated to sigma_3 with the "
+                 "platens and lateral walls servo-controlled (four plane walls around a prism, a "
+                 "cylindrical wall around a cylinder; physics.md §6.2), then loaded axially "
+                 "while the lateral walls hold sigma_3."
+               : "Biaxial compression (2D): consolidation to sigma_3 by servo-controlled side "
+                 "walls and platens, then axial loading with the side walls holding sigma_3 "
+                 "(physics.md §6.2).";
   struct Params {
     double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
     double confining_stress = 5e6, servo_relaxation = 0.5;
   };
   static constexpr std::array<ParamField<Params>, 6> fields() {
-    return compression_fields<Params, 2>(
-        confining_fields<Params>("sigma_3 held by the lateral walls"));
+    return compression_fields<Params, 2>(confining_fields<Params>(
+        Dim == 3 ? "sigma_3 held by the lateral walls" : "sigma_3 held by the side walls"));
   }
-  static void check(const Params& p, const SampleInfo& s, const std::string& where);
-  static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s);
+  static void check(const Params&, const SampleInfo& s, const std::string& where) {
+    if (s.dimension != Dim)
+      throw InputError(where, "test.kind", "\"" + std::string(name) + "\"",
+                       Dim == 3 ? "a triaxial test needs a 3D sample; 2D samples take \"biaxial\""
+                                : "a biaxial test needs a 2D sample; 3D samples take \"triaxial\"");
+  }
+  static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s) {
+    return std::make_unique<PlatenCompression>(sim, confined_settings(p), lateral_of(s),
+                                               name.data());
+  }
   static std::unique_ptr<Protocol> restore(ArchiveReader& a) {
     return PlatenCompression::restore(a);
+  }
+
+ private:
+  static PlatenCompressionSettings confined_settings(const Params& p) {
+    PlatenCompressionSettings s;
+    s.platen_speed = p.platen_speed;
+    s.ramp_time = p.ramp_time;
+    s.max_strain = p.max_strain;
+    s.stop_fraction = p.stop_fraction;
+    s.confining_stress = p.confining_stress;
+    s.servo_relaxation = p.servo_relaxation;
+    return s;
+  }
+  static LateralBoundary lateral_of(const SampleInfo& s) {
+    return s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism;
   }
 };
 
-struct BiaxialTest {
-  static constexpr std::string_view name = "biaxial";
-  static constexpr std::string_view summary =
-      "Biaxial compression (2D): consolidation to sigma_3 by servo-controlled side walls and "
-      "platens, then axial loading with the side walls holding sigma_3 (physics.md §6.2).";
-  struct Params {
-    double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
-    double confining_stress = 5e6, servo_relaxation = 0.5;
-  };
-  static constexpr std::array<ParamField<Params>, 6> fields() {
-    return compression_fields<Params, 2>(
-        confining_fields<Params>("sigma_3 held by the side walls"));
-  }
-  static void check(const Params& p, const SampleInfo& s, const std::string& where);
-  static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s);
-  static std::unique_ptr<Protocol> restore(ArchiveReader& a) {
-    return PlatenCompression::restore(a);
-  }
-};
+using TriaxialTest = ConfinedCompressionTest<3>;
+using BiaxialTest = ConfinedCompressionTest<2>;
 
 }  // namespace breccia

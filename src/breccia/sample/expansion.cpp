@@ -7,7 +7,8 @@
 //     the installation stress p0. Coming down from a jammed state is what makes this fast: held
 //     at p0 from below, a frictionless packing creeps for a very long time (its relaxation time
 //     diverges at jamming);
-//  4. floaters: every grain with fewer than N_f contacts is placed snug in its cage (floaters.cpp).
+//  4. floaters: every grain with fewer than N_f bonded neighbours is placed snug in its cage
+//     (floaters.cpp), after the servo and again after the last one.
 // Friction stays off: a frictionless packing jams dense and isotropic; the test switches it on.
 #include <fmt/format.h>
 
@@ -28,8 +29,9 @@ constexpr double kServoGain = 0.5;         // eta of §7.2 step 4
 constexpr double kMaxServoGain = 1000.0;   // the adaptive gain's ceiling
 constexpr double kStressTolerance = 0.02;  // |p - p0| / p0 for "at p0"
 constexpr int kChecksHeld = 5;             // consecutive checks at p0 for "there"
-// Settling at constant radii before the servo. Longer settling shortens the servo, but not by as
-// much (100k grains: 5,735 settling steps left 2,520 for the servo, 1,500 left 4,820).
+// Settling at constant radii before the servo. Longer settling shortens the servo by fewer steps
+// than it costs (100k grains, fixed servo gain: 5,735 settling steps left 2,520 for the servo,
+// 1,500 left 4,820).
 constexpr std::uint64_t kSettleSteps = 1500;
 
 class Expansion {
@@ -158,16 +160,15 @@ PackedState pack_by_expansion(const PackingSettings& s, const Log& log) {
                   placed.size(), 100 * shrink, shape_name(s.shape), region.volume()));
   std::vector<double> initial_radius;
   for (const PosRad& q : placed) initial_radius.push_back(q.r);
-  const std::uint64_t settle_steps = kSettleSteps;
 
   Simulation sim = vessel_simulation(placed, region, s);
   Expansion e(sim, region, s, st.report);
   bool converged = true;
   e.grow_by(1.0 / shrink);
-  e.settle(settle_steps);
+  e.settle(kSettleSteps);
+  e.done("settle", fmt::format("p = {:.4g} MPa", e.pressure() * 1e-6));
   if (s.servo_to_stress) {
-    e.grow_until_jammed(s.isotropic_stress, settle_steps);
-    e.done("settle", fmt::format("p = {:.4g} MPa", e.pressure() * 1e-6));
+    e.grow_until_jammed(s.isotropic_stress, kSettleSteps);
     converged = e.servo(s.isotropic_stress);
     e.done("servo to p0", fmt::format("p = {:.4g} MPa", e.pressure() * 1e-6));
     e.place_floaters(initial_radius);
@@ -176,7 +177,6 @@ PackedState pack_by_expansion(const PackingSettings& s, const Log& log) {
     // Grains the last servo left with too few contacts: placed without disturbing the others.
     e.place_floaters(initial_radius);
   } else {
-    e.done("settle", fmt::format("p = {:.4g} MPa", e.pressure() * 1e-6));
     e.place_floaters(initial_radius);
   }
   st.report.converged = converged && !e.out_of_steps();

@@ -5,12 +5,13 @@
 // that growth ends: the largest sphere that fits its cage, i.e. tangent to D + 1 of the nearest
 // grains and walls (the fitters of §7.4). It then touches them without overlap, so nothing else
 // is disturbed. A grain whose cage is wider than the growth cap allows is placed at the cap,
-// tangent to D surfaces; one that fits no way is left and counted.
+// tangent to D of its nearest grains; one that fits no way is left and counted.
 #include <algorithm>
 #include <cmath>
 
 #include "breccia/engine/neighbour_grid.hpp"
 #include "breccia/sample/packing_methods.hpp"
+#include "breccia/sample/sphere_grid.hpp"
 #include "breccia/sample/tangent_fit.hpp"
 
 namespace breccia::packing {
@@ -20,69 +21,17 @@ namespace {
 // The surfaces around one grain: neighbours within reach and the vessel walls, nearest first.
 struct Cage {
   std::vector<Surface> surfaces;  // sorted by gap to the grain as it is
-  std::vector<double> gaps;
-};
-
-// The grains as they are now, in cells of edge 2 r_max, for overlap tests of candidate spheres
-// (no larger than r_max: only the adjacent cells can hold grains they touch).
-class GrainGrid {
- public:
-  GrainGrid(const std::vector<PosRad>& p, const Region& region, double cell)
-      : p_(p), lo_(region.lower()), cell_(cell) {
-    const Vec3 hi = region.upper();
-    for (int k = 0; k < 3; ++k)
-      n_[k] = (region.planar() && k == 2)
-                  ? 1
-                  : std::max(1, static_cast<int>((hi[k] - lo_[k]) / cell) + 1);
-    cells_.resize(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2]);
-    for (std::uint32_t i = 0; i < p.size(); ++i) cells_[index(p[i].x)].push_back(i);
-  }
-  void moved(std::uint32_t i, const Vec3& from) {
-    auto& old = cells_[index(from)];
-    old.erase(std::find(old.begin(), old.end(), i));
-    cells_[index(p_[i].x)].push_back(i);
-  }
-  // True when a sphere (x, r) overlaps any grain but `self` (beyond round-off).
-  bool overlaps(const Vec3& x, double r, std::uint32_t self) const {
-    int c[3];
-    for (int k = 0; k < 3; ++k) c[k] = cell(x, k);
-    const int rz = n_[2] == 1 ? 0 : 1;
-    for (int dz = -rz; dz <= rz; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int a = c[0] + dx, b = c[1] + dy, d = c[2] + dz;
-          if (a < 0 || b < 0 || d < 0 || a >= n_[0] || b >= n_[1] || d >= n_[2]) continue;
-          for (std::uint32_t j : cells_[(static_cast<std::size_t>(d) * n_[1] + b) * n_[0] + a]) {
-            if (j == self) continue;
-            const double reach = (p_[j].r + r) * (1.0 - 1e-9);
-            if (norm2(p_[j].x - x) < reach * reach) return true;
-          }
-        }
-    return false;
-  }
-
- private:
-  int cell(const Vec3& x, int k) const {
-    return std::clamp(static_cast<int>((x[k] - lo_[k]) / cell_), 0, n_[k] - 1);
-  }
-  std::size_t index(const Vec3& x) const {
-    return (static_cast<std::size_t>(cell(x, 2)) * n_[1] + cell(x, 1)) * n_[0] + cell(x, 0);
-  }
-  const std::vector<PosRad>& p_;
-  Vec3 lo_;
-  double cell_;
-  int n_[3];
-  std::vector<std::vector<std::uint32_t>> cells_;
 };
 
 // A candidate stays in its cage (it moves no further than the growth allows), inside the vessel,
 // and clear of every grain.
-bool fits(const FittedSphere& f, const Vec3& from, double max_move, const GrainGrid& grid,
-          std::uint32_t self, const Region& region, double r_min, double r_max) {
+bool fits(const FittedSphere& f, const Vec3& from, double max_move, const SphereGrid& grid,
+          const std::vector<PosRad>& p, std::uint32_t self, const Region& region, double r_min,
+          double r_max) {
   if (!(f.radius >= r_min && f.radius <= r_max)) return false;
   if (norm(f.centre - from) > max_move) return false;
   if (region.wall_distance(f.centre) < f.radius * (1.0 - 1e-9)) return false;
-  return !grid.overlaps(f.centre, f.radius, self);
+  return !grid.overlaps(f.centre, f.radius, p, self, 1e-9);
 }
 
 // Every choice of k of the first n surfaces, in lexicographic order (nearest sets first).
@@ -133,7 +82,9 @@ FloaterFix fit_floaters(Simulation& sim, const Region& region, double tol, int n
   const double reach = 2.0 * max_growth * r_max + tol;
   PairList near;
   build_neighbour_pairs(p, reach * 1.0001 + 1e-300, planar, near);
-  GrainGrid grid(p, region, 2.0 * r_max * (1.0 + max_growth));
+  // Cells of twice the largest radius a grown floater can have.
+  SphereGrid grid(region.lower(), region.upper(), 2.0 * r_max * (1.0 + max_growth), planar);
+  for (std::uint32_t i = 0; i < p.size(); ++i) grid.insert(i, p[i].x);
   std::vector<int> contacts(p.size(), 0);
   for (std::size_t k = 0; k < near.size(); ++k) {
     const PosRad& a = p[near.first[k]];
@@ -164,10 +115,7 @@ FloaterFix fit_floaters(Simulation& sim, const Region& region, double tol, int n
     }
     std::sort(around.begin(), around.end(),
               [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (const auto& [gap, s] : around) {
-      cage.gaps.push_back(gap);
-      cage.surfaces.push_back(s);
-    }
+    for (const auto& a : around) cage.surfaces.push_back(a.second);
     const double r = p[i].r;
     const double limit = nominal_radius[i] * (1.0 + max_growth);
     const Vec3 from = p[i].x;
@@ -188,7 +136,7 @@ FloaterFix fit_floaters(Simulation& sim, const Region& region, double tol, int n
         for (int k : idx) chosen.push_back(cage.surfaces[static_cast<std::size_t>(k)]);
         for (FittedSphere f : fit_free_radius(chosen, planar)) {
           f = refine_on_walls(f, idx, cage, region, planar);
-          if (fits(f, from, max_move, grid, i, region, r, limit) &&
+          if (fits(f, from, max_move, grid, p, i, region, r, limit) &&
               (!best || f.radius < best->radius))
             best = f;
         }
@@ -202,7 +150,7 @@ FloaterFix fit_floaters(Simulation& sim, const Region& region, double tol, int n
         for (int k : idx) chosen.push_back(cage.surfaces[static_cast<std::size_t>(k)]);
         for (const Vec3& x : fit_fixed_radius(chosen, limit, planar, p[i].x)) {
           const FittedSphere f{x, limit};
-          if (fits(f, from, max_move, grid, i, region, r, limit)) {
+          if (fits(f, from, max_move, grid, p, i, region, r, limit)) {
             best = f;
             return true;
           }
@@ -212,7 +160,7 @@ FloaterFix fit_floaters(Simulation& sim, const Region& region, double tol, int n
     if (!best) continue;
     // A hair over tangency, so that a zero bond gap tolerance still counts the contacts.
     sim.place_particle(i, best->centre, best->radius * (1.0 + 1e-9));
-    grid.moved(i, from);
+    grid.move(i, from, best->centre);
     out.largest_growth = std::max(out.largest_growth, best->radius / nominal_radius[i] - 1.0);
     ++out.fitted;
     // Its new contacts count for the floaters still to come.

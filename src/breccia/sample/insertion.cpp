@@ -15,6 +15,7 @@
 #include "breccia/core/error.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/sample/packing_methods.hpp"
+#include "breccia/sample/sphere_grid.hpp"
 #include "breccia/sample/tangent_fit.hpp"
 
 namespace breccia::packing {
@@ -23,76 +24,6 @@ namespace {
 
 constexpr std::uint64_t kInsertStream = 0x696e736572740000ull;  // "insert"
 constexpr double kOverlapTolerance = 1e-9;  // relative: fitted grains touch, round-off aside
-
-// Grains in a uniform grid of cells of edge 2 r_max: a sphere of radius <= r_max can only touch
-// grains in its own and the adjacent cells.
-class InsertionGrid {
- public:
-  InsertionGrid(const Region& region, double r_max) : lo_(region.lower()), cell_(2.0 * r_max) {
-    const Vec3 hi = region.upper();
-    for (int k = 0; k < 3; ++k)
-      n_[k] = (region.planar() && k == 2)
-                  ? 1
-                  : std::max(1, static_cast<int>((hi[k] - lo_[k]) / cell_) + 1);
-    cells_.resize(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2]);
-  }
-  void insert(const PosRad& q) {
-    cells_[index(cell_of(q.x))].push_back(static_cast<std::uint32_t>(all_.size()));
-    all_.push_back(q);
-  }
-  const std::vector<PosRad>& particles() const { return all_; }
-  bool overlaps(const Vec3& x, double r) const {
-    bool hit = false;
-    visit(x, 1, [&](std::uint32_t i) {
-      const PosRad& q = all_[i];
-      const double reach = (q.r + r) * (1.0 - kOverlapTolerance);
-      hit = hit || norm2(q.x - x) < reach * reach;
-    });
-    return hit;
-  }
-  // The `count` grains nearest to x by surface distance |x - c| - R, within `rings` cells.
-  std::vector<std::pair<double, std::uint32_t>> nearest(const Vec3& x, std::size_t count,
-                                                        int rings) const {
-    std::vector<std::pair<double, std::uint32_t>> found;
-    visit(x, rings, [&](std::uint32_t i) {
-      found.push_back({norm(all_[i].x - x) - all_[i].r, i});
-    });
-    const std::size_t keep = std::min(count, found.size());
-    std::partial_sort(found.begin(), found.begin() + static_cast<long>(keep), found.end());
-    found.resize(keep);
-    return found;
-  }
-
- private:
-  std::array<int, 3> cell_of(const Vec3& x) const {
-    std::array<int, 3> c{};
-    for (int k = 0; k < 3; ++k)
-      c[static_cast<std::size_t>(k)] =
-          std::clamp(static_cast<int>((x[k] - lo_[k]) / cell_), 0, n_[k] - 1);
-    return c;
-  }
-  std::size_t index(const std::array<int, 3>& c) const {
-    return (static_cast<std::size_t>(c[2]) * n_[1] + c[1]) * n_[0] + c[0];
-  }
-  template <class F>
-  void visit(const Vec3& x, int rings, F&& f) const {
-    const auto c = cell_of(x);
-    const int rz = n_[2] == 1 ? 0 : rings;
-    for (int dz = -rz; dz <= rz; ++dz)
-      for (int dy = -rings; dy <= rings; ++dy)
-        for (int dx = -rings; dx <= rings; ++dx) {
-          const std::array<int, 3> d{c[0] + dx, c[1] + dy, c[2] + dz};
-          if (d[0] < 0 || d[1] < 0 || d[2] < 0 || d[0] >= n_[0] || d[1] >= n_[1] || d[2] >= n_[2])
-            continue;
-          for (std::uint32_t i : cells_[index(d)]) f(i);
-        }
-  }
-  Vec3 lo_;
-  double cell_;
-  int n_[3];
-  std::vector<std::vector<std::uint32_t>> cells_;
-  std::vector<PosRad> all_;
-};
 
 struct Bounds {
   double r_min, r_max;
@@ -113,7 +44,7 @@ class Inserter {
       : s_(s),
         region_(region),
         b_(radius_bounds(s)),
-        grid_(region, b_.r_max),
+        grid_(region.lower(), region.upper(), 2.0 * b_.r_max, region.planar()),
         planar_(region.planar()),
         dim_(region.dimension()) {}
 
@@ -126,19 +57,19 @@ class Inserter {
     for (std::uint64_t k = 0; solid < 0.05 * region_.volume() && k < 100000; ++k) {
       const double r = dist.draw(s_.seed, k);
       const Vec3 x = region_.draw(r, s_.seed, kInsertStream, counter_);
-      if (grid_.overlaps(x, r)) continue;
-      grid_.insert({x, r});
+      if (grid_.overlaps(x, r, all_)) continue;
+      add({x, r});
       solid += planar_ ? std::numbers::pi * r * r * region_.thickness
                        : 4.0 / 3.0 * std::numbers::pi * r * r * r;
     }
-    seeds_ = grid_.particles().size();
+    seeds_ = all_.size();
   }
 
   // Fits grains until `max_failures` consecutive random points gave none.
   void fill(std::uint64_t max_failures, std::size_t max_particles) {
     std::uint64_t failures = 0;
     while (failures < max_failures) {
-      if (grid_.particles().size() >= max_particles)
+      if (all_.size() >= max_particles)
         throw InputError("sample generation", "particle count",
                          "> " + std::to_string(max_particles),
                          "the insertion packing needs more particles than sample.max_particles; "
@@ -153,22 +84,22 @@ class Inserter {
 
   std::size_t seeds() const { return seeds_; }
   std::uint64_t tries() const { return tries_; }
-  const std::vector<PosRad>& particles() const { return grid_.particles(); }
+  const std::vector<PosRad>& particles() const { return all_; }
 
  private:
   bool try_one() {
     Vec3 x = region_.draw(0.0, s_.seed, kInsertStream, counter_);
     // A point inside a grain moves to its surface (fitter i of §7.4).
-    auto near = grid_.nearest(x, static_cast<std::size_t>(dim_ + 1), 1);
+    auto near = grid_.nearest(x, static_cast<std::size_t>(dim_ + 1), 1, all_);
     if (!near.empty() && near.front().first < 0.0) {
-      const PosRad& q = grid_.particles()[near.front().second];
+      const PosRad& q = all_[near.front().second];
       const Vec3 d = x - q.x;
       x = q.x + (norm(d) > 0.0 ? unit(d) : Vec3{1, 0, 0}) * q.r;
-      near = grid_.nearest(x, static_cast<std::size_t>(dim_ + 1), 1);
+      near = grid_.nearest(x, static_cast<std::size_t>(dim_ + 1), 1, all_);
     }
     std::vector<Surface> spheres;
     for (const auto& [gap, i] : near) {
-      const PosRad& q = grid_.particles()[i];
+      const PosRad& q = all_[i];
       spheres.push_back({false, q.x, {}, q.r});
     }
     // Tangent to D + 1 grains (fitter ii).
@@ -206,17 +137,23 @@ class Inserter {
     for (const FittedSphere& f : fits) {
       if (f.radius < b_.r_min || f.radius > b_.r_max) continue;
       if (region_.wall_distance(f.centre) < f.radius * (1.0 - kOverlapTolerance)) continue;
-      if (grid_.overlaps(f.centre, f.radius)) continue;
-      grid_.insert({f.centre, f.radius});
+      if (grid_.overlaps(f.centre, f.radius, all_, SphereGrid::kNone, kOverlapTolerance)) continue;
+      add({f.centre, f.radius});
       return true;
     }
     return false;
   }
 
+  void add(const PosRad& q) {
+    grid_.insert(static_cast<std::uint32_t>(all_.size()), q.x);
+    all_.push_back(q);
+  }
+
   const PackingSettings& s_;
   const Region& region_;
   Bounds b_;
-  InsertionGrid grid_;
+  SphereGrid grid_;
+  std::vector<PosRad> all_;
   bool planar_;
   int dim_;
   std::uint64_t counter_ = 0, tries_ = 0;

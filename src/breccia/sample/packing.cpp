@@ -13,6 +13,7 @@
 #include "breccia/core/format.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
 #include "breccia/sample/packing_methods.hpp"
+#include "breccia/sample/sphere_grid.hpp"
 
 namespace breccia {
 
@@ -83,61 +84,11 @@ std::vector<double> draw_radii(const PackingSettings& s, const Region& region) {
   return radii;
 }
 
-namespace {
-// Uniform grid of particle indices for overlap tests during random placement.
-class PlacementGrid {
- public:
-  PlacementGrid(Vec3 lo, Vec3 hi, double cell, bool planar) : lo_(lo), cell_(cell) {
-    for (int k = 0; k < 3; ++k)
-      n_[k] = (planar && k == 2) ? 1 : std::max(1, static_cast<int>((hi[k] - lo[k]) / cell) + 1);
-    head_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2], -1);
-  }
-  bool overlaps(const Vec3& x, double r, const std::vector<PosRad>& placed) const {
-    int c[3];
-    cell_of(x, c);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int a = c[0] + dx, b = c[1] + dy, d = c[2] + dz;
-          if (a < 0 || b < 0 || d < 0 || a >= n_[0] || b >= n_[1] || d >= n_[2]) continue;
-          for (int i = head_[index(a, b, d)]; i >= 0; i = next_[static_cast<std::size_t>(i)]) {
-            const PosRad& q = placed[static_cast<std::size_t>(i)];
-            const double reach = q.r + r;
-            if (norm2(q.x - x) < reach * reach) return true;
-          }
-        }
-    return false;
-  }
-  void insert(const Vec3& x, int id) {
-    int c[3];
-    cell_of(x, c);
-    const std::size_t k = index(c[0], c[1], c[2]);
-    if (next_.size() <= static_cast<std::size_t>(id))
-      next_.resize(static_cast<std::size_t>(id) + 1);
-    next_[static_cast<std::size_t>(id)] = head_[k];
-    head_[k] = id;
-  }
-
- private:
-  void cell_of(const Vec3& x, int c[3]) const {
-    for (int k = 0; k < 3; ++k)
-      c[k] = std::clamp(static_cast<int>((x[k] - lo_[k]) / cell_), 0, n_[k] - 1);
-  }
-  std::size_t index(int a, int b, int d) const {
-    return (static_cast<std::size_t>(d) * n_[1] + b) * n_[0] + a;
-  }
-  Vec3 lo_;
-  double cell_;
-  int n_[3];
-  std::vector<int> head_, next_;
-};
-}  // namespace
-
 std::vector<PosRad> place_at_random(const std::vector<double>& radii, double shrink,
                                     const Region& region, std::uint64_t seed, int strata) {
   std::vector<PosRad> placed;
   placed.reserve(radii.size());
-  PlacementGrid grid(region.lower(), region.upper(), 2.0 * radii.front() * shrink, region.planar());
+  SphereGrid grid(region.lower(), region.upper(), 2.0 * radii.front() * shrink, region.planar());
   std::uint64_t counter = 0;
   const double band = 1.0 / std::max(1, strata);
   for (std::size_t i = 0; i < radii.size(); ++i) {
@@ -150,7 +101,7 @@ std::vector<PosRad> place_at_random(const std::vector<double>& radii, double shr
       const Vec3 x = attempt < 1000 ? region.draw(r, seed, kPlaceStream, counter, lo, lo + band)
                                     : region.draw(r, seed, kPlaceStream, counter);
       if (grid.overlaps(x, r, placed)) continue;
-      grid.insert(x, static_cast<int>(placed.size()));
+      grid.insert(static_cast<std::uint32_t>(placed.size()), x);
       placed.push_back({x, r});
       ok = true;
     }

@@ -1,0 +1,196 @@
+// The lab-test registry (every registered test documented and run on a tiny sample) and the
+// Brazilian test: sigma_t from the platen force by the ISRM formula, a split along the loaded
+// diameter, bad discs refused.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "breccia/core/error.hpp"
+#include "breccia/io/experiment.hpp"
+#include "cli_harness.hpp"
+
+namespace fs = std::filesystem;
+using namespace breccia;
+using namespace breccia::testing;
+
+namespace {
+
+// A tiny experiment of each registered test kind: about 300-850 grains, fast loading.
+std::string tiny_experiment(std::string_view kind) {
+  const std::string common =
+      "[output]\nplot = false\nsnapshot_strain_interval = 0\n"
+      "[engine]\ndensity_scaling = 100\n";
+  if (kind == "biaxial")
+    return common +
+           "dimension = 2\n[contact]\nlaw = \"linear\"\nmodulus = 8e9\nfriction = 0.4\n"
+           "[sample]\nshape = \"rectangle\"\nwidth = 0.003\nheight = 0.006\nthickness = 2e-4\n"
+           "radius_min = 0.1e-3\nradius_max = 0.15e-3\nporosity = 0.16\n"
+           "[test]\nkind = \"biaxial\"\nplaten_speed = 0.1\nmax_strain = 0.003\n"
+           "confining_stress = 1e6\n";
+  if (kind == "brazilian")
+    return common +
+           "[sample]\nshape = \"cylinder\"\ndiameter = 0.004\nheight = 0.002\n"
+           "radius_min = 0.12e-3\nradius_max = 0.2e-3\n"
+           "[test]\nkind = \"brazilian\"\nplaten_speed = 0.1\n";
+  std::string s = common +
+                  "[sample]\nwidth = 0.0024\ndepth = 0.0024\nheight = 0.0048\n"
+                  "radius_min = 0.2e-3\nradius_max = 0.3e-3\n"
+                  "[test]\nkind = \"" +
+                  std::string(kind) + "\"\nplaten_speed = 0.1\nmax_strain = 0.003\n";
+  if (kind == "triaxial") s += "confining_stress = 1e6\n";
+  return s;
+}
+
+// Runs an experiment file through the command; the run folder's summary (and the folder).
+nlohmann::json run_file(const fs::path& dir, const std::string& name, const std::string& toml,
+                        fs::path* folder_out = nullptr) {
+  fs::create_directories(dir);
+  const fs::path file = dir / (name + ".toml");
+  std::ofstream(file) << toml;
+  const Result r = run("run --quiet --output " + (dir / "runs").string() + " " + file.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  const fs::path folder = last_line(r.out);
+  if (folder_out) *folder_out = folder;
+  return nlohmann::json::parse(read(folder / "summary.json"));
+}
+
+}  // namespace
+
+TEST(Protocols, EveryRegisteredTestIsDocumentedAndRunsATinyCase) {
+  const std::string docs = experiment_docs();
+  const fs::path dir = fs::temp_directory_path() / "breccia_protocols";
+  fs::remove_all(dir);
+  std::vector<std::string> kinds;
+  for_each_lab_test([&]<class T>() { kinds.emplace_back(T::name); });
+  EXPECT_EQ(kinds, (std::vector<std::string>{"ucs", "triaxial", "biaxial", "brazilian"}));
+  for_each_lab_test([&]<class T>() {
+    const std::string name(T::name);
+    EXPECT_NE(docs.find("`test` kind `\"" + name + "\"`"), std::string::npos) << name;
+    for (const auto& f : T::fields())
+      EXPECT_NE(docs.find("| `" + std::string(f.key) + "` |"), std::string::npos) << f.key;
+    const nlohmann::json s = run_file(dir, name, tiny_experiment(T::name));
+    EXPECT_EQ(s["test_kind"], name);
+    EXPECT_EQ(s["status"], "complete") << name;
+    EXPECT_GT(s["steps"].get<int>(), 100) << name;
+    // The resolved experiment names the test and reads back as the same kind.
+    const ExperimentSpec spec = parse_experiment(tiny_experiment(T::name), "tiny", {});
+    EXPECT_EQ(spec.test_kind, name);
+    EXPECT_NE(to_toml(spec).find("kind = \"" + name + "\""), std::string::npos);
+  });
+  fs::remove_all(dir);
+}
+
+TEST(Protocols, OldLoadingTableStillReadsAsTheTestItMeant) {
+  const ExperimentSpec ucs = parse_experiment("[loading]\nplaten_speed = 0.07\n", "old.toml", {});
+  EXPECT_EQ(ucs.test_kind, "ucs");
+  EXPECT_EQ(std::get<UcsTest::Params>(ucs.test).platen_speed, 0.07);
+  const ExperimentSpec tri =
+      parse_experiment("[loading]\nconfining_stress = 5e6\nmax_strain = 0.01\n", "old.toml", {});
+  EXPECT_EQ(tri.test_kind, "triaxial");
+  EXPECT_EQ(std::get<TriaxialTest::Params>(tri.test).confining_stress, 5e6);
+  EXPECT_EQ(confining_stress(tri), 5e6);
+  const ExperimentSpec bi = parse_experiment(
+      "[engine]\ndimension = 2\n[contact]\nlaw = \"linear\"\n[sample]\nshape = \"rectangle\"\n",
+      "old.toml", {"loading.confining_stress=2e6"});
+  EXPECT_EQ(bi.test_kind, "biaxial");
+  // Both layouts at once, a key of another kind, a test on the wrong sample: refused, by name.
+  EXPECT_THROW(parse_experiment("[loading]\nplaten_speed = 1\n[test]\nkind = \"ucs\"\n", "x", {}),
+               InputError);
+  try {
+    parse_experiment("[test]\nkind = \"ucs\"\nconfining_stress = 1e6\n", "x.toml", {});
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("for test kind \"ucs\""), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parse_experiment("[test]\nkind = \"biaxial\"\n", "x", {}), InputError);
+  EXPECT_THROW(parse_experiment("[test]\nkind = \"shear_box\"\n", "x", {}), InputError);
+}
+
+TEST(Brazilian, TensileStrengthFromThePlatenForceAndACentralSplit) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_brazilian";
+  fs::remove_all(dir);
+  fs::path folder;
+  const nlohmann::json s = run_file(dir, "disc", tiny_experiment("brazilian"), &folder);
+  ASSERT_EQ(s["status"], "complete");
+  const double d = s["disc_diameter_m"].get<double>(), t = s["disc_thickness_m"].get<double>();
+  EXPECT_NEAR(d, 0.004, 1e-4);  // the disc as packed: its extent between the platens
+  EXPECT_NEAR(t, 0.002, 1e-4);
+  // sigma_t = 2 F / (pi D t) with F the peak mean platen force: recomputed from history.csv.
+  std::ifstream hist(folder / "history.csv");
+  std::string line;
+  std::getline(hist, line);
+  std::vector<std::string> cols;
+  for (std::size_t a = 0, e; a <= line.size(); a = e + 1) {
+    e = line.find(',', a);
+    if (e == std::string::npos) e = line.size();
+    cols.push_back(line.substr(a, e - a));
+  }
+  auto col = [&](const char* n) {
+    return static_cast<std::size_t>(std::find(cols.begin(), cols.end(), n) - cols.begin());
+  };
+  const std::size_t fb = col("platen_force_bottom_n"), ft = col("platen_force_top_n");
+  const std::size_t sq = col("deviatoric_stress_pa");
+  ASSERT_LT(sq, cols.size());
+  double f_peak = 0.0, s_peak = 0.0;
+  while (std::getline(hist, line)) {
+    std::vector<double> v;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) v.push_back(std::atof(c.c_str()));
+    const double f = 0.5 * (v[fb] + v[ft]);
+    // Each row's stress is the formula applied to its own forces.
+    EXPECT_NEAR(v[sq], 2.0 * f / (std::numbers::pi * d * t), 1e-6 * std::abs(v[sq]) + 1e-3);
+    if (v[sq] > s_peak) {
+      s_peak = v[sq];
+      f_peak = f;
+    }
+  }
+  EXPECT_NEAR(s["tensile_strength_pa"].get<double>(), s_peak, 1e-9 * s_peak);
+  EXPECT_NEAR(s["peak_force_n"].get<double>(), f_peak, 1e-6 * f_peak);
+  EXPECT_GT(s_peak, 1e6);
+  // The first cracks open in tension along the loaded diameter: a uniform scatter over the disc
+  // would put 31 % of them within R / 4 of it.
+  const auto& b = s["crack_pattern"]["brazilian"];
+  EXPECT_GE(b["early_tensile_share"].get<double>(), 0.9);
+  EXPECT_GE(b["early_in_band_share"].get<double>(), 0.7);
+  EXPECT_GE(b["all_in_band_share"].get<double>(), 0.6);
+  fs::remove_all(dir);
+}
+
+TEST(Brazilian, BadDiscsAreRefused) {
+  auto refused = [](const std::string& toml, const char* fragment) {
+    try {
+      parse_experiment(toml, "disc.toml", {});
+      ADD_FAILURE() << "no error for:\n" << toml;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  const std::string test = "[test]\nkind = \"brazilian\"\n";
+  refused(test, "needs a \"cylinder\"");  // the default prism
+  refused(test + "[sample]\nshape = \"cylinder\"\ndiameter = 0.01\nheight = 0.02\n",
+          "0.2 <= t / D <= 1");
+  refused(test +
+              "[sample]\nshape = \"cylinder\"\ndiameter = 0.01\nheight = 0.0025\n"
+              "radius_min = 0.3e-3\nradius_max = 0.5e-3\n",
+          "too thin for its grains");
+  refused(test +
+              "[sample]\nshape = \"cylinder\"\ndiameter = 0.004\nheight = 0.002\n"
+              "radius_min = 0.2e-3\nradius_max = 0.3e-3\n",
+          "too small for its grains");
+  refused(test +
+              "[engine]\ndimension = 2\n[contact]\nlaw = \"linear\"\n"
+              "[sample]\nshape = \"rectangle\"\n",
+          "needs a \"disk\"");
+  // A sweep over confining stress needs a compression test.
+  ExperimentSpec disc = parse_experiment(
+      test + "[sample]\nshape = \"cylinder\"\ndiameter = 0.01\nheight = 0.005\n", "d", {});
+  EXPECT_THROW(set_confining_stress(disc, 5e6, "sweep"), InputError);
+}
