@@ -173,7 +173,7 @@ std::string sample_key(const ExperimentSpec& s) {
   // The packing cycles with the test's contact law: its parameters define the sample too.
   const std::size_t c0 = text.find("\n[contact]"), c1 = text.find("\n[bond]");
   if (c0 != std::string::npos && c1 != std::string::npos) sample_part += text.substr(c0, c1 - c0);
-  sample_part += "|packing-5";
+  sample_part += "|packing-6";
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : sample_part) h = (h ^ c) * 1099511628211ull;
   return fmt::format("{:016x}", h);

@@ -8,6 +8,8 @@
 // tangent to D of its nearest grains; one that fits no way is left and counted.
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <tuple>
 
 #include "breccia/engine/neighbour_grid.hpp"
 #include "breccia/sample/packing_methods.hpp"
@@ -20,7 +22,8 @@ namespace {
 
 // The surfaces around one grain: neighbours within reach and the vessel walls, nearest first.
 struct Cage {
-  std::vector<Surface> surfaces;  // sorted by gap to the grain as it is
+  std::vector<Surface> surfaces;     // sorted by gap to the grain as it is
+  std::vector<std::uint32_t> grain;  // the neighbour's index, or SphereGrid::kNone for a wall
 };
 
 // A candidate stays in its cage (it moves no further than the growth allows), inside the vessel,
@@ -68,104 +71,154 @@ FittedSphere refine_on_walls(FittedSphere f, const std::vector<int>& idx, const 
   return f;
 }
 
+class FloaterFitter {
+ public:
+  FloaterFitter(Simulation& sim, const Region& region, double tol, int n_f, double max_growth,
+                const std::vector<double>& nominal_radius)
+      : sim_(sim),
+        p_(sim.particles().pos_rad),
+        region_(region),
+        tol_(tol),
+        n_f_(n_f),
+        max_growth_(max_growth),
+        nominal_(nominal_radius),
+        planar_(region.planar()),
+        dim_(region.dimension()) {
+    double r_max = 0.0;
+    for (const PosRad& q : p_) r_max = std::max(r_max, q.r);
+    reach_ = 2.0 * max_growth * r_max + tol;
+    build_neighbour_pairs(p_, reach_ * 1.0001 + 1e-300, planar_, near_);
+    // Cells of twice the largest radius a grown floater can have.
+    grid_.emplace(region.lower(), region.upper(), 2.0 * r_max * (1.0 + max_growth), planar_);
+    for (std::uint32_t i = 0; i < p_.size(); ++i) grid_->insert(i, p_[i].x);
+    contacts_.assign(p_.size(), 0);
+    for (std::size_t k = 0; k < near_.size(); ++k) {
+      const PosRad& a = p_[near_.first[k]];
+      const PosRad& b = p_[near_.second[k]];
+      if (norm(b.x - a.x) - a.r - b.r <= tol) {
+        ++contacts_[near_.first[k]];
+        ++contacts_[near_.second[k]];
+      }
+    }
+  }
+
+  // Walls do not count: a grain held against a platen by two bonds is the first to break there.
+  bool is_floater(std::uint32_t i) const { return contacts_[i] < n_f_; }
+
+  // Places floater i snug in its cage; false when no fit is found.
+  bool place(std::uint32_t i, FloaterFix& out) {
+    const Cage cage = cage_of(i);
+    const std::optional<FittedSphere> best = snug_fit(i, cage);
+    if (!best) return false;
+    const Vec3 from = p_[i].x;
+    // A hair over tangency, so that a zero bond gap tolerance still counts the contacts.
+    sim_.place_particle(i, best->centre, best->radius * (1.0 + 1e-9));
+    grid_->move(i, from, best->centre);
+    out.largest_growth = std::max(out.largest_growth, best->radius / nominal_[i] - 1.0);
+    // Its new contacts count for the floaters still to come.
+    for (std::size_t k = 0; k < cage.surfaces.size(); ++k) {
+      const Surface& s = cage.surfaces[k];
+      if (!s.plane && norm(best->centre - s.point) - best->radius - s.radius <= tol_)
+        ++contacts_[cage.grain[k]];
+    }
+    return true;
+  }
+
+ private:
+  Cage cage_of(std::uint32_t i) const {
+    std::vector<std::tuple<double, Surface, std::uint32_t>> around;
+    auto add_neighbour = [&](std::uint32_t j) {
+      const double gap = norm(p_[j].x - p_[i].x) - p_[i].r - p_[j].r;
+      if (gap <= reach_) around.emplace_back(gap, Surface{false, p_[j].x, {}, p_[j].r}, j);
+    };
+    for (std::uint32_t k = near_.offsets[i]; k < near_.offsets[i + 1]; ++k)
+      add_neighbour(near_.second[k]);
+    for (std::uint32_t m = near_.in_offsets[i]; m < near_.in_offsets[i + 1]; ++m)
+      add_neighbour(near_.first[near_.in_slot[m]]);
+    for (const Surface& w : region_.wall_surfaces(p_[i].x)) {
+      const double gap = dot(p_[i].x - w.point, w.normal) - p_[i].r;
+      if (gap <= reach_) around.emplace_back(gap, w, SphereGrid::kNone);
+    }
+    std::sort(around.begin(), around.end(),
+              [](const auto& a, const auto& b) { return std::get<0>(a) < std::get<0>(b); });
+    Cage cage;
+    for (const auto& [gap, surface, j] : around) {
+      cage.surfaces.push_back(surface);
+      cage.grain.push_back(j);
+    }
+    return cage;
+  }
+
+  // The fit with the least growth tangent to D + 1 of the nearest surfaces, touching N_f grains;
+  // for a cage wider than the cap, the capped grain against D of the nearest grains.
+  std::optional<FittedSphere> snug_fit(std::uint32_t i, const Cage& cage) const {
+    const double r = p_[i].r;
+    const double limit = nominal_[i] * (1.0 + max_growth_);
+    const Vec3 from = p_[i].x;
+    const int n = std::min<int>(static_cast<int>(cage.surfaces.size()), planar_ ? 7 : 9);
+    auto grains_in = [&](const std::vector<int>& idx) {
+      int g = 0;
+      for (int k : idx) g += cage.surfaces[static_cast<std::size_t>(k)].plane ? 0 : 1;
+      return g;
+    };
+    auto chosen = [&](const std::vector<int>& idx) {
+      std::vector<Surface> c;
+      for (int k : idx) c.push_back(cage.surfaces[static_cast<std::size_t>(k)]);
+      return c;
+    };
+    auto ok = [&](const FittedSphere& f) {
+      return fits(f, from, reach_, *grid_, p_, i, region_, r, limit);
+    };
+    std::optional<FittedSphere> best;
+    if (n >= dim_ + 1)
+      combinations(n, dim_ + 1, [&](const std::vector<int>& idx) {
+        if (grains_in(idx) < std::min(n_f_, dim_ + 1)) return false;
+        for (FittedSphere f : fit_free_radius(chosen(idx), planar_)) {
+          f = refine_on_walls(f, idx, cage, region_, planar_);
+          if (ok(f) && (!best || f.radius < best->radius)) best = f;
+        }
+        return false;
+      });
+    if (!best && n >= dim_)
+      combinations(n, dim_, [&](const std::vector<int>& idx) {
+        if (grains_in(idx) < std::min(n_f_, dim_)) return false;
+        for (const Vec3& x : fit_fixed_radius(chosen(idx), limit, planar_, from))
+          if (ok({x, limit})) {
+            best = FittedSphere{x, limit};
+            return true;
+          }
+        return false;
+      });
+    return best;
+  }
+
+  Simulation& sim_;
+  const std::vector<PosRad>& p_;
+  const Region& region_;
+  double tol_;
+  int n_f_;
+  double max_growth_;
+  const std::vector<double>& nominal_;
+  bool planar_;
+  int dim_;
+  double reach_ = 0.0;
+  PairList near_;
+  std::optional<SphereGrid> grid_;
+  std::vector<int> contacts_;
+};
+
 }  // namespace
 
 FloaterFix fit_floaters(Simulation& sim, const Region& region, double tol, int n_f,
                         double max_growth, const std::vector<double>& nominal_radius,
                         std::size_t candidates) {
   FloaterFix out;
-  const bool planar = region.planar();
-  const int dim = region.dimension();
-  const auto& p = sim.particles().pos_rad;
-  double r_max = 0.0;
-  for (const PosRad& q : p) r_max = std::max(r_max, q.r);
-  const double reach = 2.0 * max_growth * r_max + tol;
-  PairList near;
-  build_neighbour_pairs(p, reach * 1.0001 + 1e-300, planar, near);
-  // Cells of twice the largest radius a grown floater can have.
-  SphereGrid grid(region.lower(), region.upper(), 2.0 * r_max * (1.0 + max_growth), planar);
-  for (std::uint32_t i = 0; i < p.size(); ++i) grid.insert(i, p[i].x);
-  std::vector<int> contacts(p.size(), 0);
-  for (std::size_t k = 0; k < near.size(); ++k) {
-    const PosRad& a = p[near.first[k]];
-    const PosRad& b = p[near.second[k]];
-    if (norm(b.x - a.x) - a.r - b.r <= tol) {
-      ++contacts[near.first[k]];
-      ++contacts[near.second[k]];
-    }
-  }
-  // Walls do not count: a grain held against a platen by two bonds is the first to break there.
-  auto is_floater = [&](std::uint32_t i) { return contacts[i] < n_f; };
-  for (std::uint32_t i = 0; i < std::min(p.size(), candidates); ++i) {
-    if (!is_floater(i)) continue;
+  FloaterFitter fitter(sim, region, tol, n_f, max_growth, nominal_radius);
+  const std::size_t n = std::min(sim.particles().size(), candidates);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (!fitter.is_floater(i)) continue;
     ++out.found;
-    Cage cage;
-    std::vector<std::pair<double, Surface>> around;
-    auto add_neighbour = [&](std::uint32_t j) {
-      const double gap = norm(p[j].x - p[i].x) - p[i].r - p[j].r;
-      if (gap <= reach) around.push_back({gap, Surface{false, p[j].x, {}, p[j].r}});
-    };
-    for (std::uint32_t k = near.offsets[i]; k < near.offsets[i + 1]; ++k)
-      add_neighbour(near.second[k]);
-    for (std::uint32_t m = near.in_offsets[i]; m < near.in_offsets[i + 1]; ++m)
-      add_neighbour(near.first[near.in_slot[m]]);
-    for (const Surface& w : region.wall_surfaces(p[i].x)) {
-      const double gap = dot(p[i].x - w.point, w.normal) - p[i].r;
-      if (gap <= reach) around.push_back({gap, w});
-    }
-    std::sort(around.begin(), around.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (const auto& a : around) cage.surfaces.push_back(a.second);
-    const double r = p[i].r;
-    const double limit = nominal_radius[i] * (1.0 + max_growth);
-    const Vec3 from = p[i].x;
-    const double max_move = reach;
-    const int n = std::min<int>(static_cast<int>(cage.surfaces.size()), planar ? 7 : 9);
-    // Only fits that touch N_f grains end a floater (walls do not count).
-    auto grains_in = [&](const std::vector<int>& idx) {
-      int g = 0;
-      for (int k : idx) g += cage.surfaces[static_cast<std::size_t>(k)].plane ? 0 : 1;
-      return g;
-    };
-    // The snug fit with the least growth, tangent to D + 1 of the n nearest surfaces.
-    std::optional<FittedSphere> best;
-    if (n >= dim + 1)
-      combinations(n, dim + 1, [&](const std::vector<int>& idx) {
-        if (grains_in(idx) < std::min(n_f, dim + 1)) return false;
-        std::vector<Surface> chosen;
-        for (int k : idx) chosen.push_back(cage.surfaces[static_cast<std::size_t>(k)]);
-        for (FittedSphere f : fit_free_radius(chosen, planar)) {
-          f = refine_on_walls(f, idx, cage, region, planar);
-          if (fits(f, from, max_move, grid, p, i, region, r, limit) &&
-              (!best || f.radius < best->radius))
-            best = f;
-        }
-        return false;
-      });
-    // A cage wider than the cap: the capped grain against D of the nearest grains.
-    if (!best && n >= dim)
-      combinations(n, dim, [&](const std::vector<int>& idx) {
-        if (grains_in(idx) < std::min(n_f, dim)) return false;
-        std::vector<Surface> chosen;
-        for (int k : idx) chosen.push_back(cage.surfaces[static_cast<std::size_t>(k)]);
-        for (const Vec3& x : fit_fixed_radius(chosen, limit, planar, p[i].x)) {
-          const FittedSphere f{x, limit};
-          if (fits(f, from, max_move, grid, p, i, region, r, limit)) {
-            best = f;
-            return true;
-          }
-        }
-        return false;
-      });
-    if (!best) continue;
-    // A hair over tangency, so that a zero bond gap tolerance still counts the contacts.
-    sim.place_particle(i, best->centre, best->radius * (1.0 + 1e-9));
-    grid.move(i, from, best->centre);
-    out.largest_growth = std::max(out.largest_growth, best->radius / nominal_radius[i] - 1.0);
-    ++out.fitted;
-    // Its new contacts count for the floaters still to come.
-    for (const Surface& s : cage.surfaces)
-      if (!s.plane && norm(best->centre - s.point) - best->radius - s.radius <= tol) ++contacts[i];
+    out.fitted += fitter.place(i, out) ? 1 : 0;
   }
   return out;
 }

@@ -77,6 +77,101 @@ double internal_sxx(const Simulation& sim, std::size_t n_sample) {
   return lf;
 }
 
+// The four rows around the sample, appended to `all` (the sample's disks stay first). Rows of
+// the smallest grains: a grain of radius r nests in the cusp between two touching row disks of
+// radius R_w to R_w + r - sqrt(r^2 + 2 R_w r) below the row's face, 0.27 r_min when
+// R_w = r = r_min.
+Rows surround_with_rows(std::vector<PosRad>& all, const PackingSettings& s, const Region& box) {
+  Rows rows;
+  rows.radius = s.radii.kind == RadiusDistribution::Kind::Classes
+                    ? *std::min_element(s.radii.class_radius.begin(), s.radii.class_radius.end())
+                    : s.radii.r_min;
+  const double rw = rows.radius, h = box.ly, w = box.lx;
+  add_row(all, rows.bottom, {-3 * rw, -rw, 0}, {w + 3 * rw, -rw, 0}, rw);
+  add_row(all, rows.top, {-3 * rw, h + rw, 0}, {w + 3 * rw, h + rw, 0}, rw);
+  // The side rows reach into the end rows, so the corners are closed.
+  add_row(all, rows.left, {-rw, -rw, 0}, {-rw, h + rw, 0}, rw);
+  add_row(all, rows.right, {w + rw, -rw, 0}, {w + rw, h + rw, 0}, rw);
+  return rows;
+}
+
+// Normal stiffness of one contact of a row disk at a small overlap: the servo's gain (§6.2).
+double row_contact_stiffness(const Simulation& sim, double rw, double thickness) {
+  double kn = 0.0;
+  std::visit(
+      [&]<class CL>(const ContactSet<CL>& c) {
+        PairGeometry g =
+            pair_geometry({}, rw, {2 * rw, 0, 0}, rw, {}, {}, {}, {}, 1, 1, true, thickness);
+        g.delta = 1e-4 * rw;
+        double ks = 0.0;
+        CL::timestep_stiffness(c.params, g, kn, ks);
+      },
+      sim.contact_model());
+  return kn;
+}
+
+// The sample's first n disks grow by `factor` between the fixed rows, then settle.
+void grow_between_rows(Simulation& sim, std::size_t n, double factor, std::uint64_t max_steps) {
+  for (double applied = 1.0; applied < factor * (1 - 1e-12) && sim.step_count() < max_steps;) {
+    const double f = std::min(1.0 + kGrowthRate, factor / applied);
+    for (std::size_t i = 0; i < n; ++i) sim.set_radius(i, sim.particles().pos_rad[i].r * f);
+    applied *= f;
+    sim.run(kCheck);
+  }
+  sim.refresh_time_step();
+  sim.run(std::min(kSettleSteps, max_steps - std::min(max_steps, sim.step_count())));
+}
+
+struct RowServo {
+  double sxx = 0.0;  // Pa, on the side rows
+  bool held = false;
+};
+
+// Drives the side rows (the end rows held) until they carry `target` and the sample's own
+// contacts balance them. The rows move at most 1 % of the width per 1000 steps.
+RowServo servo_side_rows(Simulation& sim, const Rows& rows, std::size_t n, double target,
+                         double thickness, std::uint64_t max_steps) {
+  ParticleStore& P = sim.particles_mut();
+  const double rw = rows.radius;
+  const double area =
+      (P.pos_rad[rows.left.back()].x.y - P.pos_rad[rows.left.front()].x.y - 2.0 * rw) * thickness;
+  const double kn = row_contact_stiffness(sim, rw, thickness);
+  auto width = [&] {
+    return P.pos_rad[rows.right.front()].x.x - P.pos_rad[rows.left.front()].x.x - 2.0 * rw;
+  };
+  const double v_max = 0.01 * width() / (1000.0 * sim.time_step());
+  RowServo out;
+  int held = 0;
+  while (sim.step_count() < max_steps) {
+    sim.run(kCheck);
+    const double f_left = row_load(sim, rows.left, n, {1, 0, 0});
+    const double f_right = row_load(sim, rows.right, n, {-1, 0, 0});
+    out.sxx = 0.5 * (f_left + f_right) / area;
+    // At the target on the rows, and the sample's own contacts in equilibrium with them (their
+    // mean sigma_xx within 5 %): the rows alone pass through the band while the sample moves.
+    const double inner = internal_sxx(sim, n) / (width() * area);
+    held = std::abs(out.sxx - target) <= kStressTolerance * target &&
+                   std::abs(inner - out.sxx) <= 0.05 * out.sxx
+               ? held + 1
+               : 0;
+    if (held >= kChecksHeld) break;
+    // Half the row's disks taken as its contacts (physics.md §6.2 needs their number).
+    auto drive = [&](const std::vector<std::size_t>& row, double force, double sign) {
+      const double gain =
+          kServoRelaxation * area /
+          (kn * static_cast<double>(std::max<std::size_t>(1, row.size() / 2)) * sim.time_step());
+      const double v = std::clamp(gain * (target - force / area), -v_max, v_max);
+      for (std::size_t i : row) P.drive_vel[i] = Vec3{sign * v, 0, 0};
+    };
+    drive(rows.left, f_left, 1.0);
+    drive(rows.right, f_right, -1.0);
+  }
+  for (const auto* row : {&rows.left, &rows.right})
+    for (std::size_t i : *row) P.drive_vel[i] = {};
+  out.held = held >= kChecksHeld;
+  return out;
+}
+
 }  // namespace
 
 PackedState pack_by_preconsolidation(const PackingSettings& s, const Log& log) {
@@ -87,112 +182,42 @@ PackedState pack_by_preconsolidation(const PackingSettings& s, const Log& log) {
   std::vector<PosRad> all = place_at_random(radii, shrink, target, s.seed, 16);
   sort_spatially(all, target);
   const std::size_t n = all.size();
-  Rows rows;
-  // Rows of the smallest grains: a grain of radius r nests in the cusp between two touching row
-  // disks of radius R_w to R_w + r - sqrt(r^2 + 2 R_w r) below the row's face: 0.27 r_min when
-  // R_w = r = r_min.
-  rows.radius = s.radii.kind == RadiusDistribution::Kind::Classes
-                    ? *std::min_element(s.radii.class_radius.begin(), s.radii.class_radius.end())
-                    : s.radii.r_min;
-  const double rw = rows.radius, h = target.ly, w0 = target.lx;
-  add_row(all, rows.bottom, {-3 * rw, -rw, 0}, {w0 + 3 * rw, -rw, 0}, rw);
-  add_row(all, rows.top, {-3 * rw, h + rw, 0}, {w0 + 3 * rw, h + rw, 0}, rw);
-  // The side rows reach into the end rows, so the corners are closed.
-  add_row(all, rows.left, {-rw, -rw, 0}, {-rw, h + rw, 0}, rw);
-  add_row(all, rows.right, {w0 + rw, -rw, 0}, {w0 + rw, h + rw, 0}, rw);
-  log(
-      fmt::format("packing: {} disks placed at {:.0f} % of their radii in a {:.4g} x {:.4g} m box "
-                  "between rows of {} disks; compacting to {:.4g} MPa",
-                  n, 100 * shrink, w0, h, all.size() - n, s.preconsolidation_stress * 1e-6));
-
-  // Cycling with the rows driven: the ends held, the sides servoed (physics.md §6.2).
+  const Rows rows = surround_with_rows(all, s, target);
+  const double rw = rows.radius;
+  log(fmt::format(
+      "packing: {} disks placed at {:.0f} % of their radii in a {:.4g} x {:.4g} m box "
+      "between rows of {} disks; compacting to {:.4g} MPa",
+      n, 100 * shrink, target.lx, target.ly, all.size() - n, s.preconsolidation_stress * 1e-6));
+  // The rows are the walls: the vessel's planes stay clear of everything.
   Region box = target;
-  box.lx = w0 + 8 * rw;  // the rows are the walls: the vessel planes stay clear of everything
-  box.ly = h + 4 * rw;
-  std::vector<PosRad> shifted = all;
-  for (PosRad& q : shifted) q.x += Vec3{4 * rw, 2 * rw, 0};
-  PackingSettings plain = s;
-  Simulation sim = vessel_simulation(shifted, box, plain);
+  box.lx = target.lx + 8 * rw;
+  box.ly = target.ly + 4 * rw;
+  for (PosRad& q : all) q.x += Vec3{4 * rw, 2 * rw, 0};
+  Simulation sim = vessel_simulation(all, box, s);
   ParticleStore& P = sim.particles_mut();
   for (std::size_t i = n; i < all.size(); ++i) P.motion[i] = Motion::Driven;
-  // Servo gain from the stiffness of one contact of a row disk at a small overlap (§6.2).
-  double kn = 0.0;
-  std::visit(
-      [&]<class CL>(const ContactSet<CL>& c) {
-        PairGeometry g =
-            pair_geometry({}, rw, {2 * rw, 0, 0}, rw, {}, {}, {}, {}, 1, 1, true, box.thickness);
-        g.delta = 1e-4 * rw;
-        double ks = 0.0;
-        CL::timestep_stiffness(c.params, g, kn, ks);
-      },
-      sim.contact_model());
-  const double area = h * box.thickness;
-  const double target_stress = s.preconsolidation_stress;
   StageClock clock(&sim);
-  // Growth to size between the fixed rows, then settling.
-  for (double applied = 1.0;
-       applied < (1.0 / shrink) * (1 - 1e-12) && sim.step_count() < s.max_steps;) {
-    const double f = std::min(1.0 + kGrowthRate, 1.0 / shrink / applied);
-    for (std::size_t i = 0; i < n; ++i) sim.set_radius(i, P.pos_rad[i].r * f);
-    applied *= f;
-    sim.run(kCheck);
-  }
-  sim.refresh_time_step();
-  sim.run(std::min(kSettleSteps, s.max_steps - std::min(s.max_steps, sim.step_count())));
+  grow_between_rows(sim, n, 1.0 / shrink, s.max_steps);
   st.report.stages.push_back(clock.done("growth", fmt::format("radii x {:.4f}", 1.0 / shrink)));
-  // The side rows move at most 1 % of the width per 1000 steps.
-  const double v_max = 0.01 * w0 / (1000.0 * sim.time_step());
-  int held = 0;
-  double sxx = 0.0;
-  while (sim.step_count() < s.max_steps) {
-    sim.run(kCheck);
-    const double f_left = row_load(sim, rows.left, n, {1, 0, 0});
-    const double f_right = row_load(sim, rows.right, n, {-1, 0, 0});
-    sxx = 0.5 * (f_left + f_right) / area;
-    // At the target on the rows, and the sample's own contacts in equilibrium with them (their
-    // mean sigma_xx within 5 %): the rows alone pass through the band while the sample moves.
-    const double width =
-        P.pos_rad[rows.right.front()].x.x - P.pos_rad[rows.left.front()].x.x - 2.0 * rw;
-    const double inner = internal_sxx(sim, n) / (width * area);
-    held = std::abs(sxx - target_stress) <= kStressTolerance * target_stress &&
-                   std::abs(inner - sxx) <= 0.05 * sxx
-               ? held + 1
-               : 0;
-    if (held >= kChecksHeld) break;
-    // Contacts on each row: at least one, as §6.2 asks when a wall touches nothing yet.
-    auto drive = [&](const std::vector<std::size_t>& row, double force, double sign) {
-      const std::size_t touching = row.size() / 2;
-      const double gain =
-          kServoRelaxation * area /
-          (kn * static_cast<double>(std::max<std::size_t>(1, touching)) * sim.time_step());
-      const double v = std::clamp(gain * (target_stress - force / area), -v_max, v_max);
-      for (std::size_t i : row) P.drive_vel[i] = Vec3{sign * v, 0, 0};
-    };
-    drive(rows.left, f_left, 1.0);
-    drive(rows.right, f_right, -1.0);
-  }
-  for (std::size_t i = n; i < all.size(); ++i) P.drive_vel[i] = {};
+  const RowServo servo =
+      servo_side_rows(sim, rows, n, s.preconsolidation_stress, box.thickness, s.max_steps);
   const double x_left = P.pos_rad[rows.left.front()].x.x + rw;
   const double x_right = P.pos_rad[rows.right.front()].x.x - rw;
   const double f_ends =
       row_load(sim, rows.bottom, n, {0, 1, 0}) + row_load(sim, rows.top, n, {0, -1, 0});
   const double syy = 0.5 * f_ends / ((x_right - x_left) * box.thickness);
-  st.report.converged = held >= kChecksHeld;
-  st.report.preconsolidation_stress_reached = sxx;
+  st.report.converged = servo.held;
+  st.report.preconsolidation_stress_reached = servo.sxx;
   st.report.stages.push_back(clock.done(
       "preconsolidation", fmt::format("sigma_xx = {:.4g} MPa (rows), sigma_yy = {:.4g} MPa "
                                       "(ends), width {:.4g} m",
-                                      sxx * 1e-6, syy * 1e-6, x_right - x_left)));
-  if (!st.report.converged)
+                                      servo.sxx * 1e-6, syy * 1e-6, x_right - x_left)));
+  if (!servo.held)
     st.report.warnings.push_back(fmt::format(
         "preconsolidation did not hold {} MPa within {} steps (sample.max_steps); reached {:.4g} "
         "MPa",
-        target_stress * 1e-6, s.max_steps, sxx * 1e-6));
-
-  // The compacted sample in its own frame: x from the left row's face, y from the bottom row's.
-  st.region = target;
-  st.region.lx = x_right - x_left;
-  const Vec3 origin{x_left, 2 * rw, 0};
+        s.preconsolidation_stress * 1e-6, s.max_steps, servo.sxx * 1e-6));
+  // Floaters may grow 20 % beyond the size they have now (rows are neighbours, not candidates).
   std::vector<double> nominal;
   for (const PosRad& q : P.pos_rad) nominal.push_back(q.r);
   const FloaterFix fix = fit_floaters(sim, box, s.bond_gap_tolerance, s.floater_contacts,
@@ -201,6 +226,10 @@ PackedState pack_by_preconsolidation(const PackingSettings& s, const Log& log) {
   st.report.largest_floater_growth = fix.largest_growth;
   st.report.stages.push_back(clock.done(
       "floaters", fmt::format("{} found, {} placed snug in their cages", fix.found, fix.fitted)));
+  // The compacted sample in its own frame: x from the left row's face, y from the bottom row's.
+  st.region = target;
+  st.region.lx = x_right - x_left;
+  const Vec3 origin{x_left, 2 * rw, 0};
   for (std::size_t i = 0; i < n; ++i)
     st.particles.push_back({P.pos_rad[i].x - origin, P.pos_rad[i].r});
   st.report.steps = sim.step_count();
