@@ -9,16 +9,35 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 
 #include "breccia/core/error.hpp"
+#include "breccia/core/interrupt.hpp"
 #include "breccia/io/experiment.hpp"
 #include "breccia/io/run_folder.hpp"
 #include "breccia/version.hpp"
 
 namespace {
-std::atomic<bool> g_interrupt{false};
 extern "C" void on_signal(int) {
-  g_interrupt.store(true);
+  breccia::interrupt_flag().store(true);
+}
+
+void catch_signals() {
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+}
+
+// CLI11 answers an unknown first word with "A subcommand is required"; name it instead.
+bool unknown_command(int argc, char** argv, const CLI::App& app) {
+  if (argc < 2 || argv[1][0] == '-') return false;
+  std::string allowed;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    if (sub->get_name() == argv[1]) return false;
+    allowed += (allowed.empty() ? "" : ", ") + sub->get_name();
+  }
+  std::cerr << "error: unknown command '" << argv[1] << "'; allowed: " << allowed
+            << " (breccia --help)\n";
+  return true;
 }
 }  // namespace
 
@@ -37,23 +56,27 @@ int main(int argc, char** argv) {
   run->add_option("experiment", file, "experiment file (TOML); omit for the built-in default");
   run->add_option("--set", overrides, "override a key: section.key=value")->take_all();
   run->add_option("--output", output, "folder that receives the run folder (output.directory)");
-  run->add_option("--threads", threads, "OpenMP threads (engine.threads)");
+  run->add_option("--threads", threads, "OpenMP threads (engine.threads; 0 = all cores)")
+      ->check(CLI::Range(0, 1024));
   run->add_flag("--quiet", quiet, "no progress bar or messages; only the run folder is printed");
-  std::uint64_t stop_at_step = 0;
+  std::int64_t stop_at_step = 0;
   run->add_option("--stop-at-step", stop_at_step,
                   "stop with a checkpoint once the engine has taken this many steps in all; "
-                  "continue with `breccia resume`");
+                  "continue with `breccia resume`")
+      ->check(CLI::Range(std::int64_t{1}, std::numeric_limits<std::int64_t>::max()));
 
   auto* resume = app.add_subcommand(
       "resume", "continue an interrupted run from its checkpoint, in the same run folder");
   std::string resume_dir;
   int resume_threads = -1;
   bool resume_quiet = false;
-  std::uint64_t resume_stop = 0;
+  std::int64_t resume_stop = 0;
   resume->add_option("folder", resume_dir, "run folder with a checkpoint.bin")->required();
-  resume->add_option("--threads", resume_threads, "OpenMP threads (the result does not change)");
+  resume->add_option("--threads", resume_threads, "OpenMP threads (the result does not change)")
+      ->check(CLI::Range(0, 1024));
   resume->add_flag("--quiet", resume_quiet, "no progress bar or messages");
-  resume->add_option("--stop-at-step", resume_stop, "stop again, with a checkpoint, at this step");
+  resume->add_option("--stop-at-step", resume_stop, "stop again, with a checkpoint, at this step")
+      ->check(CLI::Range(std::int64_t{1}, std::numeric_limits<std::int64_t>::max()));
 
   auto* gen = app.add_subcommand("generate",
                                  "pack and bond a sample ([sample] keys) and save it to a file");
@@ -98,6 +121,7 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("version", "print the version");
 
+  if (unknown_command(argc, argv, app)) return 2;
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -107,14 +131,13 @@ int main(int argc, char** argv) {
       const breccia::ExperimentSpec spec =
           file.empty() ? breccia::parse_experiment("", "built-in default", overrides)
                        : breccia::load_experiment(file, overrides);
-      std::signal(SIGINT, on_signal);
-      std::signal(SIGTERM, on_signal);
+      catch_signals();
       breccia::RunOptions opt;
       opt.command_line = command_line;
-      opt.interrupt = &g_interrupt;
+      opt.interrupt = &breccia::interrupt_flag();
       opt.show_progress = !quiet && spec.progress && isatty(fileno(stderr));
       if (!quiet) opt.log = [](const std::string& m) { std::cerr << m << "\n"; };
-      opt.stop_at_step = stop_at_step;
+      opt.stop_at_step = static_cast<std::uint64_t>(stop_at_step);
       const breccia::RunResult r = breccia::run_experiment(spec, opt);
       if (!quiet) {
         std::cerr << "status: " << r.status << " (" << r.stop_reason << ")\n";
@@ -124,12 +147,11 @@ int main(int argc, char** argv) {
       return r.status == "complete" ? 0 : 130;
     }
     if (*resume) {
-      std::signal(SIGINT, on_signal);
-      std::signal(SIGTERM, on_signal);
+      catch_signals();
       breccia::RunOptions opt;
       opt.command_line = command_line;
-      opt.interrupt = &g_interrupt;
-      opt.stop_at_step = resume_stop;
+      opt.interrupt = &breccia::interrupt_flag();
+      opt.stop_at_step = static_cast<std::uint64_t>(resume_stop);
       opt.show_progress = !resume_quiet && isatty(fileno(stderr));
       if (!resume_quiet) opt.log = [](const std::string& m) { std::cerr << m << "\n"; };
       const breccia::RunResult r =
@@ -147,6 +169,7 @@ int main(int argc, char** argv) {
     };
     if (*gen) {
       const breccia::ExperimentSpec spec = load(gen_file, gen_overrides);
+      catch_signals();
       breccia::generate_sample(spec, gen_out, [](const std::string& m) { std::cerr << m << "\n"; });
       std::cout << gen_out << std::endl;
       return 0;
@@ -155,11 +178,10 @@ int main(int argc, char** argv) {
       if (!sweep_output.empty())
         sweep_overrides.push_back("output.directory=\"" + sweep_output + "\"");
       const breccia::ExperimentSpec spec = load(sweep_file, sweep_overrides);
-      std::signal(SIGINT, on_signal);
-      std::signal(SIGTERM, on_signal);
+      catch_signals();
       breccia::RunOptions opt;
       opt.command_line = command_line;
-      opt.interrupt = &g_interrupt;
+      opt.interrupt = &breccia::interrupt_flag();
       opt.show_progress = spec.progress && isatty(fileno(stderr));
       opt.log = [](const std::string& m) { std::cerr << m << "\n"; };
       std::vector<double> pa;
@@ -211,6 +233,9 @@ int main(int argc, char** argv) {
     }
     std::cout << "breccia " << breccia::kVersion << "\n";
     return 0;
+  } catch (const breccia::Interrupted& e) {
+    std::cerr << "error: " << e.what() << "; nothing was written\n";
+    return 130;
   } catch (const breccia::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;

@@ -7,6 +7,7 @@
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
+#include "breccia/core/interrupt.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
 
@@ -728,7 +729,12 @@ void Simulation::step() {
 }
 
 void Simulation::run(std::uint64_t steps) {
-  for (std::uint64_t s = 0; s < steps; ++s) step();
+  // run() drives the stages before a test (packing, settling); a signal stops them between
+  // steps. The test's own loop steps one at a time and checkpoints instead.
+  for (std::uint64_t s = 0; s < steps; ++s) {
+    if (s % 64 == 0) throw_if_interrupted("preparing the sample");
+    step();
+  }
 }
 
 std::size_t Simulation::intact_bonds() const noexcept {

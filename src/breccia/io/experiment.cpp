@@ -4,6 +4,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -16,8 +17,10 @@ namespace breccia {
 namespace {
 
 // Where a node came from: "file:line" when known.
+// Where a node came from: "file:line" when known, or the `--set` option that gave it.
 std::string where_of(const std::string& source, const toml::node& n) {
   const auto& src = n.source();
+  if (src.path && src.path->rfind("--set ", 0) == 0) return *src.path;
   if (src.begin.line > 0) return source + ":" + std::to_string(src.begin.line);
   return source;
 }
@@ -612,22 +615,35 @@ void apply_overrides(toml::table& root, const std::vector<std::string>& override
     if (eq == std::string::npos || eq == 0)
       throw InputError(where, o, "", "expected section.key=value, e.g. loading.max_strain=0.01");
     const std::string path = o.substr(0, eq), value = o.substr(eq + 1);
+    // The option itself is the node's source, so errors name `--set ...`, not the file.
     toml::table parsed;
     try {
-      parsed = toml::parse("v = " + value);
+      parsed = toml::parse("v = " + value, where);
     } catch (const toml::parse_error&) {
-      parsed = toml::table{{"v", value}};  // a bare word is a string: law=hertz_mindlin
+      // A bare word is a string: law=hertz_mindlin.
+      std::string quoted;
+      for (char c : value) {
+        if (c == '\\' || c == '"') quoted += '\\';
+        if (static_cast<unsigned char>(c) < 0x20) continue;
+        quoted += c;
+      }
+      try {
+        parsed = toml::parse("v = \"" + quoted + "\"", where);
+      } catch (const toml::parse_error& e) {
+        throw InputError(where, path, value, "not a TOML value: " + std::string(e.description()));
+      }
     }
     const auto dot = path.find('.');
-    const toml::node& v = *parsed.get("v");
+    // Moved, not copied: a copied toml++ node loses its source (and errors would name the file).
+    toml::node&& v = std::move(*parsed.get("v"));
     if (dot == std::string::npos) {
-      root.insert_or_assign(path, v);
+      root.insert_or_assign(path, std::move(v));
     } else {
       const std::string sec = path.substr(0, dot), key = path.substr(dot + 1);
       if (!root.contains(sec)) root.insert(sec, toml::table{});
       auto* t = root.get_as<toml::table>(sec);
       if (!t) throw InputError(where, sec, "", "is not a table");
-      t->insert_or_assign(key, v);
+      t->insert_or_assign(key, std::move(v));
     }
   }
 }
@@ -664,6 +680,17 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
       throw InputError(source, "sample.class_radii",
                        std::to_string(s.class_radii.size()) + " radii",
                        "classes need one sample.class_mass_fractions entry per radius");
+  }
+  if (s.sample_source == "lattice") {
+    const double n = s.dimension == 2
+                         ? static_cast<double>(s.cells[0]) * static_cast<double>(s.cells[1])
+                         : 4.0 * static_cast<double>(s.cells[0]) * static_cast<double>(s.cells[1]) *
+                               static_cast<double>(s.cells[2]);
+    if (n > static_cast<double>(s.max_particles))
+      throw InputError(
+          source, "sample.cells",
+          fmt::format("[{}, {}, {}] ({:.4g} particles)", s.cells[0], s.cells[1], s.cells[2], n),
+          "more particles than sample.max_particles = " + std::to_string(s.max_particles));
   }
   visit_lab_test(
       s.test, [&]<class T>(const typename T::Params& p) { T::check(p, sample_info(s), source); });
@@ -839,6 +866,8 @@ ExperimentSpec parse_experiment(const std::string& text, const std::string& sour
 }
 
 ExperimentSpec load_experiment(const std::string& path, const std::vector<std::string>& overrides) {
+  if (std::filesystem::is_directory(path))
+    throw InputError(path, "", "", "is a folder; expected an experiment file (TOML)");
   std::ifstream in(path);
   if (!in) throw InputError(path, "", "", "cannot open the experiment file");
   std::stringstream ss;

@@ -5,11 +5,12 @@
 
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unordered_set>
 
 #include "breccia/core/error.hpp"
+#include "breccia/io/geometry_checks.hpp"
 
 namespace breccia {
 
@@ -66,7 +67,8 @@ class Reader {
 
 }  // namespace
 
-GeometryData parse_geometry(const std::string& text, const std::string& source) {
+GeometryData parse_geometry(const std::string& text, const std::string& source,
+                            std::uint64_t max_particles) {
   Reader rd(text, source);
   GeometryData g;
   if (rd.done())
@@ -104,8 +106,8 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
       if (have_particles) throw InputError(rd.where(l), key, "", "appears twice; allowed once");
       need_args(1, "expects the particle count");
       const auto count = rd.integer(l, 1, "particles");
+      check_announced_count(count, max_particles, rd.where(l), "particles");
       have_particles = true;
-      g.particles.reserve(count);
       for (std::uint64_t k = 0; k < count; ++k) {
         if (rd.done())
           throw InputError(rd.where_end(), "particles", std::to_string(k) + " rows",
@@ -144,6 +146,7 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
           throw InputError(rd.where(p), "z / vz / wx / wy", "non-zero",
                            "2D particles lie in the x-y plane: these must be 0");
         g.particles.push_back(s);
+        g.particle_lines.push_back(p.number);
       }
     } else if (key == "bonds") {
       if (have_bonds) throw InputError(rd.where(l), key, "", "appears twice; allowed once");
@@ -151,9 +154,8 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
         throw InputError(rd.where(l), key, "", "the particles section must come first");
       need_args(1, "expects the bond count");
       const auto count = rd.integer(l, 1, "bonds");
+      check_announced_count(count, kMaxBondsPerParticle * max_particles, rd.where(l), "bonds");
       have_bonds = true;
-      std::unordered_set<std::uint64_t> tags;
-      for (const auto& p : g.particles) tags.insert(p.tag);
       for (std::uint64_t k = 0; k < count; ++k) {
         if (rd.done())
           throw InputError(rd.where_end(), "bonds", std::to_string(k) + " rows",
@@ -162,14 +164,8 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
         if (b.tokens.size() != 2)
           throw InputError(rd.where(b), "bond row", std::to_string(b.tokens.size()) + " columns",
                            "expected: tag1 tag2");
-        const auto t1 = rd.integer(b, 0, "tag1"), t2 = rd.integer(b, 1, "tag2");
-        for (const auto& [t, col] : {std::pair{t1, "tag1"}, std::pair{t2, "tag2"}})
-          if (!tags.count(t))
-            throw InputError(rd.where(b), col, std::to_string(t), "no particle has this tag");
-        if (t1 == t2)
-          throw InputError(rd.where(b), "tag2", std::to_string(t2),
-                           "a particle cannot bond to itself");
-        g.bonds.emplace_back(t1, t2);
+        g.bonds.emplace_back(rd.integer(b, 0, "tag1"), rd.integer(b, 1, "tag2"));
+        g.bond_lines.push_back(b.number);
       }
     } else {
       throw InputError(rd.where(l), "'" + key + "'", "",
@@ -178,19 +174,17 @@ GeometryData parse_geometry(const std::string& text, const std::string& source) 
   }
   if (!have_particles)
     throw InputError(source, "particles", "(missing)", "a 'particles N' section is required");
-  std::unordered_set<std::uint64_t> seen;
-  for (const auto& p : g.particles)
-    if (!seen.insert(p.tag).second)
-      throw InputError(source, "tag", std::to_string(p.tag), "particle tags must be unique");
+  check_geometry(g, source, max_particles);
   return g;
 }
 
-GeometryData read_geometry(const std::string& path) {
+GeometryData read_geometry(const std::string& path, std::uint64_t max_particles) {
   std::ifstream in(path);
-  if (!in) throw InputError(path, "", "", "cannot open the geometry file");
+  if (!in || std::filesystem::is_directory(path))
+    throw InputError(path, "", "", "cannot open the geometry file");
   std::stringstream ss;
   ss << in.rdbuf();
-  return parse_geometry(ss.str(), path);
+  return parse_geometry(ss.str(), path, max_particles);
 }
 
 ParticleStore GeometryData::make_store(PlanarBody body) const {

@@ -26,20 +26,30 @@
 
 namespace breccia {
 
+// The most particles any file may announce or hold (the range of sample.max_particles).
+inline constexpr std::uint64_t kMaxFileParticles = 100'000'000;
+
 struct GeometryData {
   Dimension dimension = Dimension::Three;
   double thickness = 1.0;
   std::vector<ParticleSpec> particles;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> bonds;
+  // Line of each particle and bond row in the file it was read from (empty when not read), for
+  // error messages.
+  std::vector<std::size_t> particle_lines, bond_lines;
 
   // Builds the particle store; throws InputError on duplicate tags and bad values.
   ParticleStore make_store(PlanarBody body = PlanarBody::Disk) const;
 };
 
-// Reads a geometry file. Throws InputError naming the file, line, key, value and what is allowed.
-GeometryData read_geometry(const std::string& path);
+// Reads a geometry file. Throws InputError naming the file, line, key, value and what is allowed,
+// also when the sample fails check_geometry (io/geometry_checks.hpp) or holds more than
+// `max_particles`.
+GeometryData read_geometry(const std::string& path,
+                           std::uint64_t max_particles = kMaxFileParticles);
 // Parses geometry text; `source` names it in error messages.
-GeometryData parse_geometry(const std::string& text, const std::string& source);
+GeometryData parse_geometry(const std::string& text, const std::string& source,
+                            std::uint64_t max_particles = kMaxFileParticles);
 // Writes a geometry file that read_geometry reads back exactly (17 significant digits).
 void write_geometry(const std::string& path, const GeometryData& g);
 

@@ -7,22 +7,29 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <sstream>
 #include <thread>
 
 #include "breccia/analysis/compression.hpp"
 #include "breccia/analysis/crack_pattern.hpp"
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/core/archive.hpp"
+#include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/core/format.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/io/failure_analysis.hpp"
+#include "breccia/io/geometry_checks.hpp"
 #include "breccia/io/geometry_file.hpp"
+#include "breccia/io/json_view.hpp"
 #include "breccia/io/sample_import.hpp"
 #include "breccia/observe/ae_monitor.hpp"
 #include "breccia/observe/recorders.hpp"
@@ -174,9 +181,7 @@ std::string sample_key(const ExperimentSpec& s) {
   const std::size_t c0 = text.find("\n[contact]"), c1 = text.find("\n[bond]");
   if (c0 != std::string::npos && c1 != std::string::npos) sample_part += text.substr(c0, c1 - c0);
   sample_part += "|packing-6";
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : sample_part) h = (h ^ c) * 1099511628211ull;
-  return fmt::format("{:016x}", h);
+  return fmt::format("{:016x}", fnv1a64(sample_part));
 }
 
 }  // namespace
@@ -250,15 +255,15 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info
                          const std::function<void(const std::string&)>& log) {
   const Dimension want = s.dimension == 2 ? Dimension::Two : Dimension::Three;
   info = sample_info(s);
+  const auto max_n = static_cast<std::uint64_t>(s.max_particles);
   GeometryData g;
   if (s.sample_source == "generate") {
     const fs::path cache = fs::path(s.output_directory) / "samples" /
                            fmt::format("{}-{}.geom", s.shape, sample_key(s));
     if (s.cache && fs::exists(cache) && fs::exists(cache.string() + ".json")) {
       log("sample: reusing " + cache.string());
-      g = read_geometry(cache.string());
-      std::ifstream in(cache.string() + ".json");
-      report = json::parse(in, nullptr, false);
+      g = read_geometry(cache.string(), max_n);
+      report = read_json_object(cache.string() + ".json");
       report["cached_file"] = cache.string();
     } else {
       log("sample: generating (cached afterwards in " + cache.string() + ")");
@@ -269,10 +274,9 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info
     }
   } else if (s.sample_source == "file") {
     const std::string p = resolve(s, s.geometry_file);
-    g = read_geometry(p);
+    g = read_geometry(p, max_n);
     if (fs::exists(p + ".json")) {
-      std::ifstream in(p + ".json");
-      report = json::parse(in, nullptr, false);
+      report = read_json_object(p + ".json");
       // A sample written by `breccia generate` says its shape in its settings.
       if (report.contains("settings") && report["settings"].is_string())
         for (const char* shape : {"prism", "cylinder", "rectangle", "disk"})
@@ -282,10 +286,10 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info
     }
     report["file"] = p;
   } else if (s.sample_source == "table") {
-    g = read_xyzr_table(resolve(s, s.geometry_file), want, s.density, s.thickness);
+    g = read_xyzr_table(resolve(s, s.geometry_file), want, s.density, s.thickness, max_n);
     report["file"] = resolve(s, s.geometry_file);
   } else if (s.sample_source == "gengeo") {
-    g = read_gengeo(resolve(s, s.geometry_file), s.density, s.thickness);
+    g = read_gengeo(resolve(s, s.geometry_file), s.density, s.thickness, max_n);
     report["file"] = resolve(s, s.geometry_file);
   } else {
     const ParticleStore ps =
@@ -301,11 +305,75 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info
                              .radius = ps.pos_rad[i].r,
                              .density = ps.density[i]});
     report["lattice"] = s.dimension == 2 ? "hexagonal" : "fcc";
+    check_geometry(g, s.source + " (sample.source = \"lattice\")", max_n);
   }
   if (g.dimension != want)
     throw InputError(s.source, "engine.dimension", std::to_string(s.dimension),
                      std::string("the sample is ") + (g.dimension == Dimension::Two ? "2D" : "3D"));
   return g;
+}
+
+// Limits on what a run may ask for, checked before the test starts and before the run folder
+// exists: beyond them a run cannot finish in any reasonable time (or memory), and the cause is
+// almost always a typo or a unit error in a key the message names.
+constexpr double kMaxRunSteps = 1e9;        // about a month for a small sample on 2 cores
+constexpr double kMaxParticleSteps = 1e13;  // about a month on 2 cores (bench/RESULTS.md)
+constexpr double kMaxStrainBins = 1e6;      // indicator series and their windows
+constexpr double kMaxSnapshotsPerRun = 1e5;
+// Platen travel per step relative to the smallest radius: the contact search (skin 0.4 x mean
+// radius) and the explicit integration both assume far smaller moves per step.
+constexpr double kMaxPlatenTravelPerStep = 0.05;
+
+// The steps the test needs at most: its ramp plus the platen travel to max_strain at the platen
+// speed (each platen moves, so the sample shortens at twice that speed).
+void check_run_budget(const ExperimentSpec& s, const Simulation& sim, double length, double v_bar) {
+  const double dt = sim.time_step();
+  if (!(std::isfinite(dt) && dt > 0.0))
+    throw InputError(s.source, "engine.time_step", num(dt),
+                     "the time step must be finite and > 0; check the grain radii, densities and "
+                     "stiffnesses");
+  double ramp = 0.0, speed = 0.0, max_strain = 0.0;
+  visit_lab_test(s.test, [&]<class T>(const typename T::Params& p) {
+    ramp = p.ramp_time > 0.0 ? p.ramp_time : 10.0 * length / v_bar;
+    speed = p.platen_speed;
+    max_strain = p.max_strain;
+  });
+  const double steps = (ramp + max_strain * length / (2.0 * speed)) / dt;
+  const double n = static_cast<double>(sim.particles().size());
+  const std::string what = fmt::format(
+      "ramp {} s + max_strain {} x sample length {} m / (2 x platen_speed {} m/s), at a time step "
+      "of {} s",
+      num(ramp), num(max_strain), num(length), num(speed), num(dt));
+  if (!(steps <= kMaxRunSteps) || !(steps * n <= kMaxParticleSteps))
+    throw InputError(s.source, "test.platen_speed / test.max_strain / test.ramp_time",
+                     fmt::format("{:.3g} steps of {} particles", steps, sim.particles().size()),
+                     fmt::format("a test may take at most {:.0e} steps and {:.0e} particle-steps; "
+                                 "this one needs {}: raise the platen speed, lower the strain or "
+                                 "the ramp, or check engine.time_step and the grain radii",
+                                 kMaxRunSteps, kMaxParticleSteps, what));
+  double r_min = std::numeric_limits<double>::infinity();
+  for (const PosRad& q : sim.particles().pos_rad) r_min = std::min(r_min, q.r);
+  if (!(speed * dt <= kMaxPlatenTravelPerStep * r_min))
+    throw InputError(s.source, "test.platen_speed", num(speed) + " m/s",
+                     fmt::format("a platen may move at most {} of the smallest grain radius ({} "
+                                 "m) per time step ({} s), i.e. at most {} m/s: faster, contacts "
+                                 "are crossed within a step and the test is no longer quasi-static "
+                                 "(use a few cm/s or less)",
+                                 kMaxPlatenTravelPerStep, num(r_min), num(dt),
+                                 num(kMaxPlatenTravelPerStep * r_min / dt)));
+  if (max_strain / s.ae_bin_width > kMaxStrainBins)
+    throw InputError(
+        s.source, "ae.bin_width", num(s.ae_bin_width),
+        fmt::format("at most {:.0e} bins up to test.max_strain = {}: use a bin of at "
+                    "least {}",
+                    kMaxStrainBins, num(max_strain), num(max_strain / kMaxStrainBins)));
+  if (s.snapshot_strain_interval > 0.0 &&
+      max_strain / s.snapshot_strain_interval > kMaxSnapshotsPerRun)
+    throw InputError(
+        s.source, "output.snapshot_strain_interval", num(s.snapshot_strain_interval),
+        fmt::format("at most {:.0e} snapshots up to test.max_strain = {}; use 0 for "
+                    "none or an interval of at least {}",
+                    kMaxSnapshotsPerRun, num(max_strain), num(max_strain / kMaxSnapshotsPerRun)));
 }
 
 Built build(const ExperimentSpec& s, const std::function<void(const std::string&)>& log) {
@@ -347,6 +415,7 @@ Built build(const ExperimentSpec& s, const std::function<void(const std::string&
   const double volume = (hi - lo) * (footprint_hi[0] - footprint_lo[0]) *
                         (s.dimension == 2 ? s.thickness : footprint_hi[1] - footprint_lo[1]);
   const double v_bar = std::sqrt(s.parallel_bond.modulus / (mass / volume));
+  check_run_budget(s, sim, hi - lo, v_bar);
   const std::uint64_t consolidation = protocol->start(sim, v_bar);
   return Built{std::move(sim), std::move(protocol), v_bar, report, consolidation};
 }
@@ -386,19 +455,112 @@ void make_plot(const fs::path& folder, const std::function<void(const std::strin
     log("warning: no report.html (see " + (folder / "report.log").string() + ")");
 }
 
-std::string mpa(const json& j, const char* key) {
-  return j.contains(key) && j[key].is_number()
-             ? fmt::format("{:.2f} MPa", j[key].get<double>() * 1e-6)
-             : "n/a";
+std::string mpa(const JsonView& j, const char* key) {
+  const auto v = j.maybe_number(key);
+  return v ? fmt::format("{:.2f} MPa", *v * 1e-6) : "n/a";
 }
-std::string gpa(const json& j, const char* key) {
-  return j.contains(key) && j[key].is_number()
-             ? fmt::format("{:.2f} GPa", j[key].get<double>() * 1e-9)
-             : "n/a";
+std::string gpa(const JsonView& j, const char* key) {
+  const auto v = j.maybe_number(key);
+  return v ? fmt::format("{:.2f} GPa", *v * 1e-9) : "n/a";
 }
-std::string plain(const json& j, const char* key, const char* f = "{:.3g}") {
-  return j.contains(key) && j[key].is_number() ? fmt::format(fmt::runtime(f), j[key].get<double>())
-                                               : "n/a";
+std::string plain(const JsonView& j, const char* key, const char* f = "{:.3g}") {
+  const auto v = j.maybe_number(key);
+  return v ? fmt::format(fmt::runtime(f), *v) : "n/a";
+}
+// A two-number range ("a to b"), n/a when absent.
+std::string range(const JsonView& j, const char* key) {
+  const auto r = j.elements(key);
+  if (r.size() != 2 || r[0].raw().is_null() || r[1].raw().is_null()) return "n/a";
+  return fmt::format("{:.2f} to {:.2f}", r[0].as_number(), r[1].as_number());
+}
+
+std::string summarise_sweep(const fs::path& file) {
+  const json doc = read_json_object(file.string());
+  const JsonView j(doc, file.string());
+  std::string s = fmt::format("sweep {} ({})\n", j.text("experiment", ""), j.text("status", ""));
+  s += "  sigma3 (MPa)   peak q (MPa)   sigma1 (MPa)   E_t50 (GPa)   cracks\n";
+  for (const JsonView& r : j.elements("runs"))
+    s += fmt::format("  {:>12.2f}   {:>12.2f}   {:>12.2f}   {:>11}   {:>6}\n",
+                     r.number("confining_stress_pa") * 1e-6,
+                     r.maybe_number("peak_deviatoric_stress_pa").value_or(0.0) * 1e-6,
+                     r.maybe_number("sigma1_at_peak_pa").value_or(0.0) * 1e-6,
+                     gpa(r, "youngs_modulus_pa"), r.maybe_number("cracks").value_or(0.0));
+  if (const auto mc = j.find("mohr_coulomb"))
+    s += mc->flag("valid", false)
+             ? fmt::format("Mohr-Coulomb: cohesion {}, friction angle {} deg, UCS {} (R^2 {})\n",
+                           mpa(*mc, "cohesion_pa"), plain(*mc, "friction_angle_deg", "{:.1f}"),
+                           mpa(*mc, "ucs_intercept_pa"), plain(*mc, "r2"))
+             : "Mohr-Coulomb: no fit (" + mc->text("flag", "") + ")\n";
+  if (const auto hb = j.find("hoek_brown"))
+    s += hb->flag("valid", false)
+             ? fmt::format("Hoek-Brown: sigma_ci {}, m_i {} (rms {})\n", mpa(*hb, "sigma_ci_pa"),
+                           plain(*hb, "m_i"), mpa(*hb, "rms_residual_pa"))
+             : "Hoek-Brown: no fit (" + hb->text("flag", "") + ")\n";
+  return s;
+}
+
+std::string summarise_acoustic_emission(const JsonView& ae) {
+  std::string b_text = "n/a";
+  if (const auto b = ae.find("b_value"))
+    b_text = b->has("b") ? fmt::format("{:.2f} +- {:.2f}", b->number("b"),
+                                       b->maybe_number("sigma").value_or(0.0))
+                         : "n/a (" + b->text("flag", "") + ")";
+  std::string d2 = "n/a";
+  if (const auto d = ae.find("d2")) d2 = plain(*d, "d2", "{:.2f}");
+  return fmt::format(
+      "\n  AE: {} events (largest {} cracks), M_w {}, b = {} (windows {}), D2 = {} (windows "
+      "{}); shear fraction {}",
+      plain(ae, "events", "{:.0f}"), plain(ae, "largest_event_cracks", "{:.0f}"),
+      range(ae, "magnitude_range"), b_text, range(ae, "b_value_window_range"), d2,
+      range(ae, "d2_window_range"), plain(ae, "shear_fraction", "{:.3f}"));
+}
+
+std::string summarise_run(const fs::path& file) {
+  const json doc = read_json_object(file.string());
+  const JsonView j(doc, file.string());
+  std::string s =
+      fmt::format("{}: {}, sigma3 = {} ({}; {})\n", j.text("experiment", ""), j.text("test", ""),
+                  mpa(j, "confining_stress_pa"), j.text("status", ""), j.text("stop_reason", ""));
+  if (j.has("tensile_strength_pa"))
+    s += fmt::format("  tensile strength sigma_t = 2F/(pi D t) {} (peak force {} N) at strain {}\n",
+                     mpa(j, "tensile_strength_pa"), plain(j, "peak_force_n", "{:.4g}"),
+                     plain(j, "axial_strain_at_peak", "{:.5f}"));
+  else
+    s +=
+        fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
+                    mpa(j, "peak_deviatoric_stress_pa"), plain(j, "axial_strain_at_peak", "{:.5f}"),
+                    gpa(j, "youngs_modulus_pa"), plain(j, "poisson_ratio"));
+  s += fmt::format("  crack initiation {}, crack damage {}, residual {}\n",
+                   mpa(j, "crack_initiation_stress_pa"), mpa(j, "crack_damage_stress_pa"),
+                   mpa(j, "residual_strength_pa"));
+  s += fmt::format("  {} particles, {} bonds; {} cracks ({} tensile, {} shear)\n",
+                   plain(j, "particles", "{:.0f}"), plain(j, "bonds_initial", "{:.0f}"),
+                   plain(j, "bonds_broken", "{:.0f}"), plain(j, "cracks_tensile", "{:.0f}"),
+                   plain(j, "cracks_shear", "{:.0f}"));
+  if (const auto cp = j.find("crack_pattern")) {
+    const auto q = cp->elements("quarter_shares_along_axis");
+    if (q.size() == 4)
+      s += fmt::format("  cracks per quarter along the axis: {:.2f} {:.2f} {:.2f} {:.2f}\n",
+                       q[0].as_number(), q[1].as_number(), q[2].as_number(), q[3].as_number());
+  }
+  if (const auto qs = j.find("quasi_static"))
+    s += fmt::format("  quasi-static: {} (platen imbalance {}, kinetic/strain {})",
+                     qs->flag("ok", false) ? "yes" : "NO",
+                     plain(*qs, "max_platen_force_imbalance_before_peak"),
+                     plain(*qs, "max_kinetic_to_strain_energy_before_peak"));
+  if (j.maybe_number("confining_stress_pa").value_or(0.0) > 0.0)
+    if (const auto ce = j.find("confining_stress_error"))
+      s += fmt::format("; confining error before peak {:.2f} %",
+                       100 * ce->maybe_number("max_relative_before_peak").value_or(0.0));
+  if (const auto ae = j.find("acoustic_emission")) s += summarise_acoustic_emission(*ae);
+  if (const auto eb = j.find("energy_budget"))
+    s += fmt::format("\n  energy balance: {} (largest relative residual {})",
+                     eb->text("classification", "n/a"),
+                     plain(*eb, "residual_relative_max_after_1pct_work", "{:.2e}"));
+  s += fmt::format("\n  {} steps in {} s ({} particle-steps/s)\n", plain(j, "steps", "{:.0f}"),
+                   plain(j, "wall_seconds", "{:.1f}"), plain(j, "particle_steps_per_second"));
+  for (const JsonView& w : j.elements("warnings")) s += "  warning: " + w.as_text() + "\n";
+  return s;
 }
 
 }  // namespace
@@ -428,116 +590,24 @@ bool write_report(const std::string& folder) {
 
 std::string summarise_folder(const std::string& folder) {
   const fs::path f(folder);
-  if (fs::exists(f / "sweep.json")) {
-    std::ifstream in(f / "sweep.json");
-    const json j = json::parse(in, nullptr, false);
-    if (j.is_discarded()) throw InputError((f / "sweep.json").string(), "", "", "not valid JSON");
-    std::string s =
-        fmt::format("sweep {} ({})\n", j.value("experiment", ""), j.value("status", ""));
-    s += "  sigma3 (MPa)   peak q (MPa)   sigma1 (MPa)   E_t50 (GPa)   cracks\n";
-    for (const json& r : j["runs"])
-      s += fmt::format("  {:>12.2f}   {:>12.2f}   {:>12.2f}   {:>11}   {:>6}\n",
-                       r.value("confining_stress_pa", 0.0) * 1e-6,
-                       r.value("peak_deviatoric_stress_pa", 0.0) * 1e-6,
-                       r.value("sigma1_at_peak_pa", 0.0) * 1e-6,
-                       r["youngs_modulus_pa"].is_number()
-                           ? fmt::format("{:.2f}", r["youngs_modulus_pa"].get<double>() * 1e-9)
-                           : "n/a",
-                       r.value("cracks", 0));
-    const json& mc = j["mohr_coulomb"];
-    s += mc.value("valid", false)
-             ? fmt::format("Mohr-Coulomb: cohesion {}, friction angle {} deg, UCS {} (R^2 {})\n",
-                           mpa(mc, "cohesion_pa"), plain(mc, "friction_angle_deg", "{:.1f}"),
-                           mpa(mc, "ucs_intercept_pa"), plain(mc, "r2"))
-             : "Mohr-Coulomb: no fit (" + mc.value("flag", std::string()) + ")\n";
-    const json& hb = j["hoek_brown"];
-    s += hb.value("valid", false)
-             ? fmt::format("Hoek-Brown: sigma_ci {}, m_i {} (rms {})\n", mpa(hb, "sigma_ci_pa"),
-                           plain(hb, "m_i"), mpa(hb, "rms_residual_pa"))
-             : "Hoek-Brown: no fit (" + hb.value("flag", std::string()) + ")\n";
-    return s;
-  }
+  if (!fs::is_directory(f)) throw InputError(folder, "", "", "not a folder");
+  if (fs::exists(f / "sweep.json")) return summarise_sweep(f / "sweep.json");
   if (!fs::exists(f / "summary.json")) {
     std::string status = "unknown";
     if (fs::exists(f / "manifest.json")) {
-      std::ifstream in(f / "manifest.json");
-      const json m = json::parse(in, nullptr, false);
-      if (!m.is_discarded()) status = m.value("status", "unknown");
+      const json m = read_json_object((f / "manifest.json").string());
+      status = JsonView(m, (f / "manifest.json").string()).text("status", "unknown");
     }
     throw InputError(folder, "summary.json", "(missing)",
                      "not a finished run folder (manifest status: " + status + ")");
   }
-  std::ifstream in(f / "summary.json");
-  const json j = json::parse(in, nullptr, false);
-  if (j.is_discarded()) throw InputError((f / "summary.json").string(), "", "", "not valid JSON");
-  std::string s =
-      fmt::format("{}: {}, sigma3 = {} ({}; {})\n", j.value("experiment", ""), j.value("test", ""),
-                  mpa(j, "confining_stress_pa"), j.value("status", ""), j.value("stop_reason", ""));
-  if (j.contains("tensile_strength_pa"))
-    s += fmt::format("  tensile strength sigma_t = 2F/(pi D t) {} (peak force {} N) at strain {}\n",
-                     mpa(j, "tensile_strength_pa"), plain(j, "peak_force_n", "{:.4g}"),
-                     plain(j, "axial_strain_at_peak", "{:.5f}"));
-  else
-    s +=
-        fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
-                    mpa(j, "peak_deviatoric_stress_pa"), plain(j, "axial_strain_at_peak", "{:.5f}"),
-                    gpa(j, "youngs_modulus_pa"), plain(j, "poisson_ratio"));
-  s += fmt::format("  crack initiation {}, crack damage {}, residual {}\n",
-                   mpa(j, "crack_initiation_stress_pa"), mpa(j, "crack_damage_stress_pa"),
-                   mpa(j, "residual_strength_pa"));
-  s += fmt::format("  {} particles, {} bonds; {} cracks ({} tensile, {} shear)\n",
-                   j.value("particles", 0), j.value("bonds_initial", 0), j.value("bonds_broken", 0),
-                   j.value("cracks_tensile", 0), j.value("cracks_shear", 0));
-  if (j.contains("crack_pattern") && j["crack_pattern"].contains("quarter_shares_along_axis")) {
-    const json& q = j["crack_pattern"]["quarter_shares_along_axis"];
-    if (q.is_array() && q.size() == 4 && q[0].is_number())
-      s += fmt::format("  cracks per quarter along the axis: {:.2f} {:.2f} {:.2f} {:.2f}\n",
-                       q[0].get<double>(), q[1].get<double>(), q[2].get<double>(),
-                       q[3].get<double>());
-  }
-  const json& qs = j["quasi_static"];
-  s += fmt::format("  quasi-static: {} (platen imbalance {}, kinetic/strain {})",
-                   qs.value("ok", false) ? "yes" : "NO",
-                   plain(qs, "max_platen_force_imbalance_before_peak"),
-                   plain(qs, "max_kinetic_to_strain_energy_before_peak"));
-  if (j.value("confining_stress_pa", 0.0) > 0.0)
-    s += fmt::format("; confining error before peak {:.2f} %",
-                     100 * j["confining_stress_error"].value("max_relative_before_peak", 0.0));
-  if (j.contains("acoustic_emission")) {
-    const json& ae = j["acoustic_emission"];
-    const json& b = ae["b_value"];
-    const json& d = ae["d2"];
-    const auto range = [&](const json& r) {
-      return r.is_array() && r.size() == 2 && r[0].is_number()
-                 ? fmt::format("{:.2f} to {:.2f}", r[0].get<double>(), r[1].get<double>())
-                 : std::string("n/a");
-    };
-    s += fmt::format(
-        "\n  AE: {} events (largest {} cracks), M_w {}, b = {} (windows {}), D2 = {} (windows "
-        "{}); shear fraction {}",
-        ae.value("events", 0), ae.value("largest_event_cracks", 0), range(ae["magnitude_range"]),
-        b["b"].is_number()
-            ? fmt::format("{:.2f} +- {:.2f}", b["b"].get<double>(), b["sigma"].get<double>())
-            : "n/a (" + b.value("flag", std::string()) + ")",
-        range(ae["b_value_window_range"]), plain(d, "d2", "{:.2f}"), range(ae["d2_window_range"]),
-        plain(ae, "shear_fraction", "{:.3f}"));
-  }
-  if (j.contains("energy_budget")) {
-    const json& eb = j["energy_budget"];
-    s += fmt::format("\n  energy balance: {} (largest relative residual {})",
-                     eb.value("classification", std::string("n/a")),
-                     plain(eb, "residual_relative_max_after_1pct_work", "{:.2e}"));
-  }
-  s += fmt::format("\n  {} steps in {:.1f} s ({:.3g} particle-steps/s)\n", j.value("steps", 0),
-                   j.value("wall_seconds", 0.0), j.value("particle_steps_per_second", 0.0));
-  for (const json& w : j["warnings"]) s += "  warning: " + w.get<std::string>() + "\n";
-  return s;
+  return summarise_run(f / "summary.json");
 }
 
 namespace {
 
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
-constexpr std::uint32_t kCheckpointFormat = 1;
+constexpr std::uint32_t kCheckpointFormat = 2;  // 2: commit and trailing hash
 constexpr const char* kCheckpointFile = "checkpoint.bin";
 
 // What the loading loop carries from one row to the next besides the engine, the protocol and
@@ -602,16 +672,18 @@ struct Session {
 };
 
 // Writes checkpoint.bin atomically (temporary file, then rename): a crash while writing leaves the
-// previous checkpoint intact.
+// previous checkpoint intact. Layout: magic, format, version, commit, the resolved experiment,
+// the state of every part, and last the FNV-1a hash of all bytes before it, so that a damaged
+// file is refused before any of it is trusted.
 void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Session& s) {
   const fs::path path = folder / kCheckpointFile, tmp = folder / "checkpoint.bin.tmp";
+  std::ostringstream body(std::ios::binary);
   {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint");
-    ArchiveWriter a(out);
+    ArchiveWriter a(body);
     a.string(kCheckpointMagic);
     a.value(kCheckpointFormat);
     a.string(kVersion);
+    a.string(kCommit);
     a.string(to_toml(spec));
     s.loop.save(a);
     s.sim.save_state(a);
@@ -621,10 +693,51 @@ void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Sessio
     s.snaps.save_state(a);
     s.ae.save(a);
     a.label("end of checkpoint");
+  }
+  const std::string bytes = std::move(body).str();
+  const std::uint64_t hash = fnv1a64(bytes);
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint");
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.write(reinterpret_cast<const char*>(&hash), sizeof hash);
     out.flush();
     if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint (disk full?)");
   }
   fs::rename(tmp, path);
+}
+
+// Reads checkpoint.bin whole and checks its header and hash; returns the bytes before the hash.
+std::string read_checkpoint_bytes(const fs::path& cpath) {
+  std::ifstream in(cpath, std::ios::binary);
+  if (!in) throw InputError(cpath.string(), "", "", "cannot read the checkpoint");
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  {
+    std::istringstream head(bytes, std::ios::binary);
+    ArchiveReader a(head, cpath.string());
+    if (a.string() != kCheckpointMagic)
+      throw InputError(cpath.string(), "header", "", "not a Breccia checkpoint");
+    const auto format = a.get<std::uint32_t>();
+    const std::string version = a.string();
+    if (format != kCheckpointFormat || version != kVersion)
+      throw InputError(cpath.string(), "version",
+                       version + " (format " + std::to_string(format) + ")",
+                       std::string("this is breccia ") + kVersion + " (format " +
+                           std::to_string(kCheckpointFormat) +
+                           "): resume with the version that wrote the checkpoint");
+  }
+  std::uint64_t stored = 0;
+  if (bytes.size() < sizeof stored)
+    throw InputError(cpath.string(), "length", std::to_string(bytes.size()) + " bytes",
+                     "the checkpoint is truncated");
+  std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
+  bytes.resize(bytes.size() - sizeof stored);
+  if (fnv1a64(bytes) != stored)
+    throw InputError(cpath.string(), "checksum", fmt::format("{:016x}", stored),
+                     fmt::format("the file's bytes hash to {:016x}: the checkpoint is damaged "
+                                 "or truncated and cannot be resumed",
+                                 fnv1a64(bytes)));
+  return bytes;
 }
 
 // v_S for the event duration (analysis.md §4.1), fixed at the first crack: sqrt(G / rho) with E and
@@ -689,6 +802,32 @@ json crack_pattern_json(const Protocol& test, const Simulation& sim) {
          "by time are the early ones; a uniform scatter would put 31 % in the band"}};
   }
   return j;
+}
+
+// NaN or inf in the state: the run cannot recover and everything after would be garbage, so it
+// stops at once, failed, naming the step and the first particle affected. Checked at every history
+// row (one pass over the particles every history_interval steps).
+void check_finite_state(const Simulation& sim, const AxialState& a) {
+  const ParticleStore& p = sim.particles();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Vec3& x = p.pos_rad[i].x;
+    const Vec3& v = p.vel[i];
+    const Vec3& f = p.force[i];
+    if (std::isfinite(x.x + x.y + x.z + v.x + v.y + v.z + f.x + f.y + f.z)) continue;
+    throw std::runtime_error(fmt::format(
+        "non-finite state at step {}: particle {} (tag {}) has position ({}, {}, {}), velocity "
+        "({}, {}, {}), force ({}, {}, {}); the run stops here. Usual causes: a time step above "
+        "the critical one (engine.time_step, engine.safety_factor), grains that overlap deeply "
+        "in the sample, or stiffnesses or loads far outside the physical range",
+        sim.step_count(), i, p.tag[i], x.x, x.y, x.z, v.x, v.y, v.z, f.x, f.y, f.z));
+  }
+  for (const double q : {a.strain, a.stress, a.deviatoric, a.force_bottom, a.force_top,
+                         a.lateral_strain, a.volumetric_strain, a.confining_stress})
+    if (!std::isfinite(q))
+      throw std::runtime_error(fmt::format(
+          "non-finite test state at step {} (strain {}, stress {} Pa, forces {} / {} N): the run "
+          "stops here; check the platen speed, the confining stress and the time step",
+          sim.step_count(), a.strain, a.stress, a.force_bottom, a.force_top));
 }
 
 // Loads the loop, runs it to its end (or the next interruption), and writes the summary and the
@@ -759,6 +898,7 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
       }
       if ((sim.step_count() - 1) % interval != 0) continue;
       const AxialState a = test.measure(sim);
+      check_finite_state(sim, a);
       ss.history.record(sim, a);
       ss.cracks.record(sim);
       ss.history.flush();
@@ -778,7 +918,9 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
                                 test.confining_stress());
       if (spec.snapshot_strain_interval > 0.0 && a.strain >= L.next_snapshot) {
         ss.snaps.write(sim);
-        while (L.next_snapshot <= a.strain) L.next_snapshot += spec.snapshot_strain_interval;
+        // The next multiple of the interval above this strain (one snapshot per row at most).
+        L.next_snapshot = spec.snapshot_strain_interval *
+                          (std::floor(a.strain / spec.snapshot_strain_interval) + 1.0);
       }
       if (test.finished(a, sim.cracks().size())) {
         stop = test.stop_reason();
@@ -985,6 +1127,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   json manifest{
       {"program", "breccia"},
       {"version", kVersion},
+      {"commit", kCommit},
       {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
       {"command", opt.command_line},
       {"experiment_source", spec.source},
@@ -1077,14 +1220,8 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   const fs::path mpath = folder / "manifest.json", cpath = folder / kCheckpointFile;
   if (!fs::exists(mpath))
     throw InputError(folder_name, "manifest.json", "(missing)", "not a Breccia run folder");
-  json manifest;
-  {
-    std::ifstream in(mpath);
-    manifest = json::parse(in, nullptr, false);
-  }
-  if (manifest.is_discarded() || !manifest.is_object())
-    throw InputError(mpath.string(), "", "", "not valid JSON");
-  const std::string status = manifest.value("status", "unknown");
+  json manifest = read_json_object(mpath.string());
+  const std::string status = JsonView(manifest, mpath.string()).text("status", "unknown");
   if (status == "complete")
     throw InputError(mpath.string(), "status", status, "the run is complete: nothing to resume");
   if (!fs::exists(cpath))
@@ -1092,19 +1229,12 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
                      "the run (status '" + status +
                          "') has no checkpoint: it stopped before writing one "
                          "(see output.checkpoint_interval_s)");
-  std::ifstream in(cpath, std::ios::binary);
-  if (!in) throw InputError(cpath.string(), "", "", "cannot read the checkpoint");
+  std::istringstream in(read_checkpoint_bytes(cpath), std::ios::binary);
   ArchiveReader a(in, cpath.string());
-  if (a.string() != kCheckpointMagic)
-    throw InputError(cpath.string(), "header", "", "not a Breccia checkpoint");
-  const auto format = a.get<std::uint32_t>();
-  const std::string version = a.string();
-  if (format != kCheckpointFormat || version != kVersion)
-    throw InputError(cpath.string(), "version",
-                     version + " (format " + std::to_string(format) + ")",
-                     std::string("this is breccia ") + kVersion + " (format " +
-                         std::to_string(kCheckpointFormat) +
-                         "): resume with the version that wrote the checkpoint");
+  a.string();  // magic, format and version: checked with the hash
+  a.get<std::uint32_t>();
+  a.string();
+  const std::string commit = a.string();
   // The resolved experiment travels in the checkpoint; only run-time options may change.
   std::vector<std::string> overrides;
   if (ro.threads >= 0) overrides.push_back("engine.threads=" + std::to_string(ro.threads));
@@ -1133,6 +1263,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   json entry{{"at_step", sim.step_count()},
              {"at_time_s", sim.time()},
              {"previous_status", status},
+             {"checkpoint_written_by", std::string(kVersion) + " (" + commit + ")"},
              {"when", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
              {"command", opt.command_line},
              {"threads", max_threads()},

@@ -2,11 +2,13 @@
 
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
+#include "breccia/io/geometry_checks.hpp"
 
 namespace breccia {
 
@@ -28,22 +30,40 @@ std::vector<std::string> split(const std::string& line) {
   return out;
 }
 
-bool parse_real(const std::string& t, double& v) {
+// The whole token is a number (nan and inf included: they are numbers, not words).
+bool parse_number(const std::string& t, double& v) {
   const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-  return r.ec == std::errc() && r.ptr == t.data() + t.size() && std::isfinite(v);
+  return r.ec == std::errc() && r.ptr == t.data() + t.size();
+}
+bool parse_real(const std::string& t, double& v) {
+  return parse_number(t, v) && std::isfinite(v);
+}
+
+// A GenGeo id: a whole number in [0, 2^53) written as a real.
+bool parse_id(const std::string& t, std::uint64_t& id) {
+  double v = 0.0;
+  if (!parse_real(t, v) || v < 0.0 || v != std::floor(v) || v >= 9007199254740992.0) return false;
+  id = static_cast<std::uint64_t>(v);
+  return true;
 }
 
 std::ifstream open(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw InputError(path, "", "", "cannot open the sample file");
+  if (!in || std::filesystem::is_directory(path))
+    throw InputError(path, "", "", "cannot open the sample file");
   return in;
 }
 
 }  // namespace
 
 GeometryData read_xyzr_table(const std::string& path, Dimension dim, double density,
-                             double thickness) {
+                             double thickness, std::uint64_t max_particles) {
   std::ifstream in = open(path);
+  return parse_xyzr_table(in, path, dim, density, thickness, max_particles);
+}
+
+GeometryData parse_xyzr_table(std::istream& in, const std::string& path, Dimension dim,
+                              double density, double thickness, std::uint64_t max_particles) {
   GeometryData g;
   g.dimension = dim;
   g.thickness = dim == Dimension::Two ? thickness : 1.0;
@@ -56,15 +76,23 @@ GeometryData read_xyzr_table(const std::string& path, Dimension dim, double dens
     if (tok.empty()) continue;
     const std::string where = path + ":" + std::to_string(n);
     std::vector<double> v(tok.size());
-    bool numeric = true;
-    for (std::size_t k = 0; k < tok.size(); ++k) numeric = numeric && parse_real(tok[k], v[k]);
-    if (!numeric) {
-      if (!header_seen && g.particles.empty()) {
-        header_seen = true;  // a header row of column names
-        continue;
+    std::size_t numbers = 0, finite = 0;
+    for (std::size_t k = 0; k < tok.size(); ++k)
+      if (parse_number(tok[k], v[k])) {
+        ++numbers;
+        finite += std::isfinite(v[k]) ? 1 : 0;
       }
-      throw InputError(where, "row", "'" + line + "'", "expected numbers: x y z radius");
+    if (numbers == 0 && !header_seen && g.particles.empty()) {
+      header_seen = true;  // a header row of column names (words only)
+      continue;
     }
+    if (numbers != tok.size())
+      throw InputError(where, "row", "'" + line + "'", "expected numbers: x y z radius");
+    if (finite != tok.size())
+      throw InputError(where, "row", "'" + line + "'", "expected finite numbers (no nan or inf)");
+    if (g.particles.size() >= max_particles)
+      throw InputError(where, "particles", "> " + std::to_string(max_particles),
+                       "the table holds more particles than sample.max_particles");
     ParticleSpec p;
     p.tag = g.particles.size() + 1;
     p.density = density;
@@ -83,13 +111,21 @@ GeometryData read_xyzr_table(const std::string& path, Dimension dim, double dens
     }
     if (!(p.radius > 0.0)) throw InputError(where, "radius", num(p.radius), "must be > 0 m");
     g.particles.push_back(p);
+    g.particle_lines.push_back(n);
   }
   if (g.particles.empty()) throw InputError(path, "particles", "0", "the table has no rows");
+  check_geometry(g, path, max_particles);
   return g;
 }
 
-GeometryData read_gengeo(const std::string& path, double density, double thickness) {
+GeometryData read_gengeo(const std::string& path, double density, double thickness,
+                         std::uint64_t max_particles) {
   std::ifstream in = open(path);
+  return parse_gengeo(in, path, density, thickness, max_particles);
+}
+
+GeometryData parse_gengeo(std::istream& in, const std::string& path, double density,
+                          double thickness, std::uint64_t max_particles) {
   GeometryData g;
   std::string line;
   std::size_t n = 0;
@@ -108,12 +144,13 @@ GeometryData read_gengeo(const std::string& path, double density, double thickne
                      "expected 'LSMGeometry 1.2' (a GenGeo geometry file)");
   if (tok[1] != "1.2")
     throw InputError(where(), "version", tok[1], "only LSMGeometry 1.2 is supported");
-  auto count = [&](const char* what) {
+  auto count = [&](const char* what, std::uint64_t limit) {
     if (!next(tok) || tok.size() != 1)
       throw InputError(where(), what, tok.empty() ? "" : tok[0], "expected a count");
-    double v = 0.0;
-    if (!parse_real(tok[0], v) || v < 0 || v != std::floor(v))
+    std::uint64_t v = 0;
+    if (!parse_id(tok[0], v))
       throw InputError(where(), what, tok[0], "expected a non-negative integer");
+    check_announced_count(v, limit, where(), what);
     return static_cast<std::size_t>(v);
   };
   bool dim_seen = false;
@@ -128,33 +165,42 @@ GeometryData read_gengeo(const std::string& path, double density, double thickne
       if (!next(tok) || tok[0] != "Simple")
         throw InputError(where(), "particle type", tok.empty() ? "" : tok[0],
                          "only 'Simple' particles are supported");
-      const std::size_t np = count("particle count");
+      const std::size_t np = count("particle count", max_particles);
       for (std::size_t k = 0; k < np; ++k) {
         if (!next(tok) || tok.size() < 5)
           throw InputError(where(), "particle", line, "expected x y z radius id tag");
-        double v[5];
-        for (int c = 0; c < 5; ++c)
+        double v[4];
+        for (int c = 0; c < 4; ++c)
           if (!parse_real(tok[static_cast<std::size_t>(c)], v[c]))
             throw InputError(where(), "particle", "'" + tok[static_cast<std::size_t>(c)] + "'",
-                             "expected a number");
+                             "expected a finite number");
         if (!(v[3] > 0.0)) throw InputError(where(), "radius", num(v[3]), "must be > 0");
+        std::uint64_t id = 0;
+        if (!parse_id(tok[4], id))
+          throw InputError(where(), "id", "'" + tok[4] + "'",
+                           "expected a non-negative whole number below 2^53");
         ParticleSpec p;
         p.position = {v[0], v[1], g.dimension == Dimension::Two ? 0.0 : v[2]};
         p.radius = v[3];
-        p.tag = static_cast<std::uint64_t>(v[4]) + 1;
+        p.tag = id + 1;
         p.density = density;
         g.particles.push_back(p);
+        g.particle_lines.push_back(n);
       }
       if (!next(tok) || tok[0] != "EndParticles")
         throw InputError(where(), "EndParticles", tok.empty() ? "" : tok[0],
                          "the particle count does not match the rows");
     } else if (tok[0] == "BeginConnect") {
-      const std::size_t nb = count("bond count");
+      const std::size_t nb = count("bond count", kMaxBondsPerParticle * max_particles);
       for (std::size_t k = 0; k < nb; ++k) {
-        double a = 0, b = 0;
-        if (!next(tok) || tok.size() < 2 || !parse_real(tok[0], a) || !parse_real(tok[1], b))
-          throw InputError(where(), "bond", line, "expected id1 id2 tag");
-        g.bonds.emplace_back(static_cast<std::uint64_t>(a) + 1, static_cast<std::uint64_t>(b) + 1);
+        std::uint64_t a = 0, b = 0;
+        if (!next(tok) || tok.size() < 2)
+          throw InputError(where(), "bond", "'" + line + "'", "expected id1 id2 tag");
+        if (!parse_id(tok[0], a) || !parse_id(tok[1], b))
+          throw InputError(where(), "bond", "'" + line + "'",
+                           "particle ids are non-negative whole numbers below 2^53");
+        g.bonds.emplace_back(a + 1, b + 1);
+        g.bond_lines.push_back(n);
       }
       if (!next(tok) || tok[0] != "EndConnect")
         throw InputError(where(), "EndConnect", tok.empty() ? "" : tok[0],
@@ -163,6 +209,7 @@ GeometryData read_gengeo(const std::string& path, double density, double thickne
   }
   if (!dim_seen) throw InputError(path, "Dimension", "", "the file has no Dimension line");
   if (g.particles.empty()) throw InputError(path, "particles", "0", "the file has no particles");
+  check_geometry(g, path, max_particles);
   return g;
 }
 

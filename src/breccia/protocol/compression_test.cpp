@@ -9,6 +9,7 @@
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
+#include "breccia/core/interrupt.hpp"
 
 namespace breccia {
 
@@ -175,6 +176,7 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
     std::vector<std::vector<double>> recent(2);
     int held = 0;
     while (sim.step_count() - step0 < st_.max_consolidation_steps) {
+      throw_if_interrupted("consolidating the sample");
       for (int k = 0; k < 20; ++k) {
         const double a = current_area(sim);
         servo_.drive(W[bottom_], a, sim.time_step(), k_min_);

@@ -126,10 +126,12 @@ constexpr std::array<ParamField<P>, 4 + N> compression_fields(
   return f;
 }
 
-// sigma_3 and the servo gain of the confined tests.
+// sigma_3 and the servo gain of the confined tests. sigma_3 stops at 10 GPa: no triaxial cell
+// reaches it (the highest-pressure rock tests run near 1-2 GPa), and the servo's wall speed grows
+// with it until the consolidation cannot settle.
 template <class P>
 constexpr std::array<ParamField<P>, 2> confining_fields(std::string_view walls) {
-  return {{{"confining_stress", "Pa", &P::confining_stress, 0, kInf, false, true, walls},
+  return {{{"confining_stress", "Pa", &P::confining_stress, 0, 1e10, false, true, walls},
            {"servo_relaxation", "-", &P::servo_relaxation, 0, 1, false, true,
             "alpha_s of the wall servo (physics.md §6.2)"}}};
 }

@@ -13,6 +13,7 @@
 #include <numbers>
 
 #include "breccia/core/error.hpp"
+#include "breccia/core/interrupt.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/sample/packing_methods.hpp"
 #include "breccia/sample/sphere_grid.hpp"
@@ -74,7 +75,7 @@ class Inserter {
                          "> " + std::to_string(max_particles),
                          "the insertion packing needs more particles than sample.max_particles; "
                          "use larger grains, a smaller sample or raise the limit");
-      ++tries_;
+      if (++tries_ % 1024 == 0) throw_if_interrupted("packing the sample (insertion)");
       if (try_one())
         failures = 0;
       else

@@ -1,0 +1,489 @@
+// Bad input, as a new user makes it: experiment files, --set, the command line, every geometry
+// format and damaged run folders. Each case must end with a non-zero exit (never a signal), a
+// message naming the file, key or option and the value, and no run folder that looks whole.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "cli_harness.hpp"
+
+namespace fs = std::filesystem;
+using namespace breccia::testing;
+
+namespace {
+
+constexpr int kAnyError = -2;  // a CLI11 usage error: any non-zero exit code
+
+struct BadCase {
+  const char* name;
+  std::vector<std::pair<const char*, const char*>> files;  // written into the case's folder
+  std::string args;                                        // "{d}" is the case's folder
+  int code;                                                // expected exit code
+  std::vector<std::string> needles;                        // the message must contain each
+};
+
+// A tiny FCC lattice: runs that pass validation get past the sample in milliseconds.
+const std::string kLattice =
+    " --set sample.source=\"lattice\" --set sample.cells=[2,2,4] --set output.plot=false";
+
+std::string replace_all(std::string s, const std::string& from, const std::string& to) {
+  for (std::size_t p = 0; (p = s.find(from, p)) != std::string::npos; p += to.size())
+    s.replace(p, from.size(), to);
+  return s;
+}
+
+// A folder under `root` that looks like a finished run: a summary, or a manifest saying complete.
+bool has_whole_looking_run(const fs::path& root) {
+  if (!fs::exists(root)) return false;
+  for (const auto& e : fs::recursive_directory_iterator(root)) {
+    if (e.path().filename() == "summary.json") return true;
+    if (e.path().filename() == "manifest.json") {
+      const auto m = nlohmann::json::parse(read(e.path()), nullptr, false);
+      if (!m.is_discarded() && m.value("status", "") == "complete") return true;
+    }
+  }
+  return false;
+}
+
+const char* kGeomHead = "breccia-geometry 1\ndimension 3\n";
+
+std::vector<BadCase> cases() {
+  const std::string run = "run --quiet --output {d}/runs ";
+  const std::string geom = " --set sample.source=\"file\" --set sample.file=\"{d}/s.geom\"";
+  const std::string table = " --set sample.source=\"table\" --set sample.file=\"{d}/s.txt\"";
+  const std::string gengeo = " --set sample.source=\"gengeo\" --set sample.file=\"{d}/s.geo\"";
+  const std::string gg_head =
+      "LSMGeometry 1.2\nBoundingBox 0 0 0 1 1 1\nPeriodicBoundaries 0 0 0\n"
+      "Dimension 3D\nBeginParticles\nSimple\n";
+  static std::vector<std::string> keep;  // owns the texts the cases point to
+  auto txt = [&](std::string s) { return keep.emplace_back(std::move(s)).c_str(); };
+  auto exp = [&](const char* body) {
+    return std::vector<std::pair<const char*, const char*>>{{"e.toml", body}};
+  };
+  const std::string e = run + "{d}/e.toml";
+  std::vector<BadCase> c = {
+      // --- experiment files ---
+      {"toml_syntax", exp("[engine\nthreads = 1\n"), e, 2, {"e.toml:1", "TOML syntax"}},
+      {"unknown_table",
+       exp("[engin]\nthreads = 1\n"),
+       e,
+       2,
+       {"e.toml:1", "[engin]", "unknown table"}},
+      {"unknown_key", exp("[engine]\nthreds = 1\n"), e, 2, {"e.toml:2", "engine.threds"}},
+      {"unknown_top_key", exp("nmae = \"x\"\n"), e, 2, {"e.toml:1", "nmae"}},
+      {"wrong_type",
+       exp("[engine]\nthreads = \"x\"\n"),
+       e,
+       2,
+       {"e.toml:2", "engine.threads", "integer"}},
+      {"nan_porosity",
+       exp("[sample]\nporosity = nan\n"),
+       e,
+       2,
+       {"e.toml:2", "sample.porosity", "nan"}},
+      {"inf_speed",
+       exp("[test]\nplaten_speed = inf\n"),
+       e,
+       2,
+       {"e.toml:2", "test.platen_speed", "inf"}},
+      {"negative_radius",
+       exp("[sample]\nradius_min = -1e-3\n"),
+       e,
+       2,
+       {"sample.radius_min", "-0.001"}},
+      {"radius_order",
+       exp("[sample]\nradius_min = 5e-4\nradius_max = 4e-4\n"),
+       e,
+       2,
+       {"sample.radius_max"}},
+      {"dimension_4", exp("[engine]\ndimension = 4\n"), e, 2, {"engine.dimension", "4"}},
+      {"unknown_test", exp("[test]\nkind = \"shear\"\n"), e, 2, {"test.kind", "shear"}},
+      {"huge_confinement",
+       exp("[test]\nkind = \"triaxial\"\nconfining_stress = 1e308\n"),
+       e,
+       2,
+       {"e.toml:3", "test.confining_stress", "1e+308"}},
+      {"hertz_2d",
+       exp("[engine]\ndimension = 2\n[sample]\nshape = \"rectangle\"\n[contact]\nlaw = "
+           "\"hertz_mindlin\"\n"),
+       e,
+       2,
+       {"contact.law"}},
+      {"huge_lattice",
+       exp("[sample]\nsource = \"lattice\"\ncells = [1000, 1000, 1000]\n"),
+       e,
+       2,
+       {"sample.cells", "max_particles"}},
+      {"file_without_name", exp("[sample]\nsource = \"file\"\n"), e, 2, {"sample.file"}},
+      {"missing_geometry",
+       exp("[sample]\nsource = \"file\"\nfile = \"nowhere.geom\"\n"),
+       e,
+       2,
+       {"nowhere.geom", "cannot open"}},
+      {"missing_experiment", {}, run + "{d}/absent.toml", 2, {"absent.toml", "cannot open"}},
+      {"folder_as_experiment", {}, run + "{d}", 2, {"is a folder"}},
+      {"folder_as_experiment_check", {}, "check {d}", 2, {"is a folder"}},
+      {"safety_factor", exp("[engine]\nsafety_factor = 2\n"), e, 2, {"engine.safety_factor", "2"}},
+      {"classes_mismatch",
+       exp("[sample]\ndistribution = \"classes\"\nclass_radii = [1e-4, 2e-4]\nclass_mass_fractions "
+           "= [1.0]\n"),
+       e,
+       2,
+       {"sample.class_radii"}},
+      {"density_scaling_below_1",
+       exp("[engine]\ndensity_scaling = 0.5\n"),
+       e,
+       2,
+       {"engine.density_scaling"}},
+      {"preconsolidation_3d",
+       exp("[sample]\npacking = \"preconsolidation\"\n"),
+       e,
+       2,
+       {"sample.packing"}},
+      {"negative_seed", exp("[engine]\nseed = -1\n"), e, 2, {"engine.seed", "-1"}},
+      {"zero_max_particles", exp("[sample]\nmax_particles = 0\n"), e, 2, {"sample.max_particles"}},
+      {"legacy_loading_bad", exp("[loading]\nmode = \"sideways\"\n"), e, 2, {"e.toml:2"}},
+      // --- derived quantities (checked before a run folder exists) ---
+      {"bin_width_tiny",
+       {},
+       run + kLattice + " --set ae.bin_width=1e-300",
+       2,
+       {"ae.bin_width", "1e-300"}},
+      {"ramp_forever",
+       {},
+       run + kLattice + " --set test.ramp_time=1e308",
+       2,
+       {"test.ramp_time", "steps"}},
+      {"platen_light_speed",
+       {},
+       run + kLattice + " --set test.platen_speed=1e300",
+       2,
+       {"test.platen_speed", "1e+300"}},
+      {"platen_slow_forever",
+       {},
+       run + kLattice + " --set test.platen_speed=1e-300",
+       2,
+       {"test.platen_speed", "steps"}},
+      {"snapshots_tiny",
+       {},
+       run + kLattice + " --set output.snapshot_strain_interval=1e-300",
+       2,
+       {"output.snapshot_strain_interval"}},
+      {"lattice_radius_tiny", {}, run + kLattice + " --set sample.radius=1e-308", 2, {"lattice"}},
+      {"time_step_tiny",
+       {},
+       run + kLattice + " --set engine.time_step=1e-300",
+       2,
+       {"steps", "time step"}},
+      // --- --set ---
+      {"set_without_equals",
+       {},
+       run + "--set engine.threads",
+       2,
+       {"--set engine.threads", "section.key=value"}},
+      {"set_wrong_type",
+       {},
+       run + "--set engine.threads=x",
+       2,
+       {"--set engine.threads=x", "integer"}},
+      {"set_out_of_range",
+       {},
+       run + "--set test.platen_speed=-1",
+       2,
+       {"--set test.platen_speed=-1", "> 0"}},
+      {"set_section_as_value", {}, run + "--set engine=3", 2, {"--set engine=3"}},
+      {"set_unknown_table", {}, run + "--set nosuch.key=1", 2, {"nosuch"}},
+      {"set_bad_choice",
+       {},
+       run + "--set sample.shape=hexagon",
+       2,
+       {"--set sample.shape=hexagon", "hexagon"}},
+      {"set_on_file_blames_set",
+       exp("[engine]\nthreads = 1\n"),
+       e + " --set engine.safety_factor=7",
+       2,
+       {"--set engine.safety_factor=7"}},
+      // --- the command line ---
+      {"unknown_command", {}, "frobnicate", 2, {"unknown command 'frobnicate'", "run"}},
+      {"no_command", {}, "", kAnyError, {"subcommand"}},
+      {"negative_threads", {}, run + "--threads -1", kAnyError, {"--threads", "-1"}},
+      {"too_many_threads", {}, run + "--threads 100000", kAnyError, {"--threads"}},
+      {"negative_stop_step", {}, run + "--stop-at-step -5", kAnyError, {"--stop-at-step", "-5"}},
+      {"resume_bad_threads", {}, "resume --threads 5000 {d}", kAnyError, {"--threads", "5000"}},
+      {"unknown_flag", {}, run + "--bogus-flag", kAnyError, {"--bogus-flag"}},
+      {"sweep_without_stresses", {}, "sweep", kAnyError, {"--confining-mpa"}},
+      {"sweep_bad_stress", {}, "sweep --confining-mpa abc", kAnyError, {"--confining-mpa"}},
+      {"summarise_missing", {}, "summarise {d}/nothing", 2, {"nothing", "not a folder"}},
+      {"report_empty", {}, "report {d}", 2, {"summary.json"}},
+      {"resume_empty", {}, "resume {d}", 2, {"manifest.json"}},
+      // --- breccia-geometry files ---
+      {"geom_header", {{"s.geom", "breccia-geometri 1\n"}}, run + geom, 2, {"s.geom:1", "header"}},
+      {"geom_version",
+       {{"s.geom", "breccia-geometry 2\n"}},
+       run + geom,
+       2,
+       {"s.geom:1", "version"}},
+      {"geom_negative_radius",
+       {{"s.geom", txt(std::string(kGeomHead) + "particles 1\n1 0 0 0 -1 2650\n")}},
+       run + geom,
+       2,
+       {"s.geom:4", "radius", "-1"}},
+      {"geom_nan_position",
+       {{"s.geom", txt(std::string(kGeomHead) + "particles 1\n1 nan 0 0 1e-3 2650\n")}},
+       run + geom,
+       2,
+       {"s.geom:4", "'x'", "nan"}},
+      {"geom_duplicate_tags",
+       {{"s.geom",
+         txt(std::string(kGeomHead) + "particles 2\n1 0 0 0 1e-3 2650\n1 3e-3 0 0 1e-3 2650\n")}},
+       run + geom,
+       2,
+       {"s.geom:5", "tag", "s.geom:4"}},
+      {"geom_coincident",
+       {{"s.geom",
+         txt(std::string(kGeomHead) + "particles 2\n1 0 0 0 1e-3 2650\n2 0 0 0 1e-3 2650\n")}},
+       run + geom,
+       2,
+       {"s.geom:5", "share a centre"}},
+      {"geom_deep_overlap",
+       {{"s.geom",
+         txt(std::string(kGeomHead) + "particles 2\n1 0 0 0 1e-3 2650\n2 5e-4 0 0 1e-3 2650\n")}},
+       run + geom,
+       2,
+       {"s.geom:5", "inside another grain"}},
+      {"geom_bond_missing",
+       {{"s.geom", txt(std::string(kGeomHead) +
+                       "particles 2\n1 0 0 0 1e-3 2650\n2 2e-3 0 0 1e-3 2650\nbonds 1\n1 7\n")}},
+       run + geom,
+       2,
+       {"s.geom:7", "7", "no particle"}},
+      {"geom_self_bond",
+       {{"s.geom", txt(std::string(kGeomHead) +
+                       "particles 2\n1 0 0 0 1e-3 2650\n2 2e-3 0 0 1e-3 2650\nbonds 1\n2 2\n")}},
+       run + geom,
+       2,
+       {"s.geom:7", "itself"}},
+      {"geom_bond_twice",
+       {{"s.geom",
+         txt(std::string(kGeomHead) +
+             "particles 2\n1 0 0 0 1e-3 2650\n2 2e-3 0 0 1e-3 2650\nbonds 2\n1 2\n2 1\n")}},
+       run + geom,
+       2,
+       {"s.geom:8", "twice"}},
+      {"geom_huge_count",
+       {{"s.geom", txt(std::string(kGeomHead) + "particles 1000000000000\n")}},
+       run + geom,
+       2,
+       {"s.geom:3", "particles", "1000000000000"}},
+      {"geom_count_mismatch",
+       {{"s.geom", txt(std::string(kGeomHead) + "particles 3\n1 0 0 0 1e-3 2650\n")}},
+       run + geom,
+       2,
+       {"s.geom", "announced 3"}},
+      {"geom_negative_tag",
+       {{"s.geom", txt(std::string(kGeomHead) + "particles 1\n-1 0 0 0 1e-3 2650\n")}},
+       run + geom,
+       2,
+       {"s.geom:4", "tag", "-1"}},
+      {"geom_unknown_key",
+       {{"s.geom", txt(std::string(kGeomHead) + "walls 2\n")}},
+       run + geom,
+       2,
+       {"s.geom:3", "walls", "unknown key"}},
+      {"geom_2d_with_z",
+       {{"s.geom", "breccia-geometry 1\ndimension 2\nparticles 1\n1 0 0 1 1e-3 2650\n"}},
+       run + geom + " --set engine.dimension=2 --set contact.law=\"linear\"",
+       2,
+       {"s.geom:4", "z"}},
+      // --- x-y-z-r tables ---
+      {"table_nan_first_row",
+       {{"s.txt", "nan 0 0 1e-3\n3e-3 0 0 1e-3\n"}},
+       run + table,
+       2,
+       {"s.txt:1", "finite"}},
+      {"table_words_after_header", {{"s.txt", "x y z r\nx y z r\n"}}, run + table, 2, {"s.txt:2"}},
+      {"table_five_columns",
+       {{"s.txt", "0 0 0 1e-3 5\n"}},
+       run + table,
+       2,
+       {"s.txt:1", "columns", "5"}},
+      {"table_coincident",
+       {{"s.txt", "0 0 0 1e-3\n0 0 0 1e-3\n"}},
+       run + table,
+       2,
+       {"s.txt:2", "share a centre"}},
+      {"table_empty", {{"s.txt", "# nothing\n"}}, run + table, 2, {"s.txt", "no rows"}},
+      {"table_negative_radius",
+       {{"s.txt", "0 0 0 -1e-3\n"}},
+       run + table,
+       2,
+       {"s.txt:1", "radius"}},
+      // --- GenGeo files ---
+      {"gengeo_fractional_id",
+       {{"s.geo", txt(gg_head + "1\n0 0 0 1e-3 0.5 0\nEndParticles\n")}},
+       run + gengeo,
+       2,
+       {"s.geo:8", "id", "0.5"}},
+      {"gengeo_negative_id",
+       {{"s.geo", txt(gg_head + "1\n0 0 0 1e-3 -3 0\nEndParticles\n")}},
+       run + gengeo,
+       2,
+       {"s.geo:8", "id", "-3"}},
+      {"gengeo_bond_missing",
+       {{"s.geo", txt(gg_head + "2\n0 0 0 1e-3 0 0\n2e-3 0 0 1e-3 1 "
+                                "0\nEndParticles\nBeginConnect\n1\n0 9 0\nEndConnect\n")}},
+       run + gengeo,
+       2,
+       {"s.geo:13", "10", "no particle"}},
+      {"gengeo_header",
+       {{"s.geo", "LSMGeometri 1.2\n"}},
+       run + gengeo,
+       2,
+       {"s.geo:1", "LSMGeometry"}},
+      {"gengeo_count_mismatch",
+       {{"s.geo", txt(gg_head + "2\n0 0 0 1e-3 0 0\nEndParticles\n")}},
+       run + gengeo,
+       2,
+       {"s.geo", "EndParticles"}},
+      {"gengeo_huge_count",
+       {{"s.geo", txt(gg_head + "1e15\n")}},
+       run + gengeo,
+       2,
+       {"s.geo:7", "particle count"}},
+      // --- damaged run folders ---
+      {"summary_wrong_type",
+       {{"summary.json", "{\"experiment\": \"x\", \"quasi_static\": 3}"}},
+       "summarise {d}",
+       2,
+       {"summary.json", "quasi_static", "3"}},
+      {"summary_not_json",
+       {{"summary.json", "{\"experiment\": "}},
+       "summarise {d}",
+       2,
+       {"summary.json", "not valid JSON"}},
+      {"summary_array",
+       {{"summary.json", "[1, 2]"}},
+       "summarise {d}",
+       2,
+       {"summary.json", "object"}},
+      {"summary_bad_quarters",
+       {{"summary.json", "{\"crack_pattern\": {\"quarter_shares_along_axis\": [\"a\", 1, 2, 3]}}"}},
+       "summarise {d}",
+       2,
+       {"crack_pattern.quarter_shares_along_axis[0]"}},
+      {"sweep_runs_not_list",
+       {{"sweep.json", "{\"runs\": 5}"}},
+       "summarise {d}",
+       2,
+       {"sweep.json", "runs", "5"}},
+      {"sweep_run_missing_stress",
+       {{"sweep.json", "{\"runs\": [{}]}"}},
+       "summarise {d}",
+       2,
+       {"sweep.json", "runs[0].confining_stress_pa", "missing"}},
+      {"manifest_not_json",
+       {{"manifest.json", "{{{"}},
+       "resume {d}",
+       2,
+       {"manifest.json", "not valid JSON"}},
+      {"manifest_status_type",
+       {{"manifest.json", "{\"status\": 7}"}},
+       "resume {d}",
+       2,
+       {"manifest.json", "status", "7"}},
+      {"checkpoint_foreign",
+       {{"manifest.json", "{\"status\": \"interrupted\"}"},
+        {"checkpoint.bin", "hello world, not a checkpoint"}},
+       "resume {d}",
+       2,
+       {"checkpoint.bin"}},
+      {"complete_run",
+       {{"manifest.json", "{\"status\": \"complete\"}"}},
+       "resume {d}",
+       2,
+       {"nothing to resume"}},
+  };
+  return c;
+}
+
+void PrintTo(const BadCase& k, std::ostream* os) {
+  *os << k.name;
+}
+
+class BadInput : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadInput, FailsClearlyAndLeavesNoWholeLookingRun) {
+  const BadCase& k = GetParam();
+  const fs::path dir = fs::temp_directory_path() / (std::string("breccia_bad_") + k.name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (const auto& [name, text] : k.files) std::ofstream(dir / name) << text;
+  const Result r = run(replace_all(k.args, "{d}", dir.string()));
+  ASSERT_NE(r.code, -1) << "killed by a signal\n" << r.out;
+  if (k.code == kAnyError)
+    EXPECT_NE(r.code, 0) << r.out;
+  else
+    EXPECT_EQ(r.code, k.code) << r.out;
+  for (const std::string& needle : k.needles)
+    EXPECT_NE(r.out.find(replace_all(needle, "{d}", dir.string())), std::string::npos)
+        << "the message should name '" << needle << "':\n"
+        << r.out;
+  EXPECT_EQ(r.out.find("std::"), std::string::npos) << "a library message reached the user:\n"
+                                                    << r.out;
+  EXPECT_EQ(r.out.find("json.exception"), std::string::npos) << r.out;
+  EXPECT_FALSE(has_whole_looking_run(dir / "runs")) << r.out;
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, BadInput, ::testing::ValuesIn(cases()),
+                         [](const ::testing::TestParamInfo<BadCase>& i) {
+                           return std::string(i.param.name);
+                         });
+
+// A real checkpoint, damaged three ways: a flipped byte in the middle, a cut, and the hash
+// trailer rewritten. Each is refused by name before any of it is used; none resumes to
+// "complete".
+TEST(BadCheckpoint, DamagedCheckpointsAreRefused) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_bad_checkpoint";
+  fs::remove_all(dir);
+  const Result first =
+      run("run --quiet --output " + dir.string() + kLattice + " --stop-at-step 50");
+  ASSERT_EQ(first.code, 130) << first.out;
+  const fs::path folder = last_line(first.out);
+  const fs::path cp = folder / "checkpoint.bin";
+  ASSERT_TRUE(fs::exists(cp)) << first.out;
+  const std::string good = read(cp);
+  auto write = [&](const std::string& bytes) {
+    std::ofstream(cp, std::ios::binary | std::ios::trunc) << bytes;
+  };
+  std::string flipped = good;
+  flipped[flipped.size() / 2] = static_cast<char>(flipped[flipped.size() / 2] ^ 0x10);
+  std::string rehashed = good;
+  rehashed[rehashed.size() - 1] = static_cast<char>(rehashed[rehashed.size() - 1] ^ 0x01);
+  for (const auto& [what, bytes, needle] :
+       {std::tuple{"flipped byte", flipped, "checksum"},
+        std::tuple{"cut in half", good.substr(0, good.size() / 2), "checksum"},
+        std::tuple{"hash altered", rehashed, "checksum"},
+        std::tuple{"empty", std::string(), "checkpoint.bin"}}) {
+    write(bytes);
+    const Result r = run("resume --quiet " + folder.string());
+    EXPECT_EQ(r.code, 2) << what << ": " << r.out;
+    EXPECT_NE(r.out.find("checkpoint.bin"), std::string::npos) << what << ": " << r.out;
+    EXPECT_NE(r.out.find(needle), std::string::npos) << what << ": " << r.out;
+    EXPECT_FALSE(fs::exists(folder / "summary.json") &&
+                 read(folder / "manifest.json").find("\"complete\"") != std::string::npos)
+        << what;
+  }
+  write(good);  // the intact one still resumes, to the end
+  const Result ok = run("resume --quiet " + folder.string());
+  EXPECT_EQ(ok.code, 0) << ok.out;
+  fs::remove_all(dir);
+}
+
+}  // namespace
