@@ -16,7 +16,6 @@ namespace breccia {
 
 namespace {
 
-// Where a node came from: "file:line" when known.
 // Where a node came from: "file:line" when known, or the `--set` option that gave it.
 std::string where_of(const std::string& source, const toml::node& n) {
   const auto& src = n.source();
@@ -489,6 +488,7 @@ void apply_legacy_loading(ExperimentSpec& spec, const toml::table& tbl, const st
                                               "max_strain",       "stop_fraction",
                                               "confining_stress", "servo_relaxation"};
   for (const auto& [kk, value] : tbl) {
+    const toml::node& item_node = value;  // clang 14 cannot capture a structured binding
     const std::string item(kk.str()), full = "loading." + item;
     const std::string where = where_of(source, value);
     if (std::find(known.begin(), known.end(), item) == known.end())
@@ -498,7 +498,7 @@ void apply_legacy_loading(ExperimentSpec& spec, const toml::table& tbl, const st
                        "table replaces it)");
     bool found = false;
     with_lab_test(spec.test_kind, [&]<class T>() {
-      set_law_key<T>(std::get<typename T::Params>(spec.test), item, value, where, full, found);
+      set_law_key<T>(std::get<typename T::Params>(spec.test), item, item_node, where, full, found);
     });
     // A UCS has no confinement: its confining_stress (0) and servo gain are not used.
     if (!found && spec.test_kind == "ucs" &&
@@ -562,6 +562,7 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
                        "unknown table; allowed: [engine], [material], [sample], [contact], "
                        "[bond], [test], [output], [ae]");
     for (const auto& [kk, value] : tbl) {
+      const toml::node& item_node = value;  // clang 14 cannot capture a structured binding
       const std::string item(kk.str());
       const std::string full = name + "." + item;
       const std::string where = where_of(source, value);
@@ -588,7 +589,8 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
         allowed = "law, " + law_key_list<ParallelBond>();
       } else if (name == "test") {
         with_lab_test(spec.test_kind, [&]<class T>() {
-          set_law_key<T>(std::get<typename T::Params>(spec.test), item, value, where, full, found);
+          set_law_key<T>(std::get<typename T::Params>(spec.test), item, item_node, where, full,
+                         found);
           allowed = "kind, " + law_key_list<T>();
         });
       } else {

@@ -76,8 +76,30 @@ void AeMonitor::configure(double vs) {
   s_.shear_wave_speed = vs;
   duration_ = analysis::event_duration(s_.source_radius, vs);
   clusterer_.emplace(analysis::ClusterSettings{s_.source_radius, duration_, s_.linkage});
+  bind_clusterer();
+}
+
+void AeMonitor::bind_clusterer() {
+  if (!clusterer_) return;
   clusterer_->merged = [this](std::size_t kept, std::size_t gone) { merge(kept, gone); };
   clusterer_->closed = [this](std::size_t root) { close(root); };
+}
+
+AeMonitor& AeMonitor::operator=(AeMonitor&& o) noexcept {
+  s_ = o.s_;
+  duration_ = o.duration_;
+  clusterer_ = std::move(o.clusterer_);
+  o.clusterer_.reset();
+  open_ = std::move(o.open_);
+  done_ = std::move(o.done_);
+  done_root_ = std::move(o.done_root_);
+  context_ = std::move(o.context_);
+  seen_ = o.seen_;
+  stamp_ = o.stamp_;
+  steps_ = o.steps_;
+  grid_ = std::move(o.grid_);
+  bind_clusterer();  // the moved callbacks still point at `o`
+  return *this;
 }
 
 void AeMonitor::build_grid(const Simulation& sim) {

@@ -58,6 +58,12 @@ class AeMonitor {
   AeMonitor() = default;
   // `source_radius` resolved (> 0); clustering starts once the wave speed is set.
   explicit AeMonitor(AeSettings s) : s_(s) {}
+  // The clusterer calls back into its monitor; a move rebinds those calls to the new object (a
+  // monitor restored from a checkpoint is moved into the run's session).
+  AeMonitor(AeMonitor&& other) noexcept { *this = std::move(other); }
+  AeMonitor& operator=(AeMonitor&& other) noexcept;
+  AeMonitor(const AeMonitor&) = delete;
+  AeMonitor& operator=(const AeMonitor&) = delete;
   bool configured() const noexcept { return clusterer_.has_value(); }
   // Fixes v_S (and with it T_d = 4 r_s / v_S) before the first crack is processed.
   void configure(double shear_wave_speed);
@@ -98,6 +104,7 @@ class AeMonitor {
   };
   template <class Archive>
   void transfer(Archive& a);
+  void bind_clusterer();
   void add_source(const Simulation& sim, Open& o, std::uint32_t p);
   void watch_near(const Simulation& sim, Open& o, const Vec3& x);
   void evaluate(const Simulation& sim, Open& o, double strain);
