@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <new>
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
@@ -239,6 +240,13 @@ int main(int argc, char** argv) {
   } catch (const breccia::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "error: out of memory: the sample or the run is larger than this machine can "
+                 "hold (see sample.max_particles)\n";
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::cerr << "error: " << e.path1().string() << ": " << e.code().message() << "\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;

@@ -122,12 +122,36 @@ Key choice_key(std::string section, std::string name, std::vector<std::string> c
   return k;
 }
 
+// A TOML basic string: quotes, backslashes and control characters escaped.
+std::string toml_quoted(const std::string& v) {
+  std::string out = "\"";
+  for (const char c : v) {
+    if (c == '"' || c == '\\')
+      out += std::string("\\") + c;
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      out += fmt::format("\\u{:04x}", static_cast<unsigned>(static_cast<unsigned char>(c)));
+    else
+      out += c;
+  }
+  return out + "\"";
+}
+
 Key string_key(std::string section, std::string name, std::string doc,
-               std::string ExperimentSpec::*member) {
-  Key k{section, name, "", "string", "any text", std::move(doc), {}, {}};
-  k.set = [member](ExperimentSpec& s, const toml::node& n, const std::string& where,
-                   const std::string& key) { s.*member = get_string(n, where, key); };
-  k.get = [member](const ExperimentSpec& s) { return fmt::format("\"{}\"", s.*member); };
+               std::string ExperimentSpec::*member, std::size_t max_length = 4096) {
+  Key k{
+      section,        name, "", "string", fmt::format("text of at most {} characters", max_length),
+      std::move(doc), {},   {}};
+  k.set = [member, max_length](ExperimentSpec& s, const toml::node& n, const std::string& where,
+                               const std::string& key) {
+    std::string v = get_string(n, where, key);
+    if (v.size() > max_length)
+      throw InputError(
+          where, key,
+          "\"" + v.substr(0, 40) + "...\" (" + std::to_string(v.size()) + " characters)",
+          fmt::format("at most {} characters", max_length));
+    s.*member = std::move(v);
+  };
+  k.get = [member](const ExperimentSpec& s) { return toml_quoted(s.*member); };
   return k;
 }
 
@@ -167,7 +191,7 @@ const std::vector<Key>& key_table() {
   static const std::vector<Key> keys = [] {
     std::vector<Key> k;
     k.push_back(string_key("", "name", "name of the experiment, used in the run folder's name",
-                           &ExperimentSpec::name));
+                           &ExperimentSpec::name, 100));
     // [engine]
     k.push_back(int_key("engine", "dimension", 2, 3, "3: spheres; 2: disks in the x-y plane",
                         [](ExperimentSpec& s) -> std::int64_t& { return s.dimension; }));
