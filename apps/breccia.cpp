@@ -12,10 +12,12 @@
 #include <limits>
 #include <new>
 
+#include "breccia/calibrate/calibrate.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
 #include "breccia/io/experiment.hpp"
 #include "breccia/io/run_folder.hpp"
+#include "breccia/material/library.hpp"
 #include "breccia/version.hpp"
 
 namespace {
@@ -39,6 +41,34 @@ bool unknown_command(int argc, char** argv, const CLI::App& app) {
   std::cerr << "error: unknown command '" << argv[1] << "'; allowed: " << allowed
             << " (breccia --help)\n";
   return true;
+}
+// `breccia calibrate FILE`: the calibration folder is <output>/<name>; running the same command
+// again after an interruption continues it.
+int calibrate_command(const std::string& file, const std::string& output, bool check_only,
+                      const std::string& command_line) {
+  const breccia::CalibrationSpec spec = breccia::load_calibration(file);
+  if (check_only) {
+    std::cout << "calibration \"" << spec.name << "\": " << spec.targets.size() << " targets, "
+              << spec.free.size() << " free parameters, " << spec.tied.size()
+              << " tied; file is valid\n";
+    return 0;
+  }
+  catch_signals();
+  breccia::CalibrationOptions opt;
+  opt.output_directory = output;
+  opt.command_line = command_line;
+  opt.log = [](const std::string& m) { std::cerr << m << std::endl; };
+  const breccia::CalibrationResult r = breccia::run_calibration(spec, opt);
+  if (r.status == "complete") {
+    std::cerr << "calibration complete: " << r.evaluations << " trials, " << r.test_runs
+              << " test runs, " << static_cast<int>(r.wall_seconds) << " s\n"
+              << breccia::verdict_table(r) << "parameters: " << r.folder << "/material.toml\n";
+  } else {
+    std::cerr << "calibration " << r.status << ": the finished tests are kept; run the same "
+              << "command again to continue\n";
+  }
+  std::cout << r.folder << std::endl;
+  return r.status == "complete" ? 0 : 130;
 }
 }  // namespace
 
@@ -119,6 +149,23 @@ int main(int argc, char** argv) {
   auto* docs = app.add_subcommand("docs", "write the experiment-file reference (Markdown)");
   std::string docs_out;
   docs->add_option("--output", docs_out, "file to write (default: standard output)");
+  bool docs_calibration = false;
+  docs->add_flag("--calibration", docs_calibration,
+                 "the calibration-file reference instead (docs/calibration.md)");
+
+  auto* cal = app.add_subcommand(
+      "calibrate", "fit micro-parameters to lab targets (a calibration file); resumable");
+  std::string cal_file, cal_output = "calibrations";
+  bool cal_check = false;
+  cal->add_option("calibration", cal_file, "calibration file (TOML)")->required();
+  cal->add_option("--output", cal_output, "folder that receives <output>/<name>/")
+      ->capture_default_str();
+  cal->add_flag("--check", cal_check, "only validate the calibration file");
+
+  auto* materials = app.add_subcommand(
+      "materials", "write the material library's table and calibration records (Markdown)");
+  std::string materials_out;
+  materials->add_option("--output", materials_out, "file to write (default: standard output)");
 
   app.add_subcommand("version", "print the version");
 
@@ -192,6 +239,7 @@ int main(int argc, char** argv) {
       std::cout << r.folder << std::endl;
       return r.status == "complete" ? 0 : 130;
     }
+    if (*cal) return calibrate_command(cal_file, cal_output, cal_check, command_line);
     if (*summ) {
       std::cout << breccia::summarise_folder(summ_dir);
       return 0;
@@ -221,8 +269,11 @@ int main(int argc, char** argv) {
       std::cout << breccia::to_toml(spec);
       return 0;
     }
-    if (*docs) {
-      const std::string text = breccia::experiment_docs();
+    if (*docs || *materials) {
+      const std::string text =
+          *docs ? (docs_calibration ? breccia::calibration_docs() : breccia::experiment_docs())
+                : breccia::materials_docs();
+      if (*materials) docs_out = materials_out;
       if (docs_out.empty()) {
         std::cout << text;
       } else {

@@ -229,7 +229,7 @@ TEST(App, BadExperimentFilesFailClearly) {
   expect_input_error("[sample]\nshape = \"sphere\"\n", {"sample.shape", "\"cylinder\""});
   expect_input_error("[engine]\ndimension = 2\n[contact]\nlaw = \"linear\"\n",
                      {"sample.shape", "rectangle"});
-  expect_input_error("[material]\npreset = \"basalt\"\n", {"material.preset", "berea_analog"});
+  expect_input_error("[material]\npreset = \"basalt\"\n", {"material.preset", "\"berea\""});
   expect_input_error("[sample]\ndistribution = \"classes\"\nclass_radii = [1e-3]\n",
                      {"sample.class_radii", "mass_fractions"});
   expect_input_error("[engine]\ndensity_scaling = 0.5\n", {"engine.density_scaling", ">= 1"});

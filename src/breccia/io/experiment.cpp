@@ -11,6 +11,7 @@
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
+#include "breccia/material/library.hpp"
 
 namespace breccia {
 
@@ -545,6 +546,9 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
   // [contact] and [bond] depend on them.
   if (const auto* t = root["material"].as_table())
     if (const auto* pr = t->get("preset")) {
+      if (pr->is_string() && (pr->as_string()->get() == "berea_analog" ||
+                              pr->as_string()->get() == "lac_du_bonnet_analog"))
+        apply_preset(spec, pr->as_string()->get(), where_of(source, *pr));  // says why
       find_key("material", "preset")->set(spec, *pr, where_of(source, *pr), "material.preset");
       apply_preset(spec, spec.preset, where_of(source, *pr));
     }
@@ -728,66 +732,41 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
 }  // namespace
 
 std::vector<std::pair<std::string, std::string>> material_presets() {
-  return {
+  std::vector<std::pair<std::string, std::string>> out{
       {"custom",
        "the plain law defaults (linear contacts, the parallel bond's defaults, 2650 kg/m^3), "
-       "then the keys."},
-      {"berea_analog",
-       "Berea sandstone analog, UNCALIBRATED: Hertz-Mindlin grains G = 29 GPa, nu = 0.33, "
-       "mu = 0.4 and bond strengths T = 30 MPa, c = 300 MPa from the RICEBAL calibration "
-       "(Vora & Morgan); this parallel bond's modulus (8 GPa, the lab E) and stiffness ratio "
-       "(2.5) are not from the paper; grain density 2650 kg/m^3."},
-      {"lac_du_bonnet_analog",
-       "Lac du Bonnet granite analog, UNCALIBRATED: Potyondy & Cundall (2004) values as "
-       "restated in physics.md §4.1 (E_c = E_bar = 62 GPa, kappa = 2.5, mu = 0.5, lambda = 1, "
-       "sigma_c = tau_c = 175 +/- 40 MPa), linear contacts; grain density 2630 kg/m^3."},
-  };
+       "then the keys."}};
+  for (const auto& m : embedded_materials())
+    out.emplace_back(std::string(m.name), describe_material(m));
+  return out;
 }
 
 void apply_preset(ExperimentSpec& s, const std::string& name, const std::string& where) {
-  if (name == "custom") {
-    // The plain law defaults (the built-in default experiment itself uses berea_analog).
-    const ExperimentSpec plain;
-    s.density = plain.density;
-    s.contact_law = plain.contact_law;
-    s.linear = plain.linear;
-    s.hertz = plain.hertz;
-    s.parallel_bond = plain.parallel_bond;
-    return;
-  }
-  if (name == "berea_analog") {
-    s.density = 2650.0;
-    s.contact_law = "hertz_mindlin";
-    s.hertz = HertzMindlin::Params{};
-    s.hertz.shear_modulus = 29e9;
-    s.hertz.poisson_ratio = 0.33;
-    s.hertz.friction = 0.4;
-    s.parallel_bond = ParallelBond::Params{};
-    s.parallel_bond.modulus = 8e9;
-    s.parallel_bond.stiffness_ratio = 2.5;
-    s.parallel_bond.tensile_strength = 30e6;
-    s.parallel_bond.cohesion = 300e6;
-    return;
-  }
-  if (name == "lac_du_bonnet_analog") {
-    s.density = 2630.0;
-    s.contact_law = "linear";
-    s.linear = LinearContact::Params{};
-    s.linear.modulus = 62e9;
-    s.linear.stiffness_ratio = 2.5;
-    s.linear.friction = 0.5;
-    s.parallel_bond = ParallelBond::Params{};
-    s.parallel_bond.modulus = 62e9;
-    s.parallel_bond.stiffness_ratio = 2.5;
-    s.parallel_bond.radius_multiplier = 1.0;
-    s.parallel_bond.tensile_strength = 175e6;
-    s.parallel_bond.tensile_strength_sd = 40e6;
-    s.parallel_bond.cohesion = 175e6;
-    s.parallel_bond.cohesion_sd = 40e6;
+  // Every preset starts from the plain law defaults, so that keys a preset leaves out do not
+  // keep the values of the one before.
+  const ExperimentSpec plain;
+  s.density = plain.density;
+  s.contact_law = plain.contact_law;
+  s.linear = plain.linear;
+  s.hertz = plain.hertz;
+  s.bond_law = plain.bond_law;
+  s.parallel_bond = plain.parallel_bond;
+  if (name == "custom") return;
+  for (const auto& m : embedded_materials()) {
+    if (m.name != name) continue;
+    const std::string source = "material preset \"" + name + "\"";
+    toml::table t = toml::parse(m.fragment, source);
+    apply_table(s, t, source);
     return;
   }
   std::string allowed = "allowed: ";
   for (const auto& [n, d] : material_presets()) allowed += "\"" + n + "\" ";
+  if (name == "berea_analog" || name == "lac_du_bonnet_analog")
+    allowed =
+        "this uncalibrated analog was withdrawn (presets that are not calibrated do not "
+        "ship under a rock's name); use \"berea\", calibrated, or set the micro-parameters "
+        "yourself (examples/calibrate-berea.toml lists the analog's values); " +
+        allowed;
   throw InputError(where, "material.preset", "\"" + name + "\"", allowed);
 }
 
@@ -798,13 +777,11 @@ ExperimentSpec default_experiment() {
   ExperimentSpec s;
   s.engine.local_damping = 0.7;
   s.engine.energy_interval = 100;
-  s.preset = "berea_analog";
+  s.preset = "berea";
   apply_preset(s, s.preset, "built-in default");
   s.density_scaling = 10.0;
   s.radius_min = 0.22e-3;
   s.radius_max = 0.36e-3;
-  s.radius_mean = 0.29e-3;  // lognormal: within the bounds
-  s.radius_sd = 0.04e-3;
   // Unlubricated steel platens (rock on steel, about 0.3): with frictionless platens the grains
   // against them, loaded at one point each and free to slide, break first and the test crushes
   // an end (ARCHITECTURE.md, "Samples").
@@ -882,6 +859,30 @@ ExperimentSpec parse_experiment(const std::string& text, const std::string& sour
   } catch (const toml::parse_error& e) {
     throw InputError(source + ":" + std::to_string(e.source().begin.line), "", "",
                      std::string("TOML syntax error: ") + std::string(e.description()));
+  }
+  apply_overrides(root, overrides);
+  ExperimentSpec spec = default_experiment();
+  spec.source = source;
+  apply_table(spec, root, source);
+  check_consistency(spec, source);
+  return spec;
+}
+
+ExperimentSpec parse_experiment_table(const std::string& text, const std::string& source,
+                                      const std::string& table,
+                                      const std::vector<std::string>& overrides) {
+  toml::table file;
+  try {
+    file = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    throw InputError(source + ":" + std::to_string(e.source().begin.line), "", "",
+                     std::string("TOML syntax error: ") + std::string(e.description()));
+  }
+  toml::table root;
+  if (auto* t = file.get_as<toml::table>(table)) {
+    root = std::move(*t);  // moved, so that the nodes keep their lines in the file
+  } else if (file.contains(table)) {
+    throw InputError(where_of(source, *file.get(table)), table, "", "expected a table");
   }
   apply_overrides(root, overrides);
   ExperimentSpec spec = default_experiment();

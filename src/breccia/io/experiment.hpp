@@ -13,7 +13,7 @@
 namespace breccia {
 
 struct ExperimentSpec {
-  std::string name = "ucs-berea-analog";
+  std::string name = "ucs-berea";
   // [engine]
   std::int64_t dimension = 3;
   std::int64_t threads = 0;      // 0 = all cores
@@ -104,6 +104,12 @@ ExperimentSpec load_experiment(const std::string& path, const std::vector<std::s
 // Same, from TOML text (`source` names it in errors); empty text gives the default experiment.
 ExperimentSpec parse_experiment(const std::string& text, const std::string& source,
                                 const std::vector<std::string>& overrides);
+
+// Same, from the table `table` of a larger TOML file (a calibration file's [experiment]); errors
+// name the lines of that file. A missing table is the default experiment.
+ExperimentSpec parse_experiment_table(const std::string& text, const std::string& source,
+                                      const std::string& table,
+                                      const std::vector<std::string>& overrides);
 
 // The fully resolved spec as TOML text (every key, defaults included), for the run manifest.
 std::string to_toml(const ExperimentSpec& spec);

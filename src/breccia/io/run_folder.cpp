@@ -580,6 +580,11 @@ bool run_script(const char* script_name, const std::string& folder, const char* 
 }
 }  // namespace
 
+bool run_python_script(const std::string& script, const std::string& folder,
+                       const std::string& log_name) {
+  return run_script(script.c_str(), folder, log_name.c_str());
+}
+
 bool plot_run(const std::string& folder) {
   return run_script("plot_run.py", folder, "plot.log");
 }

@@ -79,6 +79,11 @@ bool plot_run(const std::string& folder);
 // script's messages in report.log if not.
 bool write_report(const std::string& folder);
 
+// Runs scripts/<script> <folder> with Debian's Python; its output goes to <folder>/<log_name>,
+// removed when it succeeds. False if it failed.
+bool run_python_script(const std::string& script, const std::string& folder,
+                       const std::string& log_name);
+
 // A description of this machine for manifests and benchmark records.
 std::string machine_description();
 

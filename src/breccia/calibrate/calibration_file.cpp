@@ -1,0 +1,532 @@
+#include "breccia/calibrate/calibration_file.hpp"
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "breccia/core/error.hpp"
+
+namespace breccia {
+
+std::string_view stage_name(CalibrationStage s) noexcept {
+  switch (s) {
+    case CalibrationStage::Elastic:
+      return "elastic";
+    case CalibrationStage::Strength:
+      return "strength";
+    case CalibrationStage::Friction:
+      return "friction";
+  }
+  return "?";
+}
+
+const std::vector<PropertyInfo>& property_table() {
+  using S = CalibrationStage;
+  static const std::vector<PropertyInfo> table{
+      {Property::YoungsModulus, "youngs_modulus", "Pa",
+       "Young's modulus E_t50 of the UCS test (ISRM tangent at 50 % of the peak)", S::Elastic, true,
+       0.05},
+      {Property::PoissonRatio, "poisson_ratio", "-",
+       "Poisson's ratio of the UCS test (lateral over axial strain at 50 % of the peak)",
+       S::Elastic, false, 0.03},
+      {Property::UniaxialStrength, "uniaxial_strength", "Pa", "UCS: peak axial stress, sigma_3 = 0",
+       S::Strength, true, 0.05},
+      {Property::TensileStrength, "tensile_strength", "Pa",
+       "Brazilian tensile strength 2 F / (pi D t)", S::Strength, true, 0.10},
+      {Property::CrackInitiationRatio, "crack_initiation_ratio", "-",
+       "crack-initiation stress over the UCS", S::Strength, false, 0.05},
+      {Property::StrainAtPeak, "strain_at_peak", "-",
+       "axial strain at the UCS peak (critical strain)", S::Strength, true, 0.10},
+      {Property::Cohesion, "cohesion", "Pa",
+       "Mohr-Coulomb cohesion from the UCS and the triaxial peaks", S::Friction, true, 0.10},
+      {Property::FrictionAngle, "friction_angle_deg", "deg",
+       "Mohr-Coulomb friction angle from the UCS and the triaxial peaks", S::Friction, false, 2.0},
+  };
+  return table;
+}
+
+const PropertyInfo& info(Property p) {
+  for (const auto& i : property_table())
+    if (i.property == p) return i;
+  throw InternalError("unknown property");
+}
+
+bool CalibrationSpec::has_target(Property p) const {
+  return target(p) != nullptr;
+}
+const Target* CalibrationSpec::target(Property p) const {
+  for (const auto& t : targets)
+    if (t.property == p) return &t;
+  return nullptr;
+}
+
+namespace {
+
+// The micro-parameters a calibration may free, and the stage that fits each.
+struct FreeKeyInfo {
+  std::string_view key;
+  CalibrationStage stage;
+};
+constexpr FreeKeyInfo kFreeKeys[] = {
+    {"bond.modulus", CalibrationStage::Elastic},
+    {"bond.stiffness_ratio", CalibrationStage::Elastic},
+    {"bond.radius_multiplier", CalibrationStage::Elastic},
+    {"contact.modulus", CalibrationStage::Elastic},
+    {"contact.stiffness_ratio", CalibrationStage::Elastic},
+    {"contact.shear_modulus", CalibrationStage::Elastic},
+    {"contact.poisson_ratio", CalibrationStage::Elastic},
+    {"bond.tensile_strength", CalibrationStage::Strength},
+    {"bond.cohesion", CalibrationStage::Strength},
+    {"bond.tensile_strength_sd", CalibrationStage::Strength},
+    {"bond.cohesion_sd", CalibrationStage::Strength},
+    {"bond.moment_factor", CalibrationStage::Strength},
+    {"contact.friction", CalibrationStage::Friction},
+    {"bond.friction_angle_deg", CalibrationStage::Friction},
+};
+
+std::string free_key_list() {
+  std::string s;
+  for (const auto& k : kFreeKeys) s += (s.empty() ? "" : ", ") + std::string(k.key);
+  return s;
+}
+
+std::string where_of(const std::string& source, const toml::node& n) {
+  const auto& src = n.source();
+  if (src.begin.line > 0) return source + ":" + std::to_string(src.begin.line);
+  return source;
+}
+
+std::string show(const toml::node& n) {
+  std::ostringstream s;
+  if (n.is_string())
+    s << '"' << n.as_string()->get() << '"';
+  else
+    n.visit([&](const auto& v) { s << v; });
+  return s.str();
+}
+
+double real_of(const toml::node& n, const std::string& where, const std::string& key) {
+  if (auto v = n.value<double>();
+      v && (n.is_floating_point() || n.is_integer()) && std::isfinite(*v))
+    return *v;
+  throw InputError(where, key, show(n), "expected a finite number");
+}
+
+std::int64_t int_of(const toml::node& n, const std::string& where, const std::string& key,
+                    std::int64_t lo, std::int64_t hi) {
+  if (!n.is_integer()) throw InputError(where, key, show(n), "expected an integer");
+  const std::int64_t v = n.as_integer()->get();
+  if (v < lo || v > hi)
+    throw InputError(where, key, show(n), fmt::format("allowed: {} to {}", lo, hi));
+  return v;
+}
+
+std::string string_of(const toml::node& n, const std::string& where, const std::string& key) {
+  if (!n.is_string()) throw InputError(where, key, show(n), "expected a string");
+  return n.as_string()->get();
+}
+
+std::vector<double> reals_of(const toml::node& n, const std::string& where,
+                             const std::string& key) {
+  const auto* a = n.as_array();
+  if (!a) throw InputError(where, key, show(n), "expected an array of numbers");
+  std::vector<double> out;
+  for (const auto& v : *a) out.push_back(real_of(v, where, key));
+  return out;
+}
+
+// The value of an experiment key ("section.name") in the resolved spec, if it is a number.
+std::optional<double> resolved_number(const ExperimentSpec& spec, const std::string& key) {
+  const toml::table t = toml::parse(to_toml(spec), std::string_view("resolved"));
+  const auto dot = key.find('.');
+  if (dot == std::string::npos) return std::nullopt;
+  const auto* node = t.at_path(key).node();
+  if (!node || !(node->is_floating_point() || node->is_integer())) return std::nullopt;
+  return node->value<double>();
+}
+
+Target read_target(const std::string& name, const toml::node& n, const std::string& source) {
+  const std::string where = where_of(source, n), key = "targets." + name;
+  const PropertyInfo* pi = nullptr;
+  for (const auto& i : property_table())
+    if (i.key == name) pi = &i;
+  if (!pi) {
+    std::string allowed;
+    for (const auto& i : property_table())
+      allowed += (allowed.empty() ? "" : ", ") + std::string(i.key);
+    throw InputError(where, key, "", "unknown target; allowed: " + allowed);
+  }
+  Target t{pi->property, 0.0, pi->tolerance, pi->relative, ""};
+  if (const auto* tbl = n.as_table()) {
+    for (const auto& [k, v] : *tbl) {
+      const std::string item(k.str()), w = where_of(source, v);
+      if (item == "value")
+        t.value = real_of(v, w, key + ".value");
+      else if (item == "tolerance")
+        t.tolerance = real_of(v, w, key + ".tolerance");
+      else if (item == "source")
+        t.source = string_of(v, w, key + ".source");
+      else
+        throw InputError(w, key + "." + item, show(v),
+                         "unknown key; allowed: value, tolerance, source");
+    }
+    if (!tbl->contains("value")) throw InputError(where, key, "", "needs a value");
+  } else {
+    t.value = real_of(n, where, key);
+  }
+  const std::string unit = t.relative ? "a fraction of the target, e.g. 0.05"
+                                      : fmt::format("in {}, e.g. {}", pi->unit, pi->tolerance);
+  if (!(t.tolerance > 0.0) || (t.relative && t.tolerance >= 1.0))
+    throw InputError(where, key + ".tolerance", fmt::format("{}", t.tolerance),
+                     "must be above 0 (" + unit + (t.relative ? ", below 1)" : ")"));
+  const bool ok = pi->property == Property::PoissonRatio           ? t.value > -1 && t.value < 0.5
+                  : pi->property == Property::FrictionAngle        ? t.value > 0 && t.value < 90
+                  : pi->property == Property::CrackInitiationRatio ? t.value > 0 && t.value < 1
+                                                                   : t.value > 0;
+  if (!ok)
+    throw InputError(where, key + ".value", fmt::format("{}", t.value),
+                     pi->property == Property::PoissonRatio    ? "allowed: -1 < nu < 0.5"
+                     : pi->property == Property::FrictionAngle ? "allowed: 0 < phi < 90 degrees"
+                     : pi->property == Property::CrackInitiationRatio
+                         ? "allowed: between 0 and 1"
+                         : "must be above 0 (" + std::string(pi->unit) + ")");
+  return t;
+}
+
+// A free parameter: "bond.modulus" = [lower, upper] or { lower, upper, stage, scale }.
+FreeParameter read_free(const std::string& name, const toml::node& n, const std::string& source) {
+  const std::string where = where_of(source, n), key = "free.\"" + name + "\"";
+  const FreeKeyInfo* fk = nullptr;
+  for (const auto& k : kFreeKeys)
+    if (k.key == name) fk = &k;
+  if (!fk)
+    throw InputError(where, key, "",
+                     "not a micro-parameter calibration can free; allowed: " + free_key_list());
+  FreeParameter f{name, 0.0, 0.0, 0.0, true, fk->stage};
+  std::string scale;
+  if (const auto* a = n.as_array()) {
+    const auto v = reals_of(*a, where, key);
+    if (v.size() != 2) throw InputError(where, key, show(n), "expected [lower, upper]");
+    f.lower = v[0];
+    f.upper = v[1];
+  } else if (const auto* tbl = n.as_table()) {
+    bool lo = false, hi = false;
+    for (const auto& [k, v] : *tbl) {
+      const std::string item(k.str()), w = where_of(source, v);
+      if (item == "lower") {
+        f.lower = real_of(v, w, key + ".lower");
+        lo = true;
+      } else if (item == "upper") {
+        f.upper = real_of(v, w, key + ".upper");
+        hi = true;
+      } else if (item == "scale") {
+        scale = string_of(v, w, key + ".scale");
+        if (scale != "log" && scale != "linear")
+          throw InputError(w, key + ".scale", show(v), "allowed: \"log\", \"linear\"");
+      } else if (item == "stage") {
+        const std::string s = string_of(v, w, key + ".stage");
+        bool found = false;
+        for (auto st :
+             {CalibrationStage::Elastic, CalibrationStage::Strength, CalibrationStage::Friction})
+          if (stage_name(st) == s) {
+            f.stage = st;
+            found = true;
+          }
+        if (!found)
+          throw InputError(w, key + ".stage", show(v),
+                           "allowed: \"elastic\", \"strength\", \"friction\"");
+      } else {
+        throw InputError(w, key + "." + item, show(v),
+                         "unknown key; allowed: lower, upper, scale, stage");
+      }
+    }
+    if (!lo || !hi) throw InputError(where, key, "", "needs lower and upper");
+  } else {
+    throw InputError(where, key, show(n),
+                     "expected [lower, upper] or { lower = ..., upper = ... }");
+  }
+  if (!(f.lower < f.upper))
+    throw InputError(where, key, fmt::format("[{}, {}]", f.lower, f.upper),
+                     "impossible bounds: lower must be below upper");
+  f.log_scale = scale.empty() ? f.lower > 0.0 : scale == "log";
+  if (f.log_scale && !(f.lower > 0.0))
+    throw InputError(where, key, fmt::format("[{}, {}]", f.lower, f.upper),
+                     "a log-scale parameter needs bounds above 0 (or scale = \"linear\")");
+  return f;
+}
+
+TiedParameter read_tied(const std::string& name, const toml::node& n, const std::string& source) {
+  const std::string where = where_of(source, n), key = "tied.\"" + name + "\"";
+  TiedParameter t{name, "", 1.0};
+  const auto* tbl = n.as_table();
+  if (!tbl) throw InputError(where, key, show(n), "expected { follows = \"...\", factor = ... }");
+  for (const auto& [k, v] : *tbl) {
+    const std::string item(k.str()), w = where_of(source, v);
+    if (item == "follows")
+      t.follows = string_of(v, w, key + ".follows");
+    else if (item == "factor")
+      t.factor = real_of(v, w, key + ".factor");
+    else
+      throw InputError(w, key + "." + item, show(v), "unknown key; allowed: follows, factor");
+  }
+  if (t.follows.empty()) throw InputError(where, key, "", "needs follows = \"<free parameter>\"");
+  return t;
+}
+
+void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string& source) {
+  for (const auto& [k, v] : tbl) {
+    const std::string item(k.str()), w = where_of(source, v), key = "calibration." + item;
+    if (item == "name") {
+      c.name = string_of(v, w, key);
+      const bool ok = !c.name.empty() && c.name.size() <= 100 &&
+                      std::all_of(c.name.begin(), c.name.end(), [](char ch) {
+                        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' ||
+                               ch == '_' || ch == '.';
+                      });
+      if (!ok)
+        throw InputError(w, key, show(v),
+                         "1 to 100 letters, digits, '-', '_' or '.' (it names the folder)");
+    } else if (item == "rock") {
+      c.rock = string_of(v, w, key);
+      if (c.rock.size() > 100) throw InputError(w, key, show(v), "at most 100 characters");
+    } else if (item == "confining_stresses") {
+      c.confining_stresses = reals_of(v, w, key);
+      for (double s : c.confining_stresses)
+        if (!(s > 0.0))
+          throw InputError(w, key, show(v),
+                           "every confining stress must be above 0 Pa (the UCS is always run)");
+      std::sort(c.confining_stresses.begin(), c.confining_stresses.end());
+      if (std::adjacent_find(c.confining_stresses.begin(), c.confining_stresses.end()) !=
+          c.confining_stresses.end())
+        throw InputError(w, key, show(v), "confining stresses must differ");
+    } else if (item == "trials_per_stage") {
+      c.trials_per_stage = int_of(v, w, key, 1, 200);
+    } else if (item == "passes") {
+      c.passes = int_of(v, w, key, 1, 5);
+    } else if (item == "verify_seeds") {
+      const auto* a = v.as_array();
+      if (!a) throw InputError(w, key, show(v), "expected an array of seeds (integers)");
+      c.verify_seeds.clear();
+      for (const auto& s : *a)
+        c.verify_seeds.push_back(int_of(s, w, key, 0, std::numeric_limits<std::int64_t>::max()));
+    } else if (item == "verify_set") {
+      const auto* a = v.as_array();
+      if (!a) throw InputError(w, key, show(v), "expected an array of \"section.key=value\"");
+      c.verify_set.clear();
+      for (const auto& s : *a) c.verify_set.push_back(string_of(s, w, key));
+    } else if (item == "brazilian_diameter") {
+      c.disc_diameter = real_of(v, w, key);
+    } else if (item == "brazilian_thickness") {
+      c.disc_thickness = real_of(v, w, key);
+    } else if (item == "brazilian_platen_speed") {
+      c.disc_platen_speed = real_of(v, w, key);
+      if (!(c.disc_platen_speed > 0.0)) throw InputError(w, key, show(v), "must be above 0 m/s");
+    } else {
+      throw InputError(w, key, show(v),
+                       "unknown key; allowed: name, rock, confining_stresses, trials_per_stage, "
+                       "passes, verify_seeds, verify_set, brazilian_diameter, "
+                       "brazilian_thickness, brazilian_platen_speed");
+    }
+  }
+}
+
+// Every free parameter drives a stage with targets; every target the tests cannot measure is
+// refused before anything runs.
+void check_coverage(const CalibrationSpec& c, const toml::table& root, const std::string& source) {
+  if (c.targets.empty())
+    throw InputError(source, "[targets]", "", "a calibration needs at least one target");
+  if (c.free.empty())
+    throw InputError(source, "[free]", "", "a calibration needs at least one free parameter");
+  for (const auto& f : c.free) {
+    bool has = false;
+    std::string stage_targets;
+    for (const auto& i : property_table())
+      if (i.stage == f.stage)
+        stage_targets += (stage_targets.empty() ? "" : ", ") + std::string(i.key);
+    for (const auto& t : c.targets) has |= info(t.property).stage == f.stage;
+    if (!has)
+      throw InputError(where_of(source, *root.at_path("free").as_table()->get(f.key)),
+                       "free.\"" + f.key + "\"", "",
+                       fmt::format("the {} stage fits it, and none of that stage's targets ({}) "
+                                   "is given; fix it in [experiment] or add a target",
+                                   stage_name(f.stage), stage_targets));
+  }
+  if (c.needs_envelope() && c.confining_stresses.empty()) {
+    const Property p =
+        c.has_target(Property::Cohesion) ? Property::Cohesion : Property::FrictionAngle;
+    throw InputError(
+        where_of(source, *root.at_path("targets").as_table()->get(std::string(info(p).key))),
+        "targets." + std::string(info(p).key), "",
+        "cannot be measured without triaxial tests: set calibration.confining_stresses "
+        "(e.g. [5e6, 10e6])");
+  }
+}
+
+// Bounds must be values the experiment accepts, and the start inside them.
+void check_parameters(CalibrationSpec& c, const toml::table& root, const std::string& source) {
+  const auto* free_tbl = root.at_path("free").as_table();
+  for (auto& f : c.free) {
+    const std::string where = where_of(source, *free_tbl->get(f.key));
+    const std::string key = "free.\"" + f.key + "\"";
+    for (double b : {f.lower, f.upper}) {
+      try {
+        (void)parse_experiment_table(c.text, source, "experiment",
+                                     {fmt::format("{}={:.17g}", f.key, b)});
+      } catch (const InputError& e) {
+        throw InputError(where, key, fmt::format("{}", b),
+                         "bound not accepted by the experiment: " + std::string(e.what()));
+      }
+    }
+    const auto start = resolved_number(c.base, f.key);
+    if (!start)
+      throw InputError(
+          where, key, "",
+          "not a number of this experiment's laws (contact law \"" + c.base.contact_law + "\")");
+    f.start = *start;
+    if (f.start < f.lower || f.start > f.upper)
+      throw InputError(where, key, fmt::format("[{}, {}]", f.lower, f.upper),
+                       fmt::format("the start value {} (from [experiment]) lies outside the "
+                                   "bounds",
+                                   f.start));
+  }
+  for (const auto& t : c.tied) {
+    const std::string where = where_of(source, *root.at_path("tied").as_table()->get(t.key));
+    const bool follows_free = std::any_of(c.free.begin(), c.free.end(),
+                                          [&](const auto& f) { return f.key == t.follows; });
+    if (!follows_free)
+      throw InputError(where, "tied.\"" + t.key + "\".follows", "\"" + t.follows + "\"",
+                       "must name a free parameter");
+    if (std::any_of(c.free.begin(), c.free.end(), [&](const auto& f) { return f.key == t.key; }))
+      throw InputError(where, "tied.\"" + t.key + "\"", "", "is also free");
+    if (!resolved_number(c.base, t.key))
+      throw InputError(where, "tied.\"" + t.key + "\"", "",
+                       "not a number of this experiment's laws");
+  }
+}
+
+void default_disc(CalibrationSpec& c) {
+  const ExperimentSpec& b = c.base;
+  const double across = b.dimension == 2        ? b.width
+                        : b.shape == "cylinder" ? b.diameter
+                                                : std::min(b.width, b.depth);
+  if (c.disc_diameter <= 0.0) c.disc_diameter = across;
+  if (c.disc_thickness <= 0.0) c.disc_thickness = b.dimension == 2 ? b.thickness : 0.5 * across;
+}
+
+}  // namespace
+
+CalibrationSpec parse_calibration(const std::string& text, const std::string& source) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    throw InputError(source + ":" + std::to_string(e.source().begin.line), "", "",
+                     std::string("TOML syntax error: ") + std::string(e.description()));
+  }
+  CalibrationSpec c;
+  c.path = source;
+  c.text = text;
+  c.name = std::filesystem::path(source).stem().string();
+  for (const auto& [k, v] : root) {
+    const std::string name(k.str());
+    if (name != "calibration" && name != "experiment" && name != "targets" && name != "free" &&
+        name != "tied")
+      throw InputError(where_of(source, v), name, "",
+                       "unknown table; allowed: [calibration], [experiment], [targets], [free], "
+                       "[tied]");
+    if (!v.is_table()) throw InputError(where_of(source, v), name, show(v), "expected a table");
+  }
+  if (const auto* t = root["calibration"].as_table()) read_settings(c, *t, source);
+  if (const auto* t = root["targets"].as_table())
+    for (const auto& [k, v] : *t) c.targets.push_back(read_target(std::string(k.str()), v, source));
+  if (const auto* t = root["free"].as_table())
+    for (const auto& [k, v] : *t) c.free.push_back(read_free(std::string(k.str()), v, source));
+  if (const auto* t = root["tied"].as_table())
+    for (const auto& [k, v] : *t) c.tied.push_back(read_tied(std::string(k.str()), v, source));
+  check_coverage(c, root, source);
+  c.base = parse_experiment_table(text, source, "experiment", {});
+  for (const auto& o : c.verify_set) {
+    try {
+      (void)parse_experiment_table(text, source, "experiment", {o});
+    } catch (const InputError& e) {
+      throw InputError(source, "calibration.verify_set", "\"" + o + "\"", e.what());
+    }
+  }
+  check_parameters(c, root, source);
+  default_disc(c);
+  return c;
+}
+
+CalibrationSpec load_calibration(const std::string& path) {
+  if (std::filesystem::is_directory(path))
+    throw InputError(path, "", "", "is a folder; expected a calibration file (TOML)");
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "", "", "cannot open the calibration file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_calibration(ss.str(), path);
+}
+
+std::vector<std::string> parameter_overrides(const CalibrationSpec& c,
+                                             const std::vector<double>& values) {
+  std::vector<std::string> o;
+  for (std::size_t i = 0; i < c.free.size(); ++i)
+    o.push_back(fmt::format("{}={:.17g}", c.free[i].key, values[i]));
+  for (const auto& t : c.tied)
+    for (std::size_t i = 0; i < c.free.size(); ++i)
+      if (c.free[i].key == t.follows)
+        o.push_back(fmt::format("{}={:.17g}", t.key, t.factor * values[i]));
+  return o;
+}
+
+std::string calibration_docs() {
+  std::string s =
+      "# Calibration file reference\n\n"
+      "Generated by `build/breccia docs --calibration --output docs/calibration.md`; do not "
+      "edit. A calibration file is TOML with the tables below; `breccia calibrate FILE` runs it "
+      "(ARCHITECTURE.md, \"Calibration\", says how). Example: "
+      "`examples/calibrate-berea.toml`.\n\n"
+      "### [calibration]\n\n| key | default | meaning |\n|---|---|---|\n"
+      "| `name` | the file's stem | names the folder `<output>/<name>/` (letters, digits, -, _, .) "
+      "|\n"
+      "| `rock` | the name | the rock's name in the material library |\n"
+      "| `confining_stresses` | none | sigma_3 of the triaxial (2D: biaxial) tests, Pa, above 0; "
+      "needed for `cohesion` and `friction_angle_deg` (fitted with the UCS as sigma_3 = 0) |\n"
+      "| `trials_per_stage` | 10 | trials of one stage in one pass, 1 to 200 |\n"
+      "| `passes` | 2 | passes over the three stages, 1 to 5 (stops early when every target is "
+      "met) |\n"
+      "| `verify_seeds` | [1, 2, 3] | packing seeds of the verification (empty: no verification; "
+      "the verdict is then the calibration sample's) |\n"
+      "| `verify_set` | [] | experiment overrides (`\"section.key=value\"`) of the verification, "
+      "e.g. the shipping sample size |\n"
+      "| `brazilian_diameter`, `brazilian_thickness` | the prism's width, half of it | the "
+      "Brazilian disc, m |\n"
+      "| `brazilian_platen_speed` | 0.02 | m/s |\n\n"
+      "### [experiment]\n\nThe keys of an experiment file (docs/experiment.md) as sub-tables "
+      "(`[experiment.sample]`, `[experiment.bond]`, ...): the sample, the laws, the fixed "
+      "micro-parameters and the start values of the free ones. The calibration sets the test "
+      "kind itself (UCS, triaxial, Brazilian).\n\n"
+      "### [targets]\n\nEach target is `name = value` (the default tolerance) or "
+      "`name = { value = ..., tolerance = ..., source = \"...\" }`.\n\n"
+      "| target | unit | stage | default tolerance | what is measured |\n|---|---|---|---|---|\n";
+  for (const auto& i : property_table())
+    s += fmt::format("| `{}` | {} | {} | {} | {} |\n", i.key, i.unit, stage_name(i.stage),
+                     i.relative ? fmt::format("{:g} % of the target", 100 * i.tolerance)
+                                : fmt::format("{:g} {}", i.tolerance, i.unit),
+                     i.doc);
+  s += "\n### [free]\n\n`\"section.key\" = [lower, upper]` or `{ lower, upper, scale = "
+       "\"log\"|\"linear\", stage = ... }`. The keys a calibration can free, with the stage that "
+       "fits each:\n\n| key | stage |\n|---|---|\n";
+  for (const auto& k : kFreeKeys) s += fmt::format("| `{}` | {} |\n", k.key, stage_name(k.stage));
+  s += "\n### [tied]\n\n`\"section.key\" = { follows = \"<free key>\", factor = 1.0 }`: the "
+       "key takes factor x the free parameter's value in every trial (e.g. contact modulus = "
+       "bond modulus).\n";
+  return s;
+}
+
+}  // namespace breccia

@@ -1,0 +1,99 @@
+#pragma once
+// The calibration file (TOML): lab targets with tolerances, the experiment that defines the sample
+// and the laws ([experiment], the keys of an experiment file), the micro-parameters that are free
+// (with bounds) or tied to a free one, and how to verify. Everything is checked here, before any
+// run starts, with errors that name the file, the line, the key and what is allowed.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "breccia/io/experiment.hpp"
+
+namespace breccia {
+
+// The staged scheme (ARCHITECTURE.md "Calibration"): elastic properties first, then strengths,
+// then the friction that shapes the strength envelope.
+enum class CalibrationStage { Elastic, Strength, Friction };
+std::string_view stage_name(CalibrationStage s) noexcept;
+
+// What a lab test measures and a calibration can target.
+enum class Property {
+  YoungsModulus,
+  PoissonRatio,
+  UniaxialStrength,
+  TensileStrength,
+  Cohesion,
+  FrictionAngle,
+  CrackInitiationRatio,
+  StrainAtPeak,
+};
+
+struct PropertyInfo {
+  Property property;
+  std::string_view key, unit, doc;
+  CalibrationStage stage;
+  bool relative;     // tolerance as a fraction of the target (else in the property's unit)
+  double tolerance;  // default tolerance
+};
+const std::vector<PropertyInfo>& property_table();
+const PropertyInfo& info(Property p);
+
+struct Target {
+  Property property;
+  double value = 0.0;
+  double tolerance = 0.0;
+  bool relative = true;
+  std::string source;  // where the lab value comes from (for the record)
+};
+
+struct FreeParameter {
+  std::string key;  // an experiment key, "section.name" (e.g. "bond.modulus")
+  double lower = 0.0, upper = 0.0, start = 0.0;
+  bool log_scale = true;  // searched in log space (bounds both above zero)
+  CalibrationStage stage = CalibrationStage::Elastic;
+};
+
+// A key that follows a free parameter: value = factor x the free parameter's value.
+struct TiedParameter {
+  std::string key, follows;
+  double factor = 1.0;
+};
+
+struct CalibrationSpec {
+  std::string name;
+  std::string rock;  // the rock's name in the material library ("Berea sandstone")
+  std::string path;  // the calibration file
+  std::string text;  // its contents (trial experiments are parsed from its [experiment] table)
+  std::vector<Target> targets;
+  std::vector<FreeParameter> free;
+  std::vector<TiedParameter> tied;
+  std::vector<double> confining_stresses;  // triaxial (biaxial) tests for the envelope, Pa
+  double disc_diameter = 0.0, disc_thickness = 0.0, disc_platen_speed = 0.02;  // Brazilian
+  std::int64_t trials_per_stage = 10;
+  std::int64_t passes = 2;
+  std::vector<std::int64_t> verify_seeds{1, 2, 3};
+  std::vector<std::string> verify_set;  // experiment overrides for the verification (full size)
+  ExperimentSpec base;                  // the experiment at the start values
+
+  bool has_target(Property p) const;
+  const Target* target(Property p) const;
+  bool needs_brazilian() const { return has_target(Property::TensileStrength); }
+  bool needs_envelope() const {
+    return has_target(Property::Cohesion) || has_target(Property::FrictionAngle);
+  }
+};
+
+// Reads and checks a calibration file; throws InputError.
+CalibrationSpec load_calibration(const std::string& path);
+CalibrationSpec parse_calibration(const std::string& text, const std::string& source);
+
+// "section.key=value" overrides that set the free parameters to `values` and the tied ones.
+std::vector<std::string> parameter_overrides(const CalibrationSpec& c,
+                                             const std::vector<double>& values);
+
+// Reference of the calibration file's keys (Markdown), for docs/calibration.md.
+std::string calibration_docs();
+
+}  // namespace breccia

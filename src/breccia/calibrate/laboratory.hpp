@@ -1,0 +1,71 @@
+#pragma once
+// The virtual laboratory a calibration measures with: it packs the samples once, runs the lab
+// tests a parameter set needs (UCS, Brazilian, triaxial at each confining stress) as ordinary run
+// folders, and reads the properties back from their summaries. Every finished test is recorded
+// in trials.jsonl under a key made of the sample, the test and the exact parameter values, so a
+// calibration that is stopped and started again reads its finished tests back instead of
+// re-running them (the optimiser is deterministic and asks for the same points again).
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "breccia/calibrate/calibration_file.hpp"
+
+namespace breccia {
+
+using Properties = std::map<Property, double>;
+
+// Which tests a measurement needs.
+struct TestPlan {
+  bool ucs = true;
+  bool brazilian = false;
+  bool envelope = false;  // triaxial tests at the calibration's confining stresses
+};
+TestPlan tests_for(const CalibrationSpec& c, std::optional<CalibrationStage> stage);
+
+struct Measurement {
+  Properties properties;
+  nlohmann::json tests = nlohmann::json::object();  // per test: everything it measured
+  std::vector<std::string> run_folders;
+  std::vector<std::string> problems;  // tests that did not give a property, and why
+  int new_runs = 0;                   // tests run now (not read back from the record)
+  double wall_seconds = 0.0;          // of the tests run now
+};
+
+class Laboratory {
+ public:
+  // `folder` is the calibration folder; samples/ and trials/ live under it.
+  Laboratory(const CalibrationSpec& c, std::filesystem::path folder,
+             std::function<void(const std::string&)> log);
+
+  // The samples of a sample set: "calibration" (the [experiment] sample at the start values,
+  // its seed) or "verify-<seed>" (verify_set overrides, that seed, packed with `values`).
+  void prepare_samples(const std::string& set, const std::vector<double>& values);
+  Measurement measure(const std::string& set, const std::vector<double>& values,
+                      const TestPlan& plan);
+
+  std::size_t recorded_tests() const noexcept { return book_.size(); }
+  const nlohmann::json& sample_report(const std::string& set) const;
+
+ private:
+  struct SamplePaths {
+    std::string prism, disc;
+    nlohmann::json report;
+  };
+  std::vector<std::string> set_overrides(const std::string& set) const;
+  nlohmann::json run_test(const std::string& set, const std::vector<double>& values,
+                          const std::string& test, double sigma3, Measurement& m);
+
+  const CalibrationSpec& c_;
+  std::filesystem::path folder_;
+  std::function<void(const std::string&)> log_;
+  std::map<std::string, nlohmann::json> book_;  // key -> record of a finished test
+  std::map<std::string, SamplePaths> samples_;
+  int next_run_ = 1;
+};
+
+}  // namespace breccia

@@ -1,0 +1,155 @@
+#include "breccia/material/library.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+namespace breccia {
+
+using nlohmann::json;
+
+namespace {
+
+json record_of(const EmbeddedMaterial& m) {
+  json r = json::parse(m.record, nullptr, false);
+  return r.is_object() ? r : json::object();
+}
+
+double number(const json& j, const char* key) {
+  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : std::nan("");
+}
+
+// A value in the unit users read (GPa, MPa, degrees, per cent for strains).
+std::string shown(const std::string& target, double v) {
+  if (!std::isfinite(v)) return "n/a";
+  if (target == "youngs_modulus") return fmt::format("{:.2f} GPa", v / 1e9);
+  if (target == "uniaxial_strength" || target == "tensile_strength" || target == "cohesion")
+    return fmt::format("{:.1f} MPa", v / 1e6);
+  if (target == "friction_angle_deg") return fmt::format("{:.1f} deg", v);
+  if (target == "strain_at_peak") return fmt::format("{:.3f} %", 100 * v);
+  return fmt::format("{:.3f}", v);
+}
+
+std::string error_text(const json& v) {
+  const double e = number(v, "error");
+  if (!std::isfinite(e)) return "n/a";
+  if (v.value("relative", true)) return fmt::format("{:+.1f} %", 100 * e);
+  return fmt::format("{:+.3g} {}", e, v.value("unit", ""));
+}
+
+std::string tolerance_text(const json& v) {
+  const double t = number(v, "tolerance");
+  if (v.value("relative", true)) return fmt::format("{:g} %", 100 * t);
+  return fmt::format("{:g} {}", t, v.value("unit", ""));
+}
+
+// Mean and spread of a per-test measurement over the verification seeds.
+std::string seeds_stat(const json& r, const std::string& test, const std::string& key, double scale,
+                       const char* fmt_spec) {
+  std::vector<double> xs;
+  for (const auto& s : r.value("verification", json::array()))
+    if (s.contains("tests") && s["tests"].contains(test) && s["tests"][test].contains(key))
+      xs.push_back(s["tests"][test][key].get<double>() * scale);
+  if (xs.empty()) return "n/a";
+  double mean = 0;
+  for (double x : xs) mean += x;
+  mean /= static_cast<double>(xs.size());
+  double lo = xs[0], hi = xs[0];
+  for (double x : xs) lo = std::min(lo, x), hi = std::max(hi, x);
+  return fmt::format(fmt::runtime(fmt_spec), mean) + " (" +
+         fmt::format(fmt::runtime(fmt_spec), lo) + " to " +
+         fmt::format(fmt::runtime(fmt_spec), hi) + ")";
+}
+
+std::string record_section(const EmbeddedMaterial& m) {
+  const json r = record_of(m);
+  std::string s = fmt::format("\n## `{}`: {}\n\n", m.name, r.value("rock", std::string(m.name)));
+  s += fmt::format(
+      "- Reproduce: `{}` (breccia {}, commit {}), {} trials, {} test runs, {:.0f} "
+      "min on {}.\n",
+      r.value("command", "?"), r.value("version", "?"), r.value("commit", "?"),
+      r.value("evaluations", 0), r.value("test_runs", 0), number(r, "wall_seconds") / 60,
+      r.value("machine", "?"));
+  s += fmt::format("- Laws: {}D, `{}` contacts, `{}` bonds.\n", r.value("dimension", 3),
+                   r.value("contact_law", "?"), r.value("bond_law", "?"));
+  if (r.contains("calibration_sample")) {
+    const json& cs = r["calibration_sample"];
+    s += fmt::format(
+        "- Calibrated on {} grains (porosity {:.3f}); verified over packing seeds {} "
+        "with {}.\n",
+        cs.value("particles", 0), number(cs, "porosity"),
+        r.value("verify_seeds", json::array()).dump(),
+        r.value("verify_set", json::array()).empty() ? std::string("the same sample settings")
+                                                     : "`" + r["verify_set"].dump() + "`");
+  }
+  std::string grains;
+  for (const auto& v : r.value("verification", json::array()))
+    grains += (grains.empty() ? "" : ", ") + std::to_string(v.value("particles", 0));
+  if (!grains.empty()) s += "- Verification samples: " + grains + " grains.\n";
+  s += "- Free and tied parameters: ";
+  std::string params;
+  for (const auto& [k, v] : r.value("parameters", json::object()).items())
+    params += (params.empty() ? "" : ", ") + fmt::format("`{}` = {:.4g}", k, v.get<double>());
+  s += params + ".\n";
+  s += "- Honesty checks over the verification seeds (mean, range):\n";
+  s += "  - shear share of the microcracks, UCS: " +
+       seeds_stat(r, "ucs", "shear_crack_fraction", 100, "{:.1f} %") + "\n";
+  for (const auto& v : r.value("verification", json::array())) {
+    for (const auto& [test, props] : v.value("tests", json::object()).items())
+      if (test.rfind("triaxial", 0) == 0) {
+        s += "  - shear share, " + test + ": " +
+             seeds_stat(r, test, "shear_crack_fraction", 100, "{:.1f} %") + "\n";
+        s += "  - largest share of the cracks in an end quarter, " + test + ": " +
+             seeds_stat(r, test, "largest_end_quarter_share", 100, "{:.0f} %") + "\n";
+      }
+    break;
+  }
+  s += "  - largest share of the cracks in an end quarter, UCS (a crushed end shows above 40 "
+       "%): " +
+       seeds_stat(r, "ucs", "largest_end_quarter_share", 100, "{:.0f} %") + "\n";
+  return s;
+}
+
+}  // namespace
+
+std::string describe_material(const EmbeddedMaterial& m) {
+  const json r = record_of(m);
+  std::string s = fmt::format("{}, calibrated by breccia calibrate ({}D, {} contacts, {}):",
+                              r.value("rock", std::string(m.name)), r.value("dimension", 3),
+                              r.value("contact_law", "?"), r.value("bond_law", "?"));
+  for (const auto& v : r.value("verdicts", json::array()))
+    s += fmt::format(" {} {} (lab {}, {});", v.value("target", "?"),
+                     shown(v.value("target", ""), number(v, "mean")),
+                     shown(v.value("target", ""), number(v, "value")),
+                     v.value("met", false) ? "met" : "MISSED");
+  s += " record in docs/materials.md.";
+  return s;
+}
+
+std::string materials_docs() {
+  std::string s =
+      "# Material library\n\n"
+      "Generated by `build/breccia materials --output docs/materials.md` from the calibration "
+      "records in `materials/`; do not edit. Every preset was made by `breccia calibrate` "
+      "(ARCHITECTURE.md, \"Calibration\"): the achieved values are the mean over the "
+      "verification packings (at the size named in each record), the error is that mean "
+      "against the lab value, and a target outside its tolerance is marked MISSED.\n\n"
+      "| preset | rock | target | lab | source | achieved (mean +/- sd, n) | error | "
+      "tolerance | verdict |\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& m : embedded_materials()) {
+    const json r = record_of(m);
+    for (const auto& v : r.value("verdicts", json::array())) {
+      const std::string t = v.value("target", "?");
+      s += fmt::format("| `{}` | {} | {} | {} | {} | {} +/- {} ({}) | {} | {} | {} |\n", m.name,
+                       r.value("rock", std::string(m.name)), t, shown(t, number(v, "value")),
+                       v.value("source", ""), shown(t, number(v, "mean")),
+                       shown(t, number(v, "sd")), v.value("samples", 0), error_text(v),
+                       tolerance_text(v), v.value("met", false) ? "met" : "**MISSED**");
+    }
+  }
+  for (const auto& m : embedded_materials()) s += record_section(m);
+  return s;
+}
+
+}  // namespace breccia

@@ -1,0 +1,297 @@
+// `breccia calibrate`: a tiny calibration recovers targets made by a known parameter set, resumes
+// without re-running a test, and bad calibration files are refused before anything runs.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "breccia/calibrate/calibrate.hpp"
+#include "breccia/calibrate/laboratory.hpp"
+#include "breccia/core/error.hpp"
+#include "breccia/io/run_folder.hpp"
+#include "breccia/material/library.hpp"
+#include "cli_harness.hpp"
+
+namespace fs = std::filesystem;
+using namespace breccia;
+
+namespace {
+
+// About 330 grains of 0.22-0.36 mm in a 3 x 3 x 6 mm prism: a UCS test takes a few seconds on
+// one thread (one thread: ctest runs tests side by side, and OpenMP teams that share cores
+// wait on each other).
+std::string tiny_experiment(double modulus, double tensile) {
+  return fmt::format(R"(
+[experiment]
+name = "tiny"
+[experiment.engine]
+threads = 1
+local_damping = 0.7
+density_scaling = 10.0
+[experiment.material]
+preset = "custom"
+[experiment.sample]
+width = 3e-3
+depth = 3e-3
+height = 6e-3
+radius_min = 0.22e-3
+radius_max = 0.36e-3
+[experiment.contact]
+law = "hertz_mindlin"
+shear_modulus = 29e9
+poisson_ratio = 0.33
+friction = 0.4
+wall_friction = 0.3
+[experiment.bond]
+modulus = {:.17g}
+tensile_strength = {:.17g}
+cohesion = {:.17g}
+[experiment.test]
+kind = "ucs"
+platen_speed = 0.03
+)",
+                     modulus, tensile, 2 * tensile);
+}
+
+std::string tiny_calibration(double e_target, double ucs_target, double modulus, double tensile) {
+  return fmt::format(R"([calibration]
+name = "tiny"
+trials_per_stage = 8
+passes = 2
+verify_seeds = []
+[targets]
+youngs_modulus = {{ value = {:.17g}, tolerance = 0.05 }}
+uniaxial_strength = {{ value = {:.17g}, tolerance = 0.05 }}
+[free]
+"bond.modulus" = [1e9, 50e9]
+"bond.tensile_strength" = [5e6, 300e6]
+[tied]
+"bond.cohesion" = {{ follows = "bond.tensile_strength", factor = 2.0 }}
+)",
+                     e_target, ucs_target) +
+         tiny_experiment(modulus, tensile);
+}
+
+std::size_t lines_of(const fs::path& p) {
+  std::ifstream in(p);
+  std::size_t n = 0;
+  for (std::string l; std::getline(in, l);) n += !l.empty();
+  return n;
+}
+
+}  // namespace
+
+// The targets are what a known parameter set gives on the same sample; the calibration starts
+// a factor 2 away in both parameters and must meet both targets (5 %) within its trial budget,
+// and land near the known set (the map from (E_b, sigma_c) to (E, UCS) is close to diagonal,
+// so the answer is close to unique: 20 % allows for the tolerance band and the weak coupling).
+TEST(Calibration, TinyCalibrationRecoversTargetsOfAKnownParameterSet) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_calibration_tiny";
+  fs::remove_all(dir);
+  const double known_modulus = 6e9, known_tensile = 25e6;
+  const CalibrationSpec truth =
+      parse_calibration(tiny_calibration(1e9, 1e6, known_modulus, known_tensile), "truth.toml");
+  Laboratory lab(truth, dir / "truth", [](const std::string&) {});
+  const Measurement m = lab.measure("calibration", {known_modulus, known_tensile}, TestPlan{});
+  ASSERT_TRUE(m.properties.count(Property::YoungsModulus));
+  ASSERT_TRUE(m.properties.count(Property::UniaxialStrength));
+  const double e = m.properties.at(Property::YoungsModulus);
+  const double ucs = m.properties.at(Property::UniaxialStrength);
+
+  const std::string text = tiny_calibration(e, ucs, 0.5 * known_modulus, 2.0 * known_tensile);
+  const CalibrationSpec spec = parse_calibration(text, "tiny.toml");
+  CalibrationOptions opt;
+  opt.output_directory = (dir / "out").string();
+  const CalibrationResult r = run_calibration(spec, opt);
+  ASSERT_EQ(r.status, "complete");
+  ASSERT_EQ(r.verdicts.size(), 2u);
+  for (const auto& v : r.verdicts)
+    EXPECT_TRUE(v.met) << info(v.target.property).key << " " << v.error;
+  EXPECT_NEAR(r.values[0] / known_modulus, 1.0, 0.2);
+  EXPECT_NEAR(r.values[1] / known_tensile, 1.0, 0.2);
+  for (const char* f : {"convergence.csv", "material.toml", "record.json", "trials.jsonl",
+                        "manifest.json", "calibration.toml"})
+    EXPECT_TRUE(fs::exists(fs::path(r.folder) / f)) << f;
+  const std::string fragment = breccia::testing::read(fs::path(r.folder) / "material.toml");
+  EXPECT_NE(fragment.find("[bond]"), std::string::npos);
+  EXPECT_EQ(fragment.find("wall_friction"), std::string::npos);  // the platens' property
+
+  // Run again: every test is read back from trials.jsonl, the answer is the same.
+  const std::size_t runs = lines_of(fs::path(r.folder) / "trials.jsonl");
+  const CalibrationResult again = run_calibration(spec, opt);
+  EXPECT_EQ(again.values, r.values);
+  EXPECT_EQ(again.evaluations, r.evaluations);
+  EXPECT_EQ(lines_of(fs::path(r.folder) / "trials.jsonl"), runs);
+
+  // A different file may not continue in that folder.
+  EXPECT_THROW(
+      run_calibration(parse_calibration(tiny_calibration(e, 1.01 * ucs, 3e9, 50e6), "other.toml"),
+                      opt),
+      InputError);
+  fs::remove_all(dir);
+}
+
+namespace {
+
+struct BadCalibration {
+  const char* name;
+  std::string text;
+  std::vector<std::string> needles;
+};
+
+std::string with_experiment(const std::string& head) {
+  return head + tiny_experiment(8e9, 30e6);
+}
+
+std::vector<BadCalibration> bad_calibrations() {
+  const std::string e_target = "[targets]\nyoungs_modulus = 8e9\n";
+  const std::string free_e = "[free]\n\"bond.modulus\" = [1e9, 50e9]\n";
+  return {
+      {"UnknownTarget",
+       with_experiment("[targets]\nyoungs = 8e9\n" + free_e),
+       {"bad.toml:2", "targets.youngs", "unknown target", "youngs_modulus"}},
+      {"LowerAboveUpper",
+       with_experiment(e_target + "[free]\n\"bond.modulus\" = [5e9, 1e9]\n"),
+       {"bad.toml:4", "free.\"bond.modulus\"", "impossible bounds"}},
+      {"BoundTheLawRefuses",
+       with_experiment("[targets]\nfriction_angle_deg = 30\n[calibration]\nconfining_stresses = "
+                       "[5e6]\n[free]\n\"contact.friction\" = { lower = -1, upper = 1, scale = "
+                       "\"linear\" }\n"),
+       {"bad.toml:6", "contact.friction", "bound not accepted"}},
+      {"LogScaleThroughZero",
+       with_experiment("[targets]\nfriction_angle_deg = 30\n[calibration]\nconfining_stresses = "
+                       "[5e6]\n[free]\n\"contact.friction\" = { lower = 0, upper = 1, scale = "
+                       "\"log\" }\n"),
+       {"bad.toml:6", "log-scale parameter needs bounds above 0"}},
+      {"StartOutsideBounds",
+       with_experiment(e_target + "[free]\n\"bond.modulus\" = [20e9, 50e9]\n"),
+       {"bad.toml:4", "start value 8000000000", "outside the bounds"}},
+      {"TargetTheTestsCannotMeasure",
+       with_experiment("[targets]\ncohesion = 30e6\n[free]\n\"contact.friction\" = { lower = "
+                       "0.1, upper = 1, scale = \"linear\" }\n"),
+       {"bad.toml:2", "targets.cohesion", "without triaxial tests", "confining_stresses"}},
+      {"FreeParameterWithoutATarget",
+       with_experiment(e_target + free_e +
+                       "\"contact.friction\" = { lower = 0.1, upper = 1, "
+                       "scale = \"linear\" }\n"),
+       {"bad.toml:5", "free.\"contact.friction\"", "friction stage", "none of that stage"}},
+      {"NotAMicroParameter",
+       with_experiment(e_target + "[free]\n\"sample.width\" = [1e-3, 1e-2]\n"),
+       {"bad.toml:4", "not a micro-parameter", "bond.modulus"}},
+      {"TiedToAFixedKey",
+       with_experiment(e_target + free_e +
+                       "[tied]\n\"bond.cohesion\" = { follows = \"bond.tensile_strength\" }\n"),
+       {"bad.toml:6", "must name a free parameter"}},
+      {"ZeroTolerance",
+       with_experiment("[targets]\nyoungs_modulus = { value = 8e9, tolerance = 0 }\n" + free_e),
+       {"bad.toml:2", "tolerance", "must be above 0"}},
+      {"FrictionAngleOutOfRange",
+       with_experiment("[targets]\nfriction_angle_deg = 95\n[calibration]\nconfining_stresses = "
+                       "[5e6]\n[free]\n\"contact.friction\" = { lower = 0.1, upper = 1, scale = "
+                       "\"linear\" }\n"),
+       {"bad.toml:2", "friction_angle_deg", "0 < phi < 90"}},
+      {"NoFreeParameter", with_experiment(e_target), {"[free]", "at least one free parameter"}},
+      {"UnknownTable",
+       with_experiment(e_target + free_e + "[target]\nx = 1\n"),
+       {"bad.toml:5", "unknown table", "[targets]"}},
+      {"BadExperimentKey",
+       e_target + free_e + "[experiment.sample]\nwidth = -1e-3\n",
+       {"bad.toml:6", "sample.width", "-0.001"}},
+      {"NegativeConfiningStress",
+       with_experiment(e_target + free_e + "[calibration]\nconfining_stresses = [-5e6]\n"),
+       {"bad.toml:6", "calibration.confining_stresses", "above 0"}},
+  };
+}
+
+class BadCalibrationFile : public ::testing::TestWithParam<BadCalibration> {};
+
+}  // namespace
+
+// Refused with file, line, key and what is allowed; the command exits 2 and writes nothing.
+TEST_P(BadCalibrationFile, IsRefusedBeforeAnyRunStarts) {
+  const BadCalibration& c = GetParam();
+  try {
+    (void)parse_calibration(c.text, "bad.toml");
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    for (const auto& n : c.needles)
+      EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << e.what() << "\nlacks " << n;
+  }
+  const fs::path dir = fs::temp_directory_path() / ("breccia_badcal_" + std::string(c.name));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "bad.toml") << c.text;
+  const auto r = breccia::testing::run("calibrate '" + (dir / "bad.toml").string() +
+                                       "' --output '" + (dir / "out").string() + "'");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("error: "), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "out")) << r.out;
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, BadCalibrationFile, ::testing::ValuesIn(bad_calibrations()),
+                         [](const ::testing::TestParamInfo<BadCalibration>& i) {
+                           return std::string(i.param.name);
+                         });
+
+// Every preset ships with the record of the calibration that made it (targets with sources,
+// achieved mean and spread over at least three packing seeds, the command); one without is
+// refused here.
+TEST(MaterialLibrary, EveryPresetShipsWithItsCalibrationRecord) {
+  ASSERT_FALSE(embedded_materials().empty());
+  for (const auto& m : embedded_materials()) {
+    const auto r = nlohmann::json::parse(m.record, nullptr, false);
+    ASSERT_TRUE(r.is_object()) << m.name << ": no calibration record (materials/" << m.name
+                               << "/record.json)";
+    EXPECT_EQ(r.value("name", ""), std::string(m.name));
+    EXPECT_NE(r.value("command", "").find("breccia calibrate"), std::string::npos) << m.name;
+    EXPECT_GE(r.value("verify_seeds", nlohmann::json::array()).size(), 3u) << m.name;
+    ASSERT_TRUE(r.contains("verdicts") && !r["verdicts"].empty()) << m.name;
+    for (const auto& v : r["verdicts"]) {
+      EXPECT_TRUE(v["mean"].is_number()) << m.name << " " << v.dump();
+      EXPECT_FALSE(v.value("source", "").empty()) << m.name << " " << v.dump();
+    }
+  }
+  // The built-in default experiment uses a calibrated rock.
+  const ExperimentSpec d = default_experiment();
+  bool found = false;
+  for (const auto& m : embedded_materials()) found |= m.name == d.preset;
+  EXPECT_TRUE(found) << d.preset;
+}
+
+// Each preset loads, validates and runs a tiny UCS (an FCC block of 16 grains: seconds).
+TEST(MaterialLibrary, EveryPresetRunsATinyUcs) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_presets";
+  fs::remove_all(dir);
+  for (const auto& m : embedded_materials()) {
+    const ExperimentSpec spec = parse_experiment(
+        fmt::format("[material]\npreset = \"{}\"\n[sample]\nsource = \"lattice\"\n"
+                    "cells = [2, 2, 4]\n[engine]\nthreads = 1\n[output]\nplot = false\n"
+                    "snapshot_strain_interval = 0\ndirectory = \"{}\"\n",
+                    m.name, dir.string()),
+        "preset-test", {});
+    EXPECT_EQ(spec.preset, std::string(m.name));
+    RunOptions opt;
+    const RunResult r = run_experiment(spec, opt);
+    EXPECT_EQ(r.status, "complete") << m.name << ": " << r.stop_reason;
+    EXPECT_GT(r.peak_stress, 0.0) << m.name;
+  }
+  fs::remove_all(dir);
+}
+
+// docs/materials.md is generated from the records: regenerate it with
+// `build/breccia materials --output docs/materials.md` when a preset changes.
+TEST(MaterialLibrary, DocsTableIsUpToDate) {
+  EXPECT_EQ(breccia::testing::read(fs::path(BRECCIA_SOURCE_DIR) / "docs" / "materials.md"),
+            materials_docs());
+}
+
+// docs/calibration.md is generated from the tables that validate calibration files.
+TEST(Calibration, DocsAreUpToDate) {
+  EXPECT_EQ(breccia::testing::read(fs::path(BRECCIA_SOURCE_DIR) / "docs" / "calibration.md"),
+            calibration_docs());
+}
