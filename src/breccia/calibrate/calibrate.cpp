@@ -544,17 +544,24 @@ CalibrationResult run_calibration(const CalibrationSpec& c, const CalibrationOpt
   const fs::path folder = fs::path(o.output_directory) / c.name;
   const fs::path copy = folder / "calibration.toml";
   if (fs::exists(copy)) {
+    // The recorded tests stay valid while the samples and the laws are the same: targets,
+    // tolerances, bounds, trial budgets and passes may change (to add a pass, say), and the
+    // tests already run are read back.
     std::ifstream in(copy);
     std::stringstream ss;
     ss << in.rdbuf();
-    if (ss.str() != c.text)
+    const CalibrationSpec before = parse_calibration(ss.str(), copy.string());
+    if (to_toml(before.base) != to_toml(c.base) || before.verify_set != c.verify_set ||
+        before.disc_diameter != c.disc_diameter || before.disc_thickness != c.disc_thickness ||
+        before.disc_platen_speed != c.disc_platen_speed)
       throw InputError(folder.string(), "", "",
-                       "holds a calibration made from a different file; move it away or choose "
-                       "another --output");
+                       "holds a calibration of another sample or other laws ([experiment], "
+                       "verify_set or the Brazilian disc differ); move it away or choose another "
+                       "--output");
+    if (ss.str() != c.text) write_text(copy, c.text);
     if (o.log)
       o.log("[calibrate] resuming in " + folder.string() +
-            " (finished tests are read "
-            "back from trials.jsonl)");
+            " (finished tests are read back from trials.jsonl)");
   } else {
     fs::create_directories(folder);
     write_text(copy, c.text);

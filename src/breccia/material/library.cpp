@@ -93,6 +93,10 @@ std::string record_section(const EmbeddedMaterial& m) {
   for (const auto& [k, v] : parameters.items())
     params += (params.empty() ? "" : ", ") + fmt::format("`{}` = {:.4g}", k, v.get<double>());
   s += params + ".\n";
+  s += "- Measured in the verification UCS tests (mean, range): strain at peak " +
+       seeds_stat(r, "ucs", "strain_at_peak", 100, "{:.3f} %") + "; Poisson ratio " +
+       seeds_stat(r, "ucs", "poisson_ratio", 1, "{:.3f}") + "; crack initiation / UCS " +
+       seeds_stat(r, "ucs", "crack_initiation_ratio", 1, "{:.2f}") + ".\n";
   s += "- Honesty checks over the verification seeds (mean, range):\n";
   s += "  - shear share of the microcracks, UCS: " +
        seeds_stat(r, "ucs", "shear_crack_fraction", 100, "{:.1f} %") + "\n";
