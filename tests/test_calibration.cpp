@@ -253,7 +253,8 @@ TEST(MaterialLibrary, EveryPresetShipsWithItsCalibrationRecord) {
     ASSERT_TRUE(r.is_object()) << m.name << ": no calibration record (materials/" << m.name
                                << "/record.json)";
     EXPECT_EQ(r.value("name", ""), std::string(m.name));
-    EXPECT_NE(r.value("command", "").find("breccia calibrate"), std::string::npos) << m.name;
+    EXPECT_NE(r.value("command", "").find(" calibrate "), std::string::npos) << m.name;
+    EXPECT_FALSE(r.value("calibration_file", "").empty()) << m.name;
     EXPECT_GE(r.value("verify_seeds", nlohmann::json::array()).size(), 3u) << m.name;
     ASSERT_TRUE(r.contains("verdicts") && !r["verdicts"].empty()) << m.name;
     for (const auto& v : r["verdicts"]) {

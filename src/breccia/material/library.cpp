@@ -97,6 +97,15 @@ std::string record_section(const EmbeddedMaterial& m) {
        seeds_stat(r, "ucs", "strain_at_peak", 100, "{:.3f} %") + "; Poisson ratio " +
        seeds_stat(r, "ucs", "poisson_ratio", 1, "{:.3f}") + "; crack initiation / UCS " +
        seeds_stat(r, "ucs", "crack_initiation_ratio", 1, "{:.2f}") + ".\n";
+  std::string resolution;
+  for (const auto& v : r.value("verdicts", json::array())) {
+    const std::string t = v.value("target", "?");
+    resolution +=
+        fmt::format("{}{} {} -> {}", resolution.empty() ? "" : "; ", t,
+                    shown(t, number(v, "calibration_sample")), shown(t, number(v, "mean")));
+  }
+  s += "- Resolution (calibration sample -> mean of the verification samples): " + resolution +
+       ".\n";
   s += "- Honesty checks over the verification seeds (mean, range):\n";
   s += "  - shear share of the microcracks, UCS: " +
        seeds_stat(r, "ucs", "shear_crack_fraction", 100, "{:.1f} %") + "\n";
