@@ -851,15 +851,19 @@ SampleInfo sample_info(const ExperimentSpec& s) {
   return info;
 }
 
-ExperimentSpec parse_experiment(const std::string& text, const std::string& source,
-                                const std::vector<std::string>& overrides) {
-  toml::table root;
+namespace {
+
+toml::table parse_toml(const std::string& text, const std::string& source) {
   try {
-    root = toml::parse(text, source);
+    return toml::parse(text, source);
   } catch (const toml::parse_error& e) {
     throw InputError(source + ":" + std::to_string(e.source().begin.line), "", "",
                      std::string("TOML syntax error: ") + std::string(e.description()));
   }
+}
+
+ExperimentSpec spec_from_table(toml::table root, const std::string& source,
+                               const std::vector<std::string>& overrides) {
   apply_overrides(root, overrides);
   ExperimentSpec spec = default_experiment();
   spec.source = source;
@@ -868,28 +872,24 @@ ExperimentSpec parse_experiment(const std::string& text, const std::string& sour
   return spec;
 }
 
+}  // namespace
+
+ExperimentSpec parse_experiment(const std::string& text, const std::string& source,
+                                const std::vector<std::string>& overrides) {
+  return spec_from_table(parse_toml(text, source), source, overrides);
+}
+
 ExperimentSpec parse_experiment_table(const std::string& text, const std::string& source,
                                       const std::string& table,
                                       const std::vector<std::string>& overrides) {
-  toml::table file;
-  try {
-    file = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    throw InputError(source + ":" + std::to_string(e.source().begin.line), "", "",
-                     std::string("TOML syntax error: ") + std::string(e.description()));
-  }
+  toml::table file = parse_toml(text, source);
   toml::table root;
   if (auto* t = file.get_as<toml::table>(table)) {
     root = std::move(*t);  // moved, so that the nodes keep their lines in the file
   } else if (file.contains(table)) {
     throw InputError(where_of(source, *file.get(table)), table, "", "expected a table");
   }
-  apply_overrides(root, overrides);
-  ExperimentSpec spec = default_experiment();
-  spec.source = source;
-  apply_table(spec, root, source);
-  check_consistency(spec, source);
-  return spec;
+  return spec_from_table(std::move(root), source, overrides);
 }
 
 ExperimentSpec load_experiment(const std::string& path, const std::vector<std::string>& overrides) {
