@@ -3,12 +3,14 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "breccia/calibrate/affine_elasticity.hpp"
 #include "breccia/calibrate/calibrate.hpp"
 #include "breccia/calibrate/laboratory.hpp"
 #include "breccia/core/error.hpp"
@@ -209,6 +211,9 @@ std::vector<BadCalibration> bad_calibrations() {
       {"NegativeConfiningStress",
        with_experiment(e_target + free_e + "[calibration]\nconfining_stresses = [-5e6]\n"),
        {"bad.toml:6", "calibration.confining_stresses", "above 0"}},
+      {"AimAboveTheTolerance",
+       with_experiment(e_target + free_e + "[calibration]\naim = 1.5\n"),
+       {"bad.toml:6", "calibration.aim", "1.5", "from 0.1 to 1"}},
   };
 }
 
@@ -300,4 +305,61 @@ TEST(MaterialLibrary, DocsTableIsUpToDate) {
 TEST(Calibration, DocsAreUpToDate) {
   EXPECT_EQ(breccia::testing::read(fs::path(BRECCIA_SOURCE_DIR) / "docs" / "calibration.md"),
             calibration_docs());
+}
+
+namespace {
+
+// Lame constants of the uniform-strain average of kn n n n n + ks (d n n - n n n n) over evenly
+// spread contact normals (a Fibonacci sphere, or a circle in 2D), up to a common factor.
+struct Lame {
+  double lambda, mu;
+};
+Lame averaged_contact_stiffness(int dimension, double kn, double ks) {
+  const int n = 20000;
+  double c1111 = 0.0, c1122 = 0.0;
+  for (int i = 0; i < n; ++i) {
+    double n1, n2;
+    if (dimension == 2) {
+      const double a = 2.0 * M_PI * (i + 0.5) / n;
+      n1 = std::cos(a);
+      n2 = std::sin(a);
+    } else {
+      const double z = 1.0 - 2.0 * (i + 0.5) / n, r = std::sqrt(1.0 - z * z);
+      const double a = M_PI * (3.0 - std::sqrt(5.0)) * i;
+      n1 = r * std::cos(a);
+      n2 = r * std::sin(a);
+    }
+    c1111 += kn * std::pow(n1, 4) + ks * (n1 * n1 - std::pow(n1, 4));
+    c1122 += (kn - ks) * n1 * n1 * n2 * n2;
+  }
+  return {c1122 / n, 0.5 * (c1111 - c1122) / n};
+}
+
+}  // namespace
+
+// The scaling law the elastic stage uses for nu is the affine average itself, derived here by
+// summing the contact stiffness over directions; 1e-3 is far above the quadrature error of 20,000
+// directions (about 1e-7) and far below the effect of kappa (0.13 to 0.22 for kappa 2.5 to 10).
+TEST(AffineElasticity, MatchesTheDirectionAverageOfTheContactStiffness) {
+  for (int dim : {2, 3}) {
+    const AffineElasticity affine{dim};
+    auto measured = [&](double kappa) {
+      const Lame l = averaged_contact_stiffness(dim, 1.0, 1.0 / kappa);
+      const double nu =
+          dim == 2 ? l.lambda / (l.lambda + 2 * l.mu) : l.lambda / (2 * (l.lambda + l.mu));
+      const double e = dim == 2 ? 4 * l.mu * (l.lambda + l.mu) / (l.lambda + 2 * l.mu)
+                                : l.mu * (3 * l.lambda + 2 * l.mu) / (l.lambda + l.mu);
+      return std::pair{nu, e};
+    };
+    for (double kappa : {1.0, 2.5, 10.0}) {
+      EXPECT_NEAR(measured(kappa).first, affine.poisson(kappa), 1e-3) << dim << "D " << kappa;
+      EXPECT_NEAR(affine.stiffness_ratio(affine.poisson(kappa)), kappa, 1e-9 * kappa);
+    }
+    EXPECT_NEAR(measured(10.0).second / measured(2.5).second,
+                affine.modulus_factor(10.0) / affine.modulus_factor(2.5), 1e-3);
+    EXPECT_NEAR(affine.poisson(1e9), affine.poisson_limit(), 1e-6);
+    EXPECT_TRUE(std::isinf(affine.stiffness_ratio(affine.poisson_limit())));
+  }
+  EXPECT_NEAR(AffineElasticity{3}.poisson_limit(), 0.25, 1e-15);
+  EXPECT_NEAR(AffineElasticity{2}.poisson_limit(), 1.0 / 3.0, 1e-15);
 }

@@ -14,6 +14,7 @@
 #include <optional>
 #include <sstream>
 
+#include "breccia/calibrate/affine_elasticity.hpp"
 #include "breccia/calibrate/laboratory.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
@@ -32,6 +33,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Residual given to a target the trial could not measure (no peak, a failed run): far outside
 // any tolerance, so the optimiser moves away, yet finite.
 constexpr double kUnmeasured = 30.0;
+// Scaling steps a stage may take before the optimiser (each one trial).
+constexpr int kScalingSteps = 3;
 
 // The error of a measurement in units of the target's tolerance: |r| <= 1 is met. Relative
 // targets are compared in log space (a factor 2 too strong weighs as a factor 2 too weak).
@@ -183,7 +186,7 @@ Evaluation Calibrator::evaluate(const std::vector<double>& v, std::optional<Cali
   for (const Target* t : stage_targets(stage)) {
     const double r = residual(*t, e.properties);
     e.objective += r * r;
-    e.met = e.met && std::abs(r) <= 1.0;
+    e.met = e.met && std::abs(r) <= c_.aim;
   }
   if (m.new_runs > 0) {
     new_run_seconds_ += m.wall_seconds;
@@ -244,7 +247,26 @@ std::vector<double> Calibrator::scaled_start(CalibrationStage stage, const Evalu
     if (i >= 0 && (c_.free[i].stage == stage || strength)) v[i] *= r;
   };
   if (stage == CalibrationStage::Elastic) {
-    const double r = ratio(Property::YoungsModulus);
+    double r = ratio(Property::YoungsModulus);
+    const int kappa = free_index("bond.stiffness_ratio");
+    const Target* nu = c_.target(Property::PoissonRatio);
+    const auto nu_seen = e.properties.find(Property::PoissonRatio);
+    if (kappa >= 0 && c_.free[kappa].stage == stage && nu && nu_seen != e.properties.end()) {
+      const AffineElasticity affine{static_cast<int>(c_.base.dimension)};
+      const double from = v[kappa];
+      // The measured ratio against the affine estimate keeps the non-affine correction of
+      // this packing; a target at or above the affine limit takes the upper bound.
+      const double seen = affine.stiffness_ratio(nu_seen->second);
+      double to = from;
+      if (nu->value >= affine.poisson_limit())
+        to = c_.free[kappa].upper;
+      else if (std::isfinite(seen) && seen > 0.0)
+        to = from * affine.stiffness_ratio(nu->value) / seen;
+      to = std::clamp(to, c_.free[kappa].lower, c_.free[kappa].upper);
+      v[kappa] = to;
+      // The shear stiffness falls with the ratio and takes E with it.
+      r *= affine.modulus_factor(from) / affine.modulus_factor(to);
+    }
     for (auto key : {"bond.modulus", "contact.modulus", "contact.shear_modulus"}) scale(key, r);
   } else if (stage == CalibrationStage::Strength) {
     const bool ts =
@@ -266,10 +288,21 @@ std::vector<double> Calibrator::scaled_start(CalibrationStage stage, const Evalu
 void Calibrator::fit_stage(CalibrationStage stage, int pass) {
   const auto idx = stage_parameters(stage);
   if (idx.empty() || stage_targets(stage).empty()) return;
-  const Evaluation e0 = evaluate(values_, stage, pass);
-  Evaluation best = e0;
-  if (!e0.met && c_.trials_per_stage > 1) {
-    const std::vector<double> start = scaled_start(stage, e0);
+  Evaluation best = evaluate(values_, stage, pass);
+  int used = 1;
+  // Scaling steps while they help: each is a Newton step on the proportional laws, so two or
+  // three usually land inside the tolerance. COBYLA's linear model of the summed squares is poor
+  // near a minimum, so it only takes over where the scaling stops improving.
+  for (int k = 0; k < kScalingSteps && !best.met && used < c_.trials_per_stage; ++k) {
+    const std::vector<double> next = scaled_start(stage, best);
+    if (next == best.values) break;
+    const Evaluation e = evaluate(next, stage, pass);
+    ++used;
+    if (!(e.objective < best.objective)) break;
+    best = e;
+  }
+  if (!best.met && used < c_.trials_per_stage) {
+    const std::vector<double> start = best.values;
     std::vector<double> x0(idx.size());
     for (std::size_t k = 0; k < idx.size(); ++k) x0[k] = to_unit(idx[k], start[idx[k]]);
     struct Context {
@@ -306,7 +339,8 @@ void Calibrator::fit_stage(CalibrationStage stage, int pass) {
     opt.set_lower_bounds(std::vector<double>(idx.size(), 0.0));
     opt.set_upper_bounds(std::vector<double>(idx.size(), 1.0));
     opt.set_min_objective(objective, &ctx);
-    opt.set_maxeval(static_cast<int>(c_.trials_per_stage) - 1);
+    // Its first point is the best so far, read back from the cache, not a new trial.
+    opt.set_maxeval(static_cast<int>(c_.trials_per_stage) - used + 1);
     opt.set_xtol_abs(1e-3);
     // A first step of 5 % of the unit range (about 20 % of the value for a factor-50 range in
     // log scale) after the scaling start; the friction stage has no scaling law to start from

@@ -308,6 +308,10 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
       c.trials_per_stage = int_of(v, w, key, 1, 200);
     } else if (item == "passes") {
       c.passes = int_of(v, w, key, 1, 5);
+    } else if (item == "aim") {
+      c.aim = real_of(v, w, key);
+      if (!(c.aim >= 0.1 && c.aim <= 1.0))
+        throw InputError(w, key, show(v), "a fraction of each tolerance from 0.1 to 1");
     } else if (item == "verify_seeds") {
       const auto* a = v.as_array();
       if (!a) throw InputError(w, key, show(v), "expected an array of seeds (integers)");
@@ -329,7 +333,7 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
     } else {
       throw InputError(w, key, show(v),
                        "unknown key; allowed: name, rock, confining_stresses, trials_per_stage, "
-                       "passes, verify_seeds, verify_set, brazilian_diameter, "
+                       "passes, aim, verify_seeds, verify_set, brazilian_diameter, "
                        "brazilian_thickness, brazilian_platen_speed");
     }
   }
@@ -500,6 +504,9 @@ std::string calibration_docs() {
       "| `trials_per_stage` | 10 | trials of one stage in one pass, 1 to 200 |\n"
       "| `passes` | 2 | passes over the three stages, 1 to 5 (stops early when every target is "
       "met) |\n"
+      "| `aim` | 1 | fraction of each tolerance a trial must reach to count as met during the "
+      "search, 0.1 to 1; the verdicts keep the full tolerance. Below 1 it leaves room for the "
+      "drift between the calibration sample and a larger verification sample |\n"
       "| `verify_seeds` | [1, 2, 3] | packing seeds of the verification (empty: no verification; "
       "the verdict is then the calibration sample's) |\n"
       "| `verify_set` | [] | experiment overrides (`\"section.key=value\"`) of the verification, "

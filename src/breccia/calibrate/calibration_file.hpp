@@ -73,6 +73,9 @@ struct CalibrationSpec {
   double disc_diameter = 0.0, disc_thickness = 0.0, disc_platen_speed = 0.02;  // Brazilian
   std::int64_t trials_per_stage = 10;
   std::int64_t passes = 2;
+  // Fraction of each tolerance a trial must reach to count as met during the search; below 1 it
+  // leaves room for the drift from the calibration sample to the verification sample.
+  double aim = 1.0;
   std::vector<std::int64_t> verify_seeds{1, 2, 3};
   std::vector<std::string> verify_set;  // experiment overrides for the verification (full size)
   ExperimentSpec base;                  // the experiment at the start values

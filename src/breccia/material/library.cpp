@@ -141,8 +141,8 @@ constexpr PendingRock kPending[] = {
     {"lac_du_bonnet", "Lac du Bonnet granite, 3D (seed 002 and its references)",
      "E 69 GPa, nu 0.26, UCS 200 MPa, Brazilian TS 9.3 MPa (secondary: Potyondy & Cundall 2004; "
      "Martin & Chandler 1994)",
-     "not calibrated yet; its UCS/TS of 21.5 lies beyond the parallel bond's reach (about 4, "
-     "seed 003), so one of the two has to be chosen"},
+     "calibration file written (examples/calibrate-lac-du-bonnet.toml), not yet run; it "
+     "honours the UCS, since a UCS/TS of 21.5 lies beyond the parallel bond's reach"},
     {"lac_du_bonnet_2d", "Lac du Bonnet granite, 2D (seed 002)",
      "UCS 233.8 MPa, C 54.6 MPa, phi 40 deg (seed 002 model)", "needs the 2D laboratory"},
     {"brenna", "Brenna sandstone (seed 001, BR2)", "E 20.5 GPa, nu 0.25, UCS 99 MPa",
@@ -157,8 +157,9 @@ constexpr PendingRock kPending[] = {
      "E 14.5 GPa, nu 0.30, UCS 105 MPa, crack initiation 47 MPa",
      "calibration file written (examples/calibrate-pfc-sandstone.toml), not yet run"},
     {"coal", "coal-like rock (seed 004)",
-     "E and UCS of its lab curve (UCS about 10 MPa at low strain rate)",
-     "not calibrated yet: the targets must first be read from the seed's model and fit"},
+     "UCS 10.06 MPa at 0.05 1/s and strain at peak 0.625 % (seed 004 text; its E only as a "
+     "figure)",
+     "calibration file written (examples/calibrate-coal.toml), not yet run"},
 };
 
 std::string pending_section() {
@@ -218,8 +219,12 @@ std::string materials_docs() {
        "the tensile strength 5-6 times; PFC answers with clumps and flat joints). A calibration "
        "that targets both cannot meet both: the calibration file then names the one the preset "
        "honours, and the other is reported here with its miss rather than bent by a parameter "
-       "nothing else would justify. The same applies to the Poisson ratio at a high E: the "
-       "stiffness ratio that gives a high nu also softens the assembly. Presets are calibrated "
+       "nothing else would justify. Poisson's ratio has a limit of its own: in a "
+       "packing that deforms affinely, nu = (kappa - 1) / (4 kappa + 1) for a normal-to-shear "
+       "stiffness ratio kappa, which tends to 1/4 as kappa grows (1/3 in 2D), and real packings "
+       "sit a little below it (0.128 measured against 0.136 affine at kappa = 2.5). With kappa "
+       "at most 10 (a larger one makes bonds nearly free in shear) a 3D preset reaches about "
+       "0.2; rocks above that are reported as misses. Presets are calibrated "
        "at one resolution (grain size and sample size in each record); DEM moduli and strengths "
        "depend on it, so a sample of other grains should be calibrated again.\n";
   s += pending_section();
