@@ -267,11 +267,40 @@ TEST(MaterialLibrary, EveryPresetShipsWithItsCalibrationRecord) {
       EXPECT_FALSE(v.value("source", "").empty()) << m.name << " " << v.dump();
     }
   }
+  // ... and passes the honesty checks (both crack modes, no crushed end).
+  for (const auto& m : embedded_materials())
+    for (const auto& f : honesty_failures(m)) ADD_FAILURE() << m.name << ": " << f;
   // The built-in default experiment uses a calibrated rock.
   const ExperimentSpec d = default_experiment();
   bool found = false;
   for (const auto& m : embedded_materials()) found |= m.name == d.preset;
   EXPECT_TRUE(found) << d.preset;
+}
+
+// The honesty checks catch what they name: a UCS without shear cracks, a crushed end, and a
+// triaxial test without shear cracks; a record that meets them passes.
+TEST(MaterialLibrary, HonestyChecksCatchMissingShearCracksAndCrushedEnds) {
+  auto record = [](double ucs_shear, double ucs_end, double triaxial_shear) {
+    nlohmann::json seed = {
+        {"tests",
+         {{"ucs", {{"shear_crack_fraction", ucs_shear}, {"largest_end_quarter_share", ucs_end}}},
+          {"triaxial-10MPa",
+           {{"shear_crack_fraction", triaxial_shear}, {"largest_end_quarter_share", 0.3}}}}}};
+    return nlohmann::json{{"verification", {seed, seed, seed}}}.dump();
+  };
+  const std::string good = record(0.05, 0.3, 0.2), no_shear = record(0.0004, 0.3, 0.2),
+                    crushed = record(0.05, 0.55, 0.2), triaxial = record(0.05, 0.3, 0.005);
+  EXPECT_TRUE(honesty_failures({"good", "", good}).empty());
+  const auto a = honesty_failures({"no_shear", "", no_shear});
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_NE(a[0].find("ucs: shear share of the microcracks 0.04 %"), std::string::npos) << a[0];
+  const auto b = honesty_failures({"crushed", "", crushed});
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_NE(b[0].find("55 % of the cracks in one end quarter"), std::string::npos) << b[0];
+  const auto c = honesty_failures({"triaxial", "", triaxial});
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_NE(c[0].find("triaxial-10MPa"), std::string::npos) << c[0];
+  EXPECT_FALSE(honesty_failures({"empty", "", "{}"}).empty());
 }
 
 // Each preset loads, validates and runs a tiny UCS (an FCC block of 16 grains: seconds).

@@ -62,6 +62,33 @@ std::string seeds_stat(const json& r, const std::string& test, const std::string
          fmt::format(fmt::runtime(fmt_spec), hi) + ")";
 }
 
+// Mean over the verification seeds of one measurement of one test; NaN when none has it.
+double seeds_mean(const json& r, const std::string& test, const std::string& key) {
+  double sum = 0.0;
+  int n = 0;
+  for (const auto& s : r.value("verification", json::array()))
+    if (s.contains("tests") && s["tests"].contains(test) && s["tests"][test].contains(key)) {
+      sum += s["tests"][test][key].get<double>();
+      ++n;
+    }
+  return n > 0 ? sum / n : std::nan("");
+}
+
+// The tests of the verification (ucs, triaxial-<s>MPa, ...), from its first seed.
+std::vector<std::string> verification_tests(const json& r) {
+  std::vector<std::string> tests;
+  const json seeds = r.value("verification", json::array());
+  if (seeds.empty()) return tests;
+  const json first = seeds[0].value("tests", json::object());
+  for (const auto& [test, props] : first.items())
+    if (props.contains("shear_crack_fraction")) tests.push_back(test);
+  return tests;
+}
+
+std::string verdict(bool pass) {
+  return pass ? "passes" : "**FAILS**";
+}
+
 std::string record_section(const EmbeddedMaterial& m) {
   const json r = record_of(m);
   std::string s = fmt::format("\n## `{}`: {}\n\n", m.name, r.value("rock", std::string(m.name)));
@@ -106,23 +133,22 @@ std::string record_section(const EmbeddedMaterial& m) {
   }
   s += "- Resolution (calibration sample -> mean of the verification samples): " + resolution +
        ".\n";
-  s += "- Honesty checks over the verification seeds (mean, range):\n";
-  s += "  - shear share of the microcracks, UCS: " +
-       seeds_stat(r, "ucs", "shear_crack_fraction", 100, "{:.1f} %") + "\n";
-  for (const auto& v : r.value("verification", json::array())) {
-    const json tests = v.value("tests", json::object());
-    for (const auto& [test, props] : tests.items())
-      if (test.rfind("triaxial", 0) == 0) {
-        s += "  - shear share, " + test + ": " +
-             seeds_stat(r, test, "shear_crack_fraction", 100, "{:.1f} %") + "\n";
-        s += "  - largest share of the cracks in an end quarter, " + test + ": " +
-             seeds_stat(r, test, "largest_end_quarter_share", 100, "{:.0f} %") + "\n";
-      }
-    break;
+  s += fmt::format(
+      "- Honesty checks over the verification seeds (mean, range; a preset ships only when "
+      "all pass: a shear share of at least {:g} % in every test, no end quarter with more than "
+      "{:g} % of the UCS cracks on average):\n",
+      100 * kMinShearShare, 100 * kMaxEndQuarterShare);
+  for (const auto& test : verification_tests(r)) {
+    s += fmt::format("  - shear share of the microcracks, {}: {}, {}\n", test,
+                     seeds_stat(r, test, "shear_crack_fraction", 100, "{:.1f} %"),
+                     verdict(seeds_mean(r, test, "shear_crack_fraction") >= kMinShearShare));
+    s += fmt::format("  - largest share of the cracks in an end quarter, {}: {}{}\n", test,
+                     seeds_stat(r, test, "largest_end_quarter_share", 100, "{:.0f} %"),
+                     test == "ucs"
+                         ? ", " + verdict(seeds_mean(r, test, "largest_end_quarter_share") <=
+                                          kMaxEndQuarterShare)
+                         : std::string());
   }
-  s += "  - largest share of the cracks in an end quarter, UCS (a crushed end shows above 40 "
-       "%): " +
-       seeds_stat(r, "ucs", "largest_end_quarter_share", 100, "{:.0f} %") + "\n";
   return s;
 }
 
@@ -146,7 +172,10 @@ constexpr PendingRock kPending[] = {
     {"lac_du_bonnet_2d", "Lac du Bonnet granite, 2D (seed 002)",
      "UCS 233.8 MPa, C 54.6 MPa, phi 40 deg (seed 002 model)", "needs the 2D laboratory"},
     {"brenna", "Brenna sandstone (seed 001, BR2)", "E 20.5 GPa, nu 0.25, UCS 99 MPa",
-     "calibration file written (examples/calibrate-brenna.toml), not yet run"},
+     "calibrated once (37 min on 2 cores, 5,900 grains: E 20.86 GPa +1.8 %, UCS 101.0 MPa "
+     "+2.0 %, nu 0.214 MISSED by 0.036) but not shipped: with bond cohesion 2x the tensile "
+     "strength no bond broke in shear (0.03 %), which fails the honesty check; "
+     "examples/calibrate-brenna.toml now ties it at 1.2x and waits to be run again"},
     {"mucharz", "Mucharz sandstone (seed 001, MU1)", "E 31.8 GPa, nu 0.23, UCS 138 MPa",
      "calibration file written (examples/calibrate-mucharz.toml), not yet run"},
     {"radkow", "Radkow sandstone (seed 001, RAD1)", "E 22.8 GPa, nu 0.20, UCS 60 MPa",
@@ -177,6 +206,24 @@ std::string pending_section() {
 }
 
 }  // namespace
+
+std::vector<std::string> honesty_failures(const EmbeddedMaterial& m) {
+  const json r = record_of(m);
+  std::vector<std::string> failures;
+  const auto tests = verification_tests(r);
+  if (tests.empty()) failures.push_back("no verification tests with crack counts in the record");
+  for (const auto& test : tests) {
+    const double shear = seeds_mean(r, test, "shear_crack_fraction");
+    if (!(shear >= kMinShearShare))
+      failures.push_back(fmt::format("{}: shear share of the microcracks {:.2f} %, below {:g} %",
+                                     test, 100 * shear, 100 * kMinShearShare));
+  }
+  const double end = seeds_mean(r, "ucs", "largest_end_quarter_share");
+  if (!(end <= kMaxEndQuarterShare))
+    failures.push_back(fmt::format("ucs: {:.0f} % of the cracks in one end quarter, above {:g} %",
+                                   100 * end, 100 * kMaxEndQuarterShare));
+  return failures;
+}
 
 std::string describe_material(const EmbeddedMaterial& m) {
   const json r = record_of(m);
@@ -222,9 +269,10 @@ std::string materials_docs() {
        "nothing else would justify. Poisson's ratio has a limit of its own: in a "
        "packing that deforms affinely, nu = (kappa - 1) / (4 kappa + 1) for a normal-to-shear "
        "stiffness ratio kappa, which tends to 1/4 as kappa grows (1/3 in 2D), and real packings "
-       "sit a little below it (0.128 measured against 0.136 affine at kappa = 2.5). With kappa "
-       "at most 10 (a larger one makes bonds nearly free in shear) a 3D preset reaches about "
-       "0.2; rocks above that are reported as misses. Presets are calibrated "
+       "sit a little below it (0.128 measured against 0.136 affine at kappa = 2.5, 0.214 "
+       "against 0.220 at kappa = 10 in the Brenna calibration). With kappa at most 10 (a "
+       "larger one makes bonds nearly free in shear) a 3D preset reaches about 0.21; rocks "
+       "above that are reported as misses. Presets are calibrated "
        "at one resolution (grain size and sample size in each record); DEM moduli and strengths "
        "depend on it, so a sample of other grains should be calibrated again.\n";
   s += pending_section();
