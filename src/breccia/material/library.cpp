@@ -120,7 +120,8 @@ std::string record_section(const EmbeddedMaterial& m) {
   for (const auto& [k, v] : parameters.items())
     params += (params.empty() ? "" : ", ") + fmt::format("`{}` = {:.4g}", k, v.get<double>());
   s += params + ".\n";
-  s += "- Measured in the verification UCS tests (mean, range): strain at peak " +
+  s += "- Measured in the verification UCS tests (mean, range): E_t50 " +
+       seeds_stat(r, "ucs", "youngs_modulus", 1e-9, "{:.2f} GPa") + "; strain at peak " +
        seeds_stat(r, "ucs", "strain_at_peak", 100, "{:.3f} %") + "; Poisson ratio " +
        seeds_stat(r, "ucs", "poisson_ratio", 1, "{:.3f}") + "; crack initiation / UCS " +
        seeds_stat(r, "ucs", "crack_initiation_ratio", 1, "{:.2f}") + ".\n";
@@ -267,12 +268,13 @@ std::string materials_docs() {
                        tolerance_text(v), v.value("met", false) ? "met" : "**MISSED**");
     }
   }
-  s += "\nEach record names the commit that made it. `berea` was made at commit 00ef7e2 (one "
-       "scaling step per stage, every trial aiming at the full tolerance); "
-       "`examples/calibrate-berea.toml` now asks for half the tolerance (`aim = 0.5`, to meet "
-       "E at the verification size, which this record misses) and the method takes up to three "
-       "scaling steps, so running it today takes another path and gives other values. Its "
-       "recalibration is the library's next step.\n";
+  s += "\nEach record names the commit that made it. `berea`'s record names 00ef7e2, which was "
+       "only the commit its build folder had been configured at (builds now follow HEAD); it was "
+       "made by the code of bca8aa3 to 670ead8, with one scaling step per stage and every trial "
+       "aiming at the full tolerance. `examples/calibrate-berea.toml` now asks for half the "
+       "tolerance (`aim = 0.5`, to meet E at the verification size, which this record misses) "
+       "and the method takes up to three scaling steps, so running it today takes another path "
+       "and gives other values. Its recalibration is the library's next step.\n";
   s += "\n## The measured Young's modulus includes the platen contacts\n\n"
        "The UCS test takes its axial strain from the platen separation, so E_t50 includes the "
        "compliance of the Hertz contacts between the platens and the end grains. Two heights "
