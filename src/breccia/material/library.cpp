@@ -44,34 +44,35 @@ std::string tolerance_text(const json& v) {
   return fmt::format("{:g} {}", t, v.value("unit", ""));
 }
 
-// Mean and spread of a per-test measurement over the verification seeds.
-std::string seeds_stat(const json& r, const std::string& test, const std::string& key, double scale,
-                       const char* fmt_spec) {
+// One measurement of one test over the verification seeds (those that have it).
+std::vector<double> seeds_values(const json& r, const std::string& test, const std::string& key) {
   std::vector<double> xs;
   for (const auto& s : r.value("verification", json::array()))
     if (s.contains("tests") && s["tests"].contains(test) && s["tests"][test].contains(key))
-      xs.push_back(s["tests"][test][key].get<double>() * scale);
+      xs.push_back(s["tests"][test][key].get<double>());
+  return xs;
+}
+
+// Their mean; NaN when no seed has it.
+double seeds_mean(const json& r, const std::string& test, const std::string& key) {
+  const auto xs = seeds_values(r, test, key);
+  if (xs.empty()) return std::nan("");
+  double sum = 0.0;
+  for (double x : xs) sum += x;
+  return sum / static_cast<double>(xs.size());
+}
+
+// Their mean and range, scaled and formatted.
+std::string seeds_stat(const json& r, const std::string& test, const std::string& key, double scale,
+                       const char* fmt_spec) {
+  const auto xs = seeds_values(r, test, key);
   if (xs.empty()) return "n/a";
-  double mean = 0;
-  for (double x : xs) mean += x;
-  mean /= static_cast<double>(xs.size());
+  const double mean = scale * seeds_mean(r, test, key);
   double lo = xs[0], hi = xs[0];
   for (double x : xs) lo = std::min(lo, x), hi = std::max(hi, x);
   return fmt::format(fmt::runtime(fmt_spec), mean) + " (" +
-         fmt::format(fmt::runtime(fmt_spec), lo) + " to " +
-         fmt::format(fmt::runtime(fmt_spec), hi) + ")";
-}
-
-// Mean over the verification seeds of one measurement of one test; NaN when none has it.
-double seeds_mean(const json& r, const std::string& test, const std::string& key) {
-  double sum = 0.0;
-  int n = 0;
-  for (const auto& s : r.value("verification", json::array()))
-    if (s.contains("tests") && s["tests"].contains(test) && s["tests"][test].contains(key)) {
-      sum += s["tests"][test][key].get<double>();
-      ++n;
-    }
-  return n > 0 ? sum / n : std::nan("");
+         fmt::format(fmt::runtime(fmt_spec), scale * lo) + " to " +
+         fmt::format(fmt::runtime(fmt_spec), scale * hi) + ")";
 }
 
 // The tests of the verification (ucs, triaxial-<s>MPa, ...), from its first seed.
