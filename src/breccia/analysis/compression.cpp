@@ -11,6 +11,14 @@ namespace {
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+bool has_gauges(const CompressionSeries& s, std::size_t rows) {
+  if (s.gauge_axial_strain.size() < rows || s.gauge_lateral_strain.size() < rows) return false;
+  for (std::size_t k = 0; k < rows; ++k)
+    if (!std::isfinite(s.gauge_axial_strain[k]) || !std::isfinite(s.gauge_lateral_strain[k]))
+      return false;
+  return rows > 0;
+}
+
 }  // namespace
 
 CompressionResult analyse_compression(const CompressionSeries& s) {
@@ -30,30 +38,35 @@ CompressionResult analyse_compression(const CompressionSeries& s) {
   r.peak_deviatoric = peak.stress;
   r.sigma1_at_peak = peak.stress + s.confining_stress;
   r.strain_at_peak = peak.strain;
+  // The strains the moduli are measured with: the sample gauges when every row has them.
+  r.moduli_from_gauges = has_gauges(s, n);
+  const auto& em = r.moduli_from_gauges ? s.gauge_axial_strain : e;
+  const auto& lateral = r.moduli_from_gauges ? s.gauge_lateral_strain : s.lateral_strain;
   // E_t50 with the window widening of §1.3.
   for (double w = 0.1; w <= 0.25 + 1e-12; w += 0.05) {
     r.e_t50_lo = 0.5 - w;
     r.e_t50_hi = 0.5 + w;
-    r.e_t50 = tangent_modulus(e, q, r.e_t50_lo, r.e_t50_hi);
+    r.e_t50 = tangent_modulus(em, q, r.e_t50_lo, r.e_t50_hi);
     if (r.e_t50.points >= 5) break;
   }
-  r.e_av = tangent_modulus(e, q, 0.25, 0.75);
+  r.e_t50_platen = tangent_modulus(e, q, r.e_t50_lo, r.e_t50_hi);
+  r.e_av = tangent_modulus(em, q, 0.25, 0.75);
   r.e_s50 = kNaN;
   for (std::size_t k = 1; k <= ip; ++k)
     if (q[k] >= 0.5 * peak.stress && q[k - 1] < 0.5 * peak.stress) {
       const double e50 =
-          e[k - 1] + (e[k] - e[k - 1]) * (0.5 * peak.stress - q[k - 1]) / (q[k] - q[k - 1]);
+          em[k - 1] + (em[k] - em[k - 1]) * (0.5 * peak.stress - q[k - 1]) / (q[k] - q[k - 1]);
       r.e_s50 = e50 > 0.0 ? 0.5 * peak.stress / e50 : kNaN;
       break;
     }
   // Poisson's ratio over the same window.
   r.poisson = kNaN;
-  if (!s.lateral_strain.empty()) {
+  if (!lateral.empty()) {
     std::vector<double> x, y;
     for (std::size_t k = 0; k <= ip; ++k)
       if (q[k] >= r.e_t50_lo * peak.stress && q[k] <= r.e_t50_hi * peak.stress) {
-        x.push_back(e[k]);
-        y.push_back(s.lateral_strain[k]);
+        x.push_back(em[k]);
+        y.push_back(lateral[k]);
       }
     const LinearFit l = fit_line(x, y);
     // Lateral strain is compression-positive, so expansion makes the slope negative.

@@ -11,6 +11,11 @@ namespace breccia::analysis {
 
 struct CompressionSeries {
   std::vector<double> axial_strain, deviatoric, lateral_strain, volumetric_strain;
+  // Strain gauges on the sample (AxialState): empty, or one value per row. When every row has
+  // finite values, E and nu come from them, as the ISRM method for deformability measures strain
+  // away from the platens; the platen approach `axial_strain` stays the test's strain (peak
+  // strain, curves).
+  std::vector<double> gauge_axial_strain, gauge_lateral_strain;
   std::vector<double> broken_bonds;  // cumulative
   double confining_stress = 0.0;     // sigma_3 set-point, Pa
 };
@@ -23,6 +28,8 @@ struct CompressionResult {
   LinearFit e_av;                         // over [0.25, 0.75] q_peak
   double e_s50 = 0.0;                     // secant at 50 % of the peak (NaN if not crossed)
   double poisson = 0.0;                   // -slope of lateral vs axial strain over the E_t50 window
+  bool moduli_from_gauges = false;        // E and nu from the sample gauges, not the platens
+  LinearFit e_t50_platen;                 // E_t50 against the platen approach (same window)
   double crack_initiation = 0.0;          // q at 5 % of the cracks at peak (NaN without cracks)
   double crack_damage = 0.0;              // q at the maximum volumetric strain before the peak
   bool no_reversal = false;

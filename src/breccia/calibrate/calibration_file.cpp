@@ -29,8 +29,9 @@ const std::vector<PropertyInfo>& property_table() {
   using S = CalibrationStage;
   static const std::vector<PropertyInfo> table{
       {Property::YoungsModulus, "youngs_modulus", "Pa",
-       "Young's modulus E_t50 of the UCS test (ISRM tangent at 50 % of the peak)", S::Elastic, true,
-       0.05},
+       "Young's modulus E_t50 of the UCS test (ISRM tangent at 50 % of the peak, read with the "
+       "sample gauge)",
+       S::Elastic, true, 0.05},
       {Property::PoissonRatio, "poisson_ratio", "-",
        "Poisson's ratio of the UCS test (lateral over axial strain at 50 % of the peak)",
        S::Elastic, false, 0.03},

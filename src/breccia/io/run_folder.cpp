@@ -612,7 +612,7 @@ std::string summarise_folder(const std::string& folder) {
 namespace {
 
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
-constexpr std::uint32_t kCheckpointFormat = 2;  // 2: commit and trailing hash
+constexpr std::uint32_t kCheckpointFormat = 3;  // 2: commit and trailing hash; 3: strain gauges
 constexpr const char* kCheckpointFile = "checkpoint.bin";
 
 // What the loading loop carries from one row to the next besides the engine, the protocol and
@@ -636,6 +636,8 @@ struct LoopState {
     a.vector(series.deviatoric);
     a.vector(series.lateral_strain);
     a.vector(series.volumetric_strain);
+    a.vector(series.gauge_axial_strain);
+    a.vector(series.gauge_lateral_strain);
     a.vector(series.broken_bonds);
     a.value(series.confining_stress);
     a.vector(imbalance);
@@ -658,6 +660,7 @@ struct LoopState {
     const std::size_t rows = series.axial_strain.size();
     for (std::size_t m :
          {series.deviatoric.size(), series.lateral_strain.size(), series.volumetric_strain.size(),
+          series.gauge_axial_strain.size(), series.gauge_lateral_strain.size(),
           series.broken_bonds.size(), imbalance.size(), ke_ratio.size()})
       if (m != rows)
         throw InputError(a.where(), "series", std::to_string(m),
@@ -752,12 +755,15 @@ void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
   const auto& s = L.series;
   double qmax = 0.0;
   for (double q : s.deviatoric) qmax = std::max(qmax, q);
+  // The sample gauges where the test has them (they leave out the platen contacts).
+  const bool gauges = !s.gauge_axial_strain.empty() && std::isfinite(s.gauge_axial_strain[0]) &&
+                      std::isfinite(s.gauge_lateral_strain[0]);
   std::vector<double> x, y, lat;
   for (std::size_t k = 0; k < s.deviatoric.size(); ++k)
     if (s.deviatoric[k] >= 0.2 * qmax && qmax > 0.0) {
-      x.push_back(s.axial_strain[k]);
+      x.push_back(gauges ? s.gauge_axial_strain[k] : s.axial_strain[k]);
       y.push_back(s.deviatoric[k]);
-      lat.push_back(s.lateral_strain[k]);
+      lat.push_back(gauges ? s.gauge_lateral_strain[k] : s.lateral_strain[k]);
     }
   const analysis::LinearFit fe = analysis::fit_line(x, y, 3);
   const analysis::LinearFit fn = analysis::fit_line(x, lat, 3);
@@ -912,6 +918,8 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
       series.deviatoric.push_back(a.deviatoric);
       series.lateral_strain.push_back(a.lateral_strain);
       series.volumetric_strain.push_back(a.volumetric_strain);
+      series.gauge_axial_strain.push_back(a.gauge_strain);
+      series.gauge_lateral_strain.push_back(a.gauge_lateral_strain);
       series.broken_bonds.push_back(static_cast<double>(sim.cracks().size()));
       // Quality monitors, judged after the run over the pre-peak rows (physics.md §6.1).
       const double fbar = 0.5 * (a.force_bottom + a.force_top);
@@ -1037,15 +1045,27 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
         {"youngs_modulus_pa", an.e_t50.valid ? json(an.e_t50.slope) : json(nullptr)},
         {"youngs_modulus_method",
          fmt::format("ISRM tangent E_t50: least-squares slope of q = sigma_1 - sigma_3 against "
-                     "axial strain over pre-peak samples at {:.0f}-{:.0f} % of the peak",
+                     "{} over pre-peak samples at {:.0f}-{:.0f} % of the peak",
+                     an.moduli_from_gauges
+                         ? "the axial strain of the sample gauge (grain layers at 1/4 and 3/4 "
+                           "of the height, clear of the platen contacts)"
+                         : "the platen approach strain",
                      100 * an.e_t50_lo, 100 * an.e_t50_hi)},
         {"youngs_modulus_fit",
          {{"points", an.e_t50.points},
           {"r2", an.e_t50.r2},
+          {"strain_column", an.moduli_from_gauges ? "gauge_axial_strain" : "axial_strain"},
           {"window_fraction_of_peak", {an.e_t50_lo, an.e_t50_hi}}}},
+        {"youngs_modulus_platen_pa",
+         an.e_t50_platen.valid ? json(an.e_t50_platen.slope) : json(nullptr)},
         {"youngs_modulus_average_pa", an.e_av.valid ? json(an.e_av.slope) : json(nullptr)},
         {"youngs_modulus_secant50_pa", nan_null(an.e_s50)},
         {"poisson_ratio", nan_null(an.poisson)},
+        {"poisson_ratio_method",
+         an.moduli_from_gauges ? "-slope of the gauge lateral strain (lateral-face grains of "
+                                 "the middle half) against the gauge axial strain, E_t50 window"
+                               : "-slope of the lateral strain against the platen approach "
+                                 "strain, E_t50 window"},
         {"crack_initiation_stress_pa", nan_null(an.crack_initiation)},
         {"crack_initiation_method", "q when the broken bonds reach 5 % of those at the peak"},
         {"crack_damage_stress_pa", nan_null(an.crack_damage)},

@@ -60,6 +60,8 @@ HistoryRecorder::HistoryRecorder(const std::string& path)
                   "confining_stress_pa",
                   "lateral_strain",
                   "volumetric_strain",
+                  "gauge_axial_strain",
+                  "gauge_lateral_strain",
                   "platen_force_bottom_n",
                   "platen_force_top_n",
                   "broken_bonds",
@@ -103,15 +105,17 @@ void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
   const std::size_t tensile = tensile_;
   const EnergyLedger& L = sim.ledger();
   csv_.write_line(fmt::format(
-      "{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{},{},{},"
+      "{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
+      "{},{},{},{},{},"
       "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
       "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g}",
       sim.step_count(), sim.time(), a.strain, a.stress, a.stress_nominal, a.deviatoric,
-      a.confining_stress, a.lateral_strain, a.volumetric_strain, a.force_bottom, a.force_top,
-      sim.cracks().size(), tensile, sim.cracks().size() - tensile, sim.intact_bonds(),
-      sim.active_contacts(), L.kinetic(), L.bond.tension, L.bond.compression, L.bond.shear,
-      L.bond.bending, L.bond.twisting, L.contact, L.boundary_work, L.friction, L.local_damping,
-      L.viscous_damping, L.deleted, L.released.total(), L.residual, L.residual_relative));
+      a.confining_stress, a.lateral_strain, a.volumetric_strain, a.gauge_strain,
+      a.gauge_lateral_strain, a.force_bottom, a.force_top, sim.cracks().size(), tensile,
+      sim.cracks().size() - tensile, sim.intact_bonds(), sim.active_contacts(), L.kinetic(),
+      L.bond.tension, L.bond.compression, L.bond.shear, L.bond.bending, L.bond.twisting, L.contact,
+      L.boundary_work, L.friction, L.local_damping, L.viscous_damping, L.deleted,
+      L.released.total(), L.residual, L.residual_relative));
 }
 
 std::string crack_row(const CrackRecord& c) {

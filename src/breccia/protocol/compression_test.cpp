@@ -54,21 +54,65 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
       }
     }
   } else {
-    // Boundary particles within one maximum radius of each lateral face (or of the shell).
-    for (std::uint32_t i = 0; i < p.size(); ++i) {
-      const PosRad& q = p.pos_rad[i];
-      if (lateral_ == LateralBoundary::Cylinder) {
-        if (std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r > shell - r_max)
-          face_[0].push_back(i);
-        continue;
-      }
-      if (q.x.x - q.r < lo.x + r_max) face_[0].push_back(i);
-      if (q.x.x + q.r > hi.x - r_max) face_[1].push_back(i);
-      if (!planar_ && q.x.y - q.r < lo.y + r_max) face_[2].push_back(i);
-      if (!planar_ && q.x.y + q.r > hi.y - r_max) face_[3].push_back(i);
-    }
+    find_face_grains(sim, -inf, inf, face_);  // they measure the lateral strain (§1.1)
   }
   servo_ = StressServo{st_.confining_stress, st_.servo_relaxation, 10.0 * st_.platen_speed};
+}
+
+void PlatenCompression::find_face_grains(const Simulation& sim, double z_from, double z_to,
+                                         std::vector<std::uint32_t> (&faces)[4]) const {
+  const ParticleStore& p = sim.particles();
+  const double inf = std::numeric_limits<double>::infinity();
+  Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+  double r_max = 0.0, shell = 0.0;
+  for (const PosRad& q : p.pos_rad) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], q.x[k] - q.r);
+      hi[k] = std::max(hi[k], q.x[k] + q.r);
+    }
+    r_max = std::max(r_max, q.r);
+    shell = std::max(shell, std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r);
+  }
+  for (auto& f : faces) f.clear();
+  for (std::uint32_t i = 0; i < p.size(); ++i) {
+    const PosRad& q = p.pos_rad[i];
+    if (q.x[axis_] < z_from || q.x[axis_] > z_to) continue;
+    if (lateral_ == LateralBoundary::Cylinder) {
+      if (std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r > shell - r_max)
+        faces[0].push_back(i);
+      continue;
+    }
+    if (q.x.x - q.r < lo.x + r_max) faces[0].push_back(i);
+    if (q.x.x + q.r > hi.x - r_max) faces[1].push_back(i);
+    if (!planar_ && q.x.y - q.r < lo.y + r_max) faces[2].push_back(i);
+    if (!planar_ && q.x.y + q.r > hi.y - r_max) faces[3].push_back(i);
+  }
+}
+
+void PlatenCompression::place_gauges(const Simulation& sim) {
+  const ParticleStore& p = sim.particles();
+  double r_max = 0.0;
+  for (const PosRad& q : p.pos_rad) r_max = std::max(r_max, q.r);
+  for (int k = 0; k < 2; ++k) {
+    const double at = z0_ + (k == 0 ? 0.25 : 0.75) * h0_;
+    gauge_layer_[k].clear();
+    for (std::uint32_t i = 0; i < p.size(); ++i)
+      if (std::abs(p.pos_rad[i].x[axis_] - at) <= r_max) gauge_layer_[k].push_back(i);
+  }
+  gauge_length0_ = gauge_length(sim);
+  find_face_grains(sim, z0_ + 0.25 * h0_, z0_ + 0.75 * h0_, waist_);
+  particle_widths(sim, waist_, waist0_);
+}
+
+double PlatenCompression::gauge_length(const Simulation& sim) const {
+  const ParticleStore& p = sim.particles();
+  double mean[2] = {0.0, 0.0};
+  for (int k = 0; k < 2; ++k) {
+    if (gauge_layer_[k].empty()) return std::numeric_limits<double>::quiet_NaN();
+    for (std::uint32_t i : gauge_layer_[k]) mean[k] += p.pos_rad[i].x[axis_];
+    mean[k] /= static_cast<double>(gauge_layer_[k].size());
+  }
+  return mean[1] - mean[0];
 }
 
 double PlatenCompression::height(const Simulation& sim) const {
@@ -77,7 +121,6 @@ double PlatenCompression::height(const Simulation& sim) const {
 
 void PlatenCompression::widths(const Simulation& sim, double w[2]) const {
   const auto& W = sim.walls();
-  const ParticleStore& p = sim.particles();
   if (confined()) {
     if (lateral_ == LateralBoundary::Cylinder) {
       w[0] = w[1] = 2.0 * W[side_[0]].radius;
@@ -87,23 +130,30 @@ void PlatenCompression::widths(const Simulation& sim, double w[2]) const {
     }
     return;
   }
+  particle_widths(sim, face_, w);
+}
+
+void PlatenCompression::particle_widths(const Simulation& sim,
+                                        const std::vector<std::uint32_t> (&faces)[4],
+                                        double w[2]) const {
+  const ParticleStore& p = sim.particles();
   auto mean = [&](const std::vector<std::uint32_t>& ids, auto&& f) {
     double s = 0.0;
     for (std::uint32_t i : ids) s += f(p.pos_rad[i]);
     return ids.empty() ? 0.0 : s / static_cast<double>(ids.size());
   };
   if (lateral_ == LateralBoundary::Cylinder) {
-    const double r = mean(face_[0], [&](const PosRad& q) {
+    const double r = mean(faces[0], [&](const PosRad& q) {
       return std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r;
     });
     w[0] = w[1] = 2.0 * r;
     return;
   }
-  w[0] = mean(face_[1], [](const PosRad& q) { return q.x.x + q.r; }) -
-         mean(face_[0], [](const PosRad& q) { return q.x.x - q.r; });
-  w[1] = planar_ ? thickness_ : mean(face_[3], [](const PosRad& q) {
+  w[0] = mean(faces[1], [](const PosRad& q) { return q.x.x + q.r; }) -
+         mean(faces[0], [](const PosRad& q) { return q.x.x - q.r; });
+  w[1] = planar_ ? thickness_ : mean(faces[3], [](const PosRad& q) {
                                   return q.x.y + q.r;
-                                }) - mean(face_[2], [](const PosRad& q) { return q.x.y - q.r; });
+                                }) - mean(faces[2], [](const PosRad& q) { return q.x.y - q.r; });
 }
 
 double PlatenCompression::current_area(const Simulation& sim) const {
@@ -210,6 +260,7 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
   z0_ = sim.walls()[bottom_].point[axis_];
   widths(sim, w0_);
   area0_ = current_area(sim);
+  place_gauges(sim);
   Vec3 up{};
   up[axis_] = 1.0;
   double ramp = st_.ramp_time;
@@ -250,6 +301,10 @@ AxialState PlatenCompression::measure(const Simulation& sim) const {
   }
   s.confining_stress = lateral_stress(sim);
   s.deviatoric = s.stress - st_.confining_stress;
+  s.gauge_strain = (gauge_length0_ - gauge_length(sim)) / gauge_length0_;
+  particle_widths(sim, waist_, w);
+  const double gx = (waist0_[0] - w[0]) / waist0_[0], gy = (waist0_[1] - w[1]) / waist0_[1];
+  s.gauge_lateral_strain = lateral_ == LateralBoundary::Cylinder || planar_ ? gx : 0.5 * (gx + gy);
   return s;
 }
 
@@ -301,6 +356,10 @@ void PlatenCompression::transfer(Archive& a) {
   a.value(z0_);
   a.value(area0_);
   a.value(w0_);
+  for (auto& g : gauge_layer_) a.vector(g);
+  for (auto& f : waist_) a.vector(f);
+  a.value(gauge_length0_);
+  a.value(waist0_);
   a.value(peak_);
   a.value(k_min_);
   a.value(consolidated_);
@@ -322,8 +381,11 @@ void PlatenCompression::check_restored(const Simulation& sim, const std::string&
   const std::size_t walls = sim.walls().size(), n = sim.particles().size();
   bool ok = bottom_ < walls && top_ < walls;
   for (std::size_t w : side_) ok = ok && w < walls;
-  for (const auto& f : face_)
-    for (std::uint32_t i : f) ok = ok && i < n;
+  for (const auto* set : {&face_, &waist_})
+    for (const auto& f : *set)
+      for (std::uint32_t i : f) ok = ok && i < n;
+  for (const auto& g : gauge_layer_)
+    for (std::uint32_t i : g) ok = ok && i < n;
   if (!ok)
     throw InputError(
         where, "platen compression", "wall or particle index",

@@ -85,7 +85,18 @@ class PlatenCompression final : public Protocol {
   double height(const Simulation& sim) const;
   // Current lateral extents (x, y widths; cylinder: diameter twice) from walls or particles.
   void widths(const Simulation& sim, double w[2]) const;
+  // The lateral extents spanned by the outer surfaces of the grains in `faces` (as face_).
+  void particle_widths(const Simulation& sim, const std::vector<std::uint32_t> (&faces)[4],
+                       double w[2]) const;
+  // The grains within one largest radius of each lateral face (cylinder: of the shell) whose
+  // centres lie in [z_from, z_to] along the axis.
+  void find_face_grains(const Simulation& sim, double z_from, double z_to,
+                        std::vector<std::uint32_t> (&faces)[4]) const;
   double current_area(const Simulation& sim) const;
+  // The gauges of the loading stage (see AxialState): chosen from the grains as they stand when
+  // axial loading starts.
+  void place_gauges(const Simulation& sim);
+  double gauge_length(const Simulation& sim) const;
   void drive_lateral(Simulation& sim) const;
   double lateral_stress(const Simulation& sim) const;
 
@@ -101,6 +112,11 @@ class PlatenCompression final : public Protocol {
   // Unconfined: boundary particles that measure the lateral strain (analysis.md §1.1).
   std::vector<std::uint32_t> face_[4];  // x-, x+, y-, y+ (prism) or face_[0] = outer shell
   double h0_ = 0.0, area0_ = 0.0, w0_[2] = {0.0, 0.0}, z0_ = 0.0;
+  // Gauges: the grain layers centred at 1/4 and 3/4 of the height (one largest radius either
+  // side), and the lateral-face grains of the middle half (as face_), with their initial spans.
+  std::vector<std::uint32_t> gauge_layer_[2];
+  std::vector<std::uint32_t> waist_[4];
+  double gauge_length0_ = 0.0, waist0_[2] = {0.0, 0.0};
   double peak_ = 0.0, k_min_ = 0.0;
   bool consolidated_ = true;
   StressServo servo_;

@@ -6,6 +6,7 @@
 // generated docs, and `create` / `restore` functions that make one of these.
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 
 #include "breccia/engine/simulation.hpp"
@@ -26,6 +27,12 @@ struct AxialState {
   double volumetric_strain = 0.0;
   double confining_stress = 0.0;  // Pa, measured on the lateral walls (0 when unconfined)
   double deviatoric = 0.0;        // q = stress - sigma_3 (target sigma_3)
+  // Strain gauges on the sample itself, away from the platens (NaN when the test has none): the
+  // axial strain between two grain layers at 1/4 and 3/4 of the length, and the lateral strain
+  // of the middle half. They leave out the compliance of the platen contacts, which the platen
+  // approach `strain` includes.
+  double gauge_strain = std::numeric_limits<double>::quiet_NaN();
+  double gauge_lateral_strain = std::numeric_limits<double>::quiet_NaN();
 };
 
 // What a test needs to know about the sample it is given.
