@@ -1,5 +1,5 @@
-// The `breccia` command: run an experiment into a run folder, check an experiment file, write the
-// experiment reference, print the version.
+// The `breccia` command: one function per subcommand (run, resume, generate, sweep, summarise,
+// report, check, docs, calibrate, materials, version) declares its options and what it does.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -8,8 +8,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <limits>
+#include <memory>
 #include <new>
 
 #include "breccia/calibrate/calibrate.hpp"
@@ -42,6 +44,7 @@ bool unknown_command(int argc, char** argv, const CLI::App& app) {
             << " (breccia --help)\n";
   return true;
 }
+
 // `breccia calibrate FILE`: the calibration folder is <output>/<name>; running the same command
 // again after an interruption continues it.
 int calibrate_command(const std::string& file, const std::string& output, bool check_only,
@@ -70,221 +73,270 @@ int calibrate_command(const std::string& file, const std::string& output, bool c
   std::cout << r.folder << std::endl;
   return r.status == "complete" ? 0 : 130;
 }
-}  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App app{"Breccia: a virtual rock-mechanics laboratory (bonded-particle DEM)"};
-  app.require_subcommand(1);
-  std::string command_line;
-  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
+// One subcommand: its CLI11 node and what it does once parsed. The options live in a struct
+// owned by the closure, so each subcommand is one function that declares and runs it.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
 
-  auto* run = app.add_subcommand("run", "run an experiment (the built-in default without a file)");
-  std::string file;
-  std::vector<std::string> overrides;
-  std::string output;
-  int threads = -1;
-  bool quiet = false;
-  run->add_option("experiment", file, "experiment file (TOML); omit for the built-in default");
-  run->add_option("--set", overrides, "override a key: section.key=value")->take_all();
-  run->add_option("--output", output, "folder that receives the run folder (output.directory)");
-  run->add_option("--threads", threads, "OpenMP threads (engine.threads; 0 = all cores)")
+void log_to_stderr(const std::string& m) {
+  std::cerr << m << "\n";
+}
+
+breccia::ExperimentSpec load_spec(const std::string& file,
+                                  const std::vector<std::string>& overrides) {
+  return file.empty() ? breccia::parse_experiment("", "built-in default", overrides)
+                      : breccia::load_experiment(file, overrides);
+}
+
+// Prints the outcome of a run that wrote a run folder; the exit status of the command.
+int finish_run(const breccia::RunResult& r, bool quiet) {
+  if (!quiet) {
+    std::cerr << "status: " << r.status << " (" << r.stop_reason << ")\n";
+    std::cerr << breccia::summarise_folder(r.folder);
+  }
+  std::cout << r.folder << std::endl;
+  return r.status == "complete" ? 0 : 130;
+}
+
+Command add_run(CLI::App& app, const std::string& command_line) {
+  struct Options {
+    std::string file, output;
+    std::vector<std::string> overrides;
+    int threads = -1;
+    bool quiet = false;
+    std::int64_t stop_at_step = 0;
+  };
+  auto o = std::make_shared<Options>();
+  auto* c = app.add_subcommand("run", "run an experiment (the built-in default without a file)");
+  c->add_option("experiment", o->file, "experiment file (TOML); omit for the built-in default");
+  c->add_option("--set", o->overrides, "override a key: section.key=value")->take_all();
+  c->add_option("--output", o->output, "folder that receives the run folder (output.directory)");
+  c->add_option("--threads", o->threads, "OpenMP threads (engine.threads; 0 = all cores)")
       ->check(CLI::Range(0, 1024));
-  run->add_flag("--quiet", quiet, "no progress bar or messages; only the run folder is printed");
-  std::int64_t stop_at_step = 0;
-  run->add_option("--stop-at-step", stop_at_step,
-                  "stop with a checkpoint once the engine has taken this many steps in all; "
-                  "continue with `breccia resume`")
+  c->add_flag("--quiet", o->quiet, "no progress bar or messages; only the run folder is printed");
+  c->add_option("--stop-at-step", o->stop_at_step,
+                "stop with a checkpoint once the engine has taken this many steps in all; "
+                "continue with `breccia resume`")
       ->check(CLI::Range(std::int64_t{1}, std::numeric_limits<std::int64_t>::max()));
+  return {c, [o, command_line] {
+            if (!o->output.empty())
+              o->overrides.push_back("output.directory=\"" + o->output + "\"");
+            if (o->threads >= 0)
+              o->overrides.push_back("engine.threads=" + std::to_string(o->threads));
+            const breccia::ExperimentSpec spec = load_spec(o->file, o->overrides);
+            catch_signals();
+            breccia::RunOptions opt;
+            opt.command_line = command_line;
+            opt.interrupt = &breccia::interrupt_flag();
+            opt.show_progress = !o->quiet && spec.progress && isatty(fileno(stderr));
+            if (!o->quiet) opt.log = log_to_stderr;
+            opt.stop_at_step = static_cast<std::uint64_t>(o->stop_at_step);
+            return finish_run(breccia::run_experiment(spec, opt), o->quiet);
+          }};
+}
 
-  auto* resume = app.add_subcommand(
+Command add_resume(CLI::App& app, const std::string& command_line) {
+  struct Options {
+    std::string folder;
+    int threads = -1;
+    bool quiet = false;
+    std::int64_t stop_at_step = 0;
+  };
+  auto o = std::make_shared<Options>();
+  auto* c = app.add_subcommand(
       "resume", "continue an interrupted run from its checkpoint, in the same run folder");
-  std::string resume_dir;
-  int resume_threads = -1;
-  bool resume_quiet = false;
-  std::int64_t resume_stop = 0;
-  resume->add_option("folder", resume_dir, "run folder with a checkpoint.bin")->required();
-  resume->add_option("--threads", resume_threads, "OpenMP threads (the result does not change)")
+  c->add_option("folder", o->folder, "run folder with a checkpoint.bin")->required();
+  c->add_option("--threads", o->threads, "OpenMP threads (the result does not change)")
       ->check(CLI::Range(0, 1024));
-  resume->add_flag("--quiet", resume_quiet, "no progress bar or messages");
-  resume->add_option("--stop-at-step", resume_stop, "stop again, with a checkpoint, at this step")
+  c->add_flag("--quiet", o->quiet, "no progress bar or messages");
+  c->add_option("--stop-at-step", o->stop_at_step, "stop again, with a checkpoint, at this step")
       ->check(CLI::Range(std::int64_t{1}, std::numeric_limits<std::int64_t>::max()));
+  return {c, [o, command_line] {
+            catch_signals();
+            breccia::RunOptions opt;
+            opt.command_line = command_line;
+            opt.interrupt = &breccia::interrupt_flag();
+            opt.stop_at_step = static_cast<std::uint64_t>(o->stop_at_step);
+            opt.show_progress = !o->quiet && isatty(fileno(stderr));
+            if (!o->quiet) opt.log = log_to_stderr;
+            return finish_run(
+                breccia::resume_run(o->folder, breccia::ResumeOptions{o->threads}, opt), o->quiet);
+          }};
+}
 
-  auto* gen = app.add_subcommand("generate",
-                                 "pack and bond a sample ([sample] keys) and save it to a file");
-  std::string gen_file, gen_out;
-  std::vector<std::string> gen_overrides;
-  gen->add_option("experiment", gen_file, "experiment file (TOML); omit for the default");
-  gen->add_option("--set", gen_overrides, "override a key: section.key=value")->take_all();
-  gen->add_option("--output", gen_out, "sample file to write (breccia-geometry)")->required();
+Command add_generate(CLI::App& app) {
+  struct Options {
+    std::string file, output;
+    std::vector<std::string> overrides;
+  };
+  auto o = std::make_shared<Options>();
+  auto* c = app.add_subcommand("generate",
+                               "pack and bond a sample ([sample] keys) and save it to a file");
+  c->add_option("experiment", o->file, "experiment file (TOML); omit for the default");
+  c->add_option("--set", o->overrides, "override a key: section.key=value")->take_all();
+  c->add_option("--output", o->output, "sample file to write (breccia-geometry)")->required();
+  return {c, [o] {
+            const breccia::ExperimentSpec spec = load_spec(o->file, o->overrides);
+            catch_signals();
+            breccia::generate_sample(spec, o->output, log_to_stderr);
+            std::cout << o->output << std::endl;
+            return 0;
+          }};
+}
 
-  auto* sweep = app.add_subcommand(
+Command add_sweep(CLI::App& app, const std::string& command_line) {
+  struct Options {
+    std::string file, output;
+    std::vector<std::string> overrides;
+    std::vector<double> confining_mpa;
+  };
+  auto o = std::make_shared<Options>();
+  auto* c = app.add_subcommand(
       "sweep", "run the experiment at several confining stresses; fit Mohr-Coulomb, Hoek-Brown");
-  std::string sweep_file;
-  std::vector<std::string> sweep_overrides;
-  std::vector<double> sweep_mpa;
-  std::string sweep_output;
-  sweep->add_option("experiment", sweep_file, "experiment file (TOML); omit for the default");
-  sweep->add_option("--set", sweep_overrides, "override a key: section.key=value")->take_all();
-  sweep->add_option("--confining-mpa", sweep_mpa, "confining stresses in MPa, e.g. 0 5 10")
+  c->add_option("experiment", o->file, "experiment file (TOML); omit for the default");
+  c->add_option("--set", o->overrides, "override a key: section.key=value")->take_all();
+  c->add_option("--confining-mpa", o->confining_mpa, "confining stresses in MPa, e.g. 0 5 10")
       ->required()
       ->expected(1, 100);
-  sweep->add_option("--output", sweep_output, "folder that receives the sweep folder");
+  c->add_option("--output", o->output, "folder that receives the sweep folder");
+  return {c, [o, command_line] {
+            if (!o->output.empty())
+              o->overrides.push_back("output.directory=\"" + o->output + "\"");
+            const breccia::ExperimentSpec spec = load_spec(o->file, o->overrides);
+            catch_signals();
+            breccia::RunOptions opt;
+            opt.command_line = command_line;
+            opt.interrupt = &breccia::interrupt_flag();
+            opt.show_progress = spec.progress && isatty(fileno(stderr));
+            opt.log = log_to_stderr;
+            std::vector<double> pa;
+            for (double m : o->confining_mpa) pa.push_back(m * 1e6);
+            const breccia::SweepResult r = breccia::run_sweep(spec, pa, opt);
+            std::cerr << breccia::summarise_folder(r.folder);
+            std::cout << r.folder << std::endl;
+            return r.status == "complete" ? 0 : 130;
+          }};
+}
 
-  auto* summ =
-      app.add_subcommand("summarise", "print the headline results of a run or sweep folder");
-  std::string summ_dir;
-  summ->add_option("folder", summ_dir, "run folder or sweep folder")->required();
+Command add_summarise(CLI::App& app) {
+  auto folder = std::make_shared<std::string>();
+  auto* c = app.add_subcommand("summarise", "print the headline results of a run or sweep folder");
+  c->add_option("folder", *folder, "run folder or sweep folder")->required();
+  return {c, [folder] {
+            std::cout << breccia::summarise_folder(*folder);
+            return 0;
+          }};
+}
 
-  auto* report = app.add_subcommand(
+int report_command(const std::string& folder) {
+  namespace fs = std::filesystem;
+  const bool run_folder = fs::exists(fs::path(folder) / "summary.json");
+  if (!run_folder && !fs::exists(fs::path(folder) / "sweep.json"))
+    throw breccia::InputError(folder, "summary.json", "(missing)",
+                              "not a finished run or sweep folder");
+  if (run_folder && !breccia::plot_run(folder)) {
+    std::cerr << "error: stress_strain.png failed; see " << folder << "/plot.log\n";
+    return 1;
+  }
+  if (!breccia::write_report(folder)) {
+    std::cerr << "error: the report failed; see " << folder << "/report.log\n";
+    return 1;
+  }
+  std::cout << folder << "/report.html" << std::endl;
+  return 0;
+}
+
+Command add_report(CLI::App& app) {
+  auto folder = std::make_shared<std::string>();
+  auto* c = app.add_subcommand(
       "report", "write report.html and its figures (report/*.png) for a run or sweep folder");
-  std::string report_dir;
-  report->add_option("folder", report_dir, "run folder")->required();
+  c->add_option("folder", *folder, "run folder")->required();
+  return {c, [folder] { return report_command(*folder); }};
+}
 
-  auto* check = app.add_subcommand("check", "validate an experiment file and print it resolved");
-  std::string check_file;
-  std::vector<std::string> check_overrides;
-  check->add_option("experiment", check_file, "experiment file (TOML); omit for the default");
-  check->add_option("--set", check_overrides, "override a key: section.key=value")->take_all();
+Command add_check(CLI::App& app) {
+  struct Options {
+    std::string file;
+    std::vector<std::string> overrides;
+  };
+  auto o = std::make_shared<Options>();
+  auto* c = app.add_subcommand("check", "validate an experiment file and print it resolved");
+  c->add_option("experiment", o->file, "experiment file (TOML); omit for the default");
+  c->add_option("--set", o->overrides, "override a key: section.key=value")->take_all();
+  return {c, [o] {
+            std::cout << breccia::to_toml(load_spec(o->file, o->overrides));
+            return 0;
+          }};
+}
 
-  auto* docs = app.add_subcommand("docs", "write the experiment-file reference (Markdown)");
-  std::string docs_out;
-  docs->add_option("--output", docs_out, "file to write (default: standard output)");
-  bool docs_calibration = false;
-  docs->add_flag("--calibration", docs_calibration,
-                 "the calibration-file reference instead (docs/calibration.md)");
-
-  auto* cal = app.add_subcommand(
-      "calibrate", "fit micro-parameters to lab targets (a calibration file); resumable");
-  std::string cal_file, cal_output = "calibrations";
-  bool cal_check = false;
-  cal->add_option("calibration", cal_file, "calibration file (TOML)")->required();
-  cal->add_option("--output", cal_output, "folder that receives <output>/<name>/")
-      ->capture_default_str();
-  cal->add_flag("--check", cal_check, "only validate the calibration file");
-
-  auto* materials = app.add_subcommand(
-      "materials", "write the material library's table and calibration records (Markdown)");
-  std::string materials_out;
-  materials->add_option("--output", materials_out, "file to write (default: standard output)");
-
-  app.add_subcommand("version", "print the version");
-
-  if (unknown_command(argc, argv, app)) return 2;
-  CLI11_PARSE(app, argc, argv);
-
-  try {
-    if (*run) {
-      if (!output.empty()) overrides.push_back("output.directory=\"" + output + "\"");
-      if (threads >= 0) overrides.push_back("engine.threads=" + std::to_string(threads));
-      const breccia::ExperimentSpec spec =
-          file.empty() ? breccia::parse_experiment("", "built-in default", overrides)
-                       : breccia::load_experiment(file, overrides);
-      catch_signals();
-      breccia::RunOptions opt;
-      opt.command_line = command_line;
-      opt.interrupt = &breccia::interrupt_flag();
-      opt.show_progress = !quiet && spec.progress && isatty(fileno(stderr));
-      if (!quiet) opt.log = [](const std::string& m) { std::cerr << m << "\n"; };
-      opt.stop_at_step = static_cast<std::uint64_t>(stop_at_step);
-      const breccia::RunResult r = breccia::run_experiment(spec, opt);
-      if (!quiet) {
-        std::cerr << "status: " << r.status << " (" << r.stop_reason << ")\n";
-        std::cerr << breccia::summarise_folder(r.folder);
-      }
-      std::cout << r.folder << std::endl;
-      return r.status == "complete" ? 0 : 130;
-    }
-    if (*resume) {
-      catch_signals();
-      breccia::RunOptions opt;
-      opt.command_line = command_line;
-      opt.interrupt = &breccia::interrupt_flag();
-      opt.stop_at_step = static_cast<std::uint64_t>(resume_stop);
-      opt.show_progress = !resume_quiet && isatty(fileno(stderr));
-      if (!resume_quiet) opt.log = [](const std::string& m) { std::cerr << m << "\n"; };
-      const breccia::RunResult r =
-          breccia::resume_run(resume_dir, breccia::ResumeOptions{resume_threads}, opt);
-      if (!resume_quiet) {
-        std::cerr << "status: " << r.status << " (" << r.stop_reason << ")\n";
-        std::cerr << breccia::summarise_folder(r.folder);
-      }
-      std::cout << r.folder << std::endl;
-      return r.status == "complete" ? 0 : 130;
-    }
-    auto load = [](const std::string& f, const std::vector<std::string>& o) {
-      return f.empty() ? breccia::parse_experiment("", "built-in default", o)
-                       : breccia::load_experiment(f, o);
-    };
-    if (*gen) {
-      const breccia::ExperimentSpec spec = load(gen_file, gen_overrides);
-      catch_signals();
-      breccia::generate_sample(spec, gen_out, [](const std::string& m) { std::cerr << m << "\n"; });
-      std::cout << gen_out << std::endl;
-      return 0;
-    }
-    if (*sweep) {
-      if (!sweep_output.empty())
-        sweep_overrides.push_back("output.directory=\"" + sweep_output + "\"");
-      const breccia::ExperimentSpec spec = load(sweep_file, sweep_overrides);
-      catch_signals();
-      breccia::RunOptions opt;
-      opt.command_line = command_line;
-      opt.interrupt = &breccia::interrupt_flag();
-      opt.show_progress = spec.progress && isatty(fileno(stderr));
-      opt.log = [](const std::string& m) { std::cerr << m << "\n"; };
-      std::vector<double> pa;
-      for (double m : sweep_mpa) pa.push_back(m * 1e6);
-      const breccia::SweepResult r = breccia::run_sweep(spec, pa, opt);
-      std::cerr << breccia::summarise_folder(r.folder);
-      std::cout << r.folder << std::endl;
-      return r.status == "complete" ? 0 : 130;
-    }
-    if (*cal) return calibrate_command(cal_file, cal_output, cal_check, command_line);
-    if (*summ) {
-      std::cout << breccia::summarise_folder(summ_dir);
-      return 0;
-    }
-    if (*report) {
-      namespace fs = std::filesystem;
-      if (!fs::exists(fs::path(report_dir) / "summary.json") &&
-          !fs::exists(fs::path(report_dir) / "sweep.json"))
-        throw breccia::InputError(report_dir, "summary.json", "(missing)",
-                                  "not a finished run or sweep folder");
-      const bool run_folder = fs::exists(fs::path(report_dir) / "summary.json");
-      if (run_folder && !breccia::plot_run(report_dir)) {
-        std::cerr << "error: stress_strain.png failed; see " << report_dir << "/plot.log\n";
-        return 1;
-      }
-      if (!breccia::write_report(report_dir)) {
-        std::cerr << "error: the report failed; see " << report_dir << "/report.log\n";
-        return 1;
-      }
-      std::cout << report_dir << "/report.html" << std::endl;
-      return 0;
-    }
-    if (*check) {
-      const breccia::ExperimentSpec spec =
-          check_file.empty() ? breccia::parse_experiment("", "built-in default", check_overrides)
-                             : breccia::load_experiment(check_file, check_overrides);
-      std::cout << breccia::to_toml(spec);
-      return 0;
-    }
-    if (*docs || *materials) {
-      const std::string text =
-          *docs ? (docs_calibration ? breccia::calibration_docs() : breccia::experiment_docs())
-                : breccia::materials_docs();
-      if (*materials) docs_out = materials_out;
-      if (docs_out.empty()) {
-        std::cout << text;
-      } else {
-        std::ofstream out(docs_out);
-        if (!out) throw breccia::InputError(docs_out, "", "", "cannot write the file");
-        out << text;
-      }
-      return 0;
-    }
-    std::cout << "breccia " << breccia::kVersion << "\n";
+// Writes `text` to `path`, or to standard output when the path is empty.
+int write_text(const std::string& text, const std::string& path) {
+  if (path.empty()) {
+    std::cout << text;
     return 0;
+  }
+  std::ofstream out(path);
+  if (!out) throw breccia::InputError(path, "", "", "cannot write the file");
+  out << text;
+  return 0;
+}
+
+Command add_docs(CLI::App& app) {
+  struct Options {
+    std::string output;
+    bool calibration = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto* c = app.add_subcommand("docs", "write the experiment-file reference (Markdown)");
+  c->add_option("--output", o->output, "file to write (default: standard output)");
+  c->add_flag("--calibration", o->calibration,
+              "the calibration-file reference instead (docs/calibration.md)");
+  return {c, [o] {
+            return write_text(
+                o->calibration ? breccia::calibration_docs() : breccia::experiment_docs(),
+                o->output);
+          }};
+}
+
+Command add_calibrate(CLI::App& app, const std::string& command_line) {
+  struct Options {
+    std::string file, output = "calibrations";
+    bool check = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto* c = app.add_subcommand(
+      "calibrate", "fit micro-parameters to lab targets (a calibration file); resumable");
+  c->add_option("calibration", o->file, "calibration file (TOML)")->required();
+  c->add_option("--output", o->output, "folder that receives <output>/<name>/")
+      ->capture_default_str();
+  c->add_flag("--check", o->check, "only validate the calibration file");
+  return {c, [o, command_line] {
+            return calibrate_command(o->file, o->output, o->check, command_line);
+          }};
+}
+
+Command add_materials(CLI::App& app) {
+  auto output = std::make_shared<std::string>();
+  auto* c = app.add_subcommand(
+      "materials", "write the material library's table and calibration records (Markdown)");
+  c->add_option("--output", *output, "file to write (default: standard output)");
+  return {c, [output] { return write_text(breccia::materials_docs(), *output); }};
+}
+
+Command add_version(CLI::App& app) {
+  return {app.add_subcommand("version", "print the version"), [] {
+            std::cout << "breccia " << breccia::kVersion << "\n";
+            return 0;
+          }};
+}
+
+// Runs a command, turning what it throws into a message and an exit status.
+int guarded(const std::function<int()>& body) {
+  try {
+    return body();
   } catch (const breccia::Interrupted& e) {
     std::cerr << "error: " << e.what() << "; nothing was written\n";
     return 130;
@@ -302,4 +354,29 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Breccia: a virtual rock-mechanics laboratory (bonded-particle DEM)"};
+  app.require_subcommand(1);
+  std::string command_line;
+  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
+  const std::vector<Command> commands = {add_run(app, command_line),
+                                         add_resume(app, command_line),
+                                         add_generate(app),
+                                         add_sweep(app, command_line),
+                                         add_summarise(app),
+                                         add_report(app),
+                                         add_check(app),
+                                         add_docs(app),
+                                         add_calibrate(app, command_line),
+                                         add_materials(app),
+                                         add_version(app)};
+  if (unknown_command(argc, argv, app)) return 2;
+  CLI11_PARSE(app, argc, argv);
+  for (const Command& c : commands)
+    if (*c.app) return guarded(c.run);
+  return 2;  // unreachable: CLI11 requires one subcommand
 }
