@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "breccia/core/error.hpp"
+#include "breccia/io/toml_node.hpp"
 
 namespace breccia {
 
@@ -94,21 +95,6 @@ std::string free_key_list() {
   std::string s;
   for (const auto& k : kFreeKeys) s += (s.empty() ? "" : ", ") + std::string(k.key);
   return s;
-}
-
-std::string where_of(const std::string& source, const toml::node& n) {
-  const auto& src = n.source();
-  if (src.begin.line > 0) return source + ":" + std::to_string(src.begin.line);
-  return source;
-}
-
-std::string show(const toml::node& n) {
-  std::ostringstream s;
-  if (n.is_string())
-    s << '"' << n.as_string()->get() << '"';
-  else
-    n.visit([&](const auto& v) { s << v; });
-  return s.str();
 }
 
 double real_of(const toml::node& n, const std::string& where, const std::string& key) {

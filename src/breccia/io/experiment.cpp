@@ -11,28 +11,12 @@
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
+#include "breccia/io/toml_node.hpp"
 #include "breccia/material/library.hpp"
 
 namespace breccia {
 
 namespace {
-
-// Where a node came from: "file:line" when known, or the `--set` option that gave it.
-std::string where_of(const std::string& source, const toml::node& n) {
-  const auto& src = n.source();
-  if (src.path && src.path->rfind("--set ", 0) == 0) return *src.path;
-  if (src.begin.line > 0) return source + ":" + std::to_string(src.begin.line);
-  return source;
-}
-
-std::string show(const toml::node& n) {
-  std::ostringstream s;
-  if (n.is_string())
-    s << '"' << n.as_string()->get() << '"';
-  else
-    n.visit([&](const auto& v) { s << v; });
-  return s.str();
-}
 
 double get_real(const toml::node& n, const std::string& where, const std::string& key) {
   if (auto v = n.value<double>(); v && (n.is_floating_point() || n.is_integer())) return *v;
