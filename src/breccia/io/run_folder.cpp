@@ -52,8 +52,10 @@ std::string machine_description() {
     }
   char host[256] = "unknown";
   gethostname(host, sizeof host - 1);
-  return fmt::format("{}; {} hardware threads; host {}", cpu, std::thread::hardware_concurrency(),
-                     host);
+  // The threads this process runs on (engine.threads, --threads or OMP_NUM_THREADS) and the
+  // machine's: a timing means little without both.
+  return fmt::format("{}; {} threads used of {} hardware threads; host {}", cpu, max_threads(),
+                     std::thread::hardware_concurrency(), host);
 }
 
 namespace {
