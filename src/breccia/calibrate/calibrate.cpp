@@ -254,14 +254,19 @@ std::vector<double> Calibrator::scaled_start(CalibrationStage stage, const Evalu
     if (kappa >= 0 && c_.free[kappa].stage == stage && nu && nu_seen != e.properties.end()) {
       const AffineElasticity affine{static_cast<int>(c_.base.dimension)};
       const double from = v[kappa];
-      // The measured ratio against the affine estimate keeps the non-affine correction of
-      // this packing; a target at or above the affine limit takes the upper bound.
-      const double seen = affine.stiffness_ratio(nu_seen->second);
+      // The packing's departure from the affine estimate (non-affine relaxation, the gauges'
+      // end effects) is kept as an offset: kappa goes where the affine estimate plus that
+      // offset meets the target. The offset can put the measured nu above the affine limit
+      // (gauges read 0.28 at kappa 10), so it is not a ratio of stiffness ratios.
+      const double offset = nu_seen->second - affine.poisson(from);
+      const double aim = nu->value - offset;
       double to = from;
-      if (nu->value >= affine.poisson_limit())
+      if (aim >= affine.poisson_limit())
         to = c_.free[kappa].upper;
-      else if (std::isfinite(seen) && seen > 0.0)
-        to = from * affine.stiffness_ratio(nu->value) / seen;
+      else if (aim <= affine.poisson(c_.free[kappa].lower))
+        to = c_.free[kappa].lower;
+      else
+        to = affine.stiffness_ratio(aim);
       to = std::clamp(to, c_.free[kappa].lower, c_.free[kappa].upper);
       v[kappa] = to;
       // The shear stiffness falls with the ratio and takes E with it.
@@ -278,6 +283,16 @@ std::vector<double> Calibrator::scaled_start(CalibrationStage stage, const Evalu
     if (!ts) {
       scale("bond.tensile_strength", r);
       scale("bond.tensile_strength_sd", r);
+    }
+    // The strain at the peak goes as the UCS over the modulus: a modulus calibrated in this
+    // stage (the file puts it here when E is not a target) moves so that the strain the scaled
+    // strengths would give meets its target.
+    const Target* peak_strain = c_.target(Property::StrainAtPeak);
+    const auto strain_seen = e.properties.find(Property::StrainAtPeak);
+    if (peak_strain && strain_seen != e.properties.end() && strain_seen->second > 0.0) {
+      const double r_modulus = r * strain_seen->second / peak_strain->value;
+      for (auto key : {"bond.modulus", "contact.modulus", "contact.shear_modulus"})
+        scale(key, r_modulus);
     }
   }
   for (std::size_t i = 0; i < v.size(); ++i)

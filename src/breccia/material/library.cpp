@@ -171,15 +171,17 @@ constexpr PendingRock kPending[] = {
      "Martin & Chandler 1994)",
      "calibration file written (examples/calibrate-lac-du-bonnet.toml; it honours the UCS, "
      "since a UCS/TS of 21.5 lies beyond the parallel bond's reach); a first run stalled near "
-     "E = 54 GPa with a bond modulus at 400 GPa, the platen contacts' compliance (below) "
-     "capping the measured E: waits for a gauge-based E"},
+     "E = 54 GPa (platen reading) with a bond modulus at 400 GPa, the platen contacts' "
+     "compliance capping it; E is now read with gauges on the sample (below), and the file "
+     "waits to be run again"},
     {"lac_du_bonnet_2d", "Lac du Bonnet granite, 2D (seed 002)",
      "UCS 233.8 MPa, C 54.6 MPa, phi 40 deg (seed 002 model)", "needs the 2D laboratory"},
     {"brenna", "Brenna sandstone (seed 001, BR2)", "E 20.5 GPa, nu 0.25, UCS 99 MPa",
      "calibrated once (37 min on 2 cores, 5,900 grains: E 20.86 GPa +1.8 %, UCS 101.0 MPa "
      "+2.0 %, nu 0.214 MISSED by 0.036) but not shipped: with bond cohesion 2x the tensile "
      "strength no bond broke in shear (0.03 %), which fails the honesty check; "
-     "examples/calibrate-brenna.toml now ties it at 1.2x and waits to be run again"},
+     "examples/calibrate-brenna.toml now ties it at 1.2x and waits to be run again, with E "
+     "and nu read on the gauges (below)"},
     {"mucharz", "Mucharz sandstone (seed 001, MU1)", "E 31.8 GPa, nu 0.23, UCS 138 MPa",
      "calibration file written (examples/calibrate-mucharz.toml), not yet run"},
     {"radkow", "Radkow sandstone (seed 001, RAD1)", "E 22.8 GPa, nu 0.20, UCS 60 MPa",
@@ -188,12 +190,15 @@ constexpr PendingRock kPending[] = {
      "63.1 MPa +5.1 % and E 25.28 GPa +10.9 % MISSED (E was 22.96 GPa on the calibration "
      "sample: the platen contacts' compliance, see below), and a shear share of 0.97 %, below "
      "the 1 % bar (bond "
-     "stiffness ratio 10, needed for nu): not shipped"},
+     "stiffness ratio 10, needed for nu with the platen reading; the gauges read a higher nu "
+     "at the same ratio, below): not shipped, waits to be run again"},
     {"tumlin", "Tumlin sandstone (seed 001, TU2)", "E 26.2 GPa, nu 0.22, UCS 115 MPa",
      "calibrated once (27 min on one thread beside another run; 2,500 grains, verified on "
      "5,900): nu 0.208 and UCS 115.9 MPa +0.7 % met, E 28.62 GPa +9.2 % MISSED (26.33 GPa on "
-     "the calibration sample: the platen contacts' compliance), shear share 1.0 %, at the bar: "
-     "held back until E is measured on the specimen"},
+     "the calibration sample: the platen contacts' compliance), shear share 1.0 %, at the bar. "
+     "Read with the gauges (below), its parameters give E 35.9 GPa and nu 0.281 on the "
+     "calibration sample; examples/calibrate-tumlin.toml now starts from them and waits to be "
+     "run"},
     {"pfc_sandstone", "PFC sandstone (seed 003 Table 2, a PFC3D model)",
      "E 14.5 GPa, nu 0.30, UCS 105 MPa, crack initiation 47 MPa",
      "calibration file written (examples/calibrate-pfc-sandstone.toml), not yet run"},
@@ -272,26 +277,26 @@ std::string materials_docs() {
                        tolerance_text(v), v.value("met", false) ? "met" : "**MISSED**");
     }
   }
-  s += "\nEach record names the commit that made it. `berea`'s record names 00ef7e2, which was "
-       "only the commit its build folder had been configured at (builds now follow HEAD); it was "
-       "made by the code of bca8aa3 to 670ead8, with one scaling step per stage and every trial "
-       "aiming at the full tolerance. `examples/calibrate-berea.toml` now asks for half the "
-       "tolerance (`aim = 0.5`, to meet E at the verification size, which this record misses) "
-       "and the method takes up to three scaling steps, so running it today takes another path "
-       "and gives other values. Its recalibration is the library's next step.\n";
-  s += "\n## The measured Young's modulus includes the platen contacts\n\n"
-       "The UCS test takes its axial strain from the platen separation, so E_t50 includes the "
-       "compliance of the Hertz contacts between the platens and the end grains. Two heights "
-       "of the same packing give it: the Radkow parameters measure 22.96 GPa on the 12 mm "
-       "calibration prism and 25.28 GPa on the 16 mm verification prisms; with a compliance "
-       "1 / E + c / H these two points put the specimen's own modulus near 36 GPa "
-       "and the end contacts at about 30 % of the compliance at "
-       "16 mm (Berea, softer: 8.40 and 8.59 GPa, about 7 %). This is why the size drift grows "
-       "with the rock's stiffness, why the bond moduli come out several times the rock's E, "
-       "and why a 69 GPa granite cannot be reached at all. Labs measure E with gauges on the "
-       "specimen for the same reason; Breccia's UCS needs a mid-height gauge (the relative "
-       "motion of two grain layers) before the stiff rocks can be calibrated, and the presets "
-       "then recalibrated.\n";
+  s += "\nEach record names the commit that made it. `berea` was calibrated from scratch by "
+       "`examples/calibrate-berea.toml` at 0cb9f02, the first commit that reads E on the "
+       "sample (its build carried the label of the parent, 1dee1bf, and the record was "
+       "corrected by hand; the later changes to the method touch Poisson's ratio and "
+       "strain-at-peak targets, which this file has not). `coal`'s targets, the UCS and the "
+       "strain at the peak, do not depend on how E is read; the E its record lists (not a "
+       "target) is the platen reading of d3d7783.\n";
+  s += "\n## Young's modulus is read on the sample\n\n"
+       "E_t50 and Poisson's ratio come from strain gauges on the sample (grain layers at 1/4 and "
+       "3/4 of the height; the lateral faces of the middle half), as the ISRM method for "
+       "deformability measures them; the platen approach, which the presets before the gauges "
+       "were calibrated with, adds the compliance of the Hertz contacts between the platens and "
+       "the end grains. The default Berea run reads 9.09 GPa on the gauges and 8.60 GPa on the "
+       "platens (5 %); the first Tumlin parameters read 35.9 GPa and 26.3 GPa on the 12 mm "
+       "calibration prism (the platen contacts held 27 % of the compliance), and their "
+       "Poisson's ratio 0.281 where the platen reading gave 0.208. The platen reading also grew "
+       "with the sample's height (Radkow: 22.96 GPa at 12 mm, 25.28 GPa at 16 mm), which is why "
+       "the stiff rocks missed E at the verification size; the gauge reading does not (Berea: "
+       "9.11 GPa at 12 mm, 9.09 GPa at 16 mm). Every summary.json keeps the platen value as "
+       "`youngs_modulus_platen_pa`.\n";
   s += "\n## Limits of the laws\n\n"
        "Bonded spheres with parallel bonds give a UCS about 4 times the Brazilian tensile "
        "strength, where rocks show 10 to 20 (seed 003 says its parallel-bond model overestimates "
