@@ -184,13 +184,6 @@ constexpr PendingRock kPending[] = {
      "and nu read on the gauges (below)"},
     {"mucharz", "Mucharz sandstone (seed 001, MU1)", "E 31.8 GPa, nu 0.23, UCS 138 MPa",
      "calibration file written (examples/calibrate-mucharz.toml), not yet run"},
-    {"tumlin", "Tumlin sandstone (seed 001, TU2)", "E 26.2 GPa, nu 0.22, UCS 115 MPa",
-     "calibrated once (27 min on one thread beside another run; 2,500 grains, verified on "
-     "5,900): nu 0.208 and UCS 115.9 MPa +0.7 % met, E 28.62 GPa +9.2 % MISSED (26.33 GPa on "
-     "the calibration sample: the platen contacts' compliance), shear share 1.0 %, at the bar. "
-     "Read with the gauges (below), its parameters give E 35.9 GPa and nu 0.281 on the "
-     "calibration sample; examples/calibrate-tumlin.toml now starts from them and waits to be "
-     "run"},
     {"pfc_sandstone", "PFC sandstone (seed 003 Table 2, a PFC3D model)",
      "E 14.5 GPa, nu 0.30, UCS 105 MPa, crack initiation 47 MPa",
      "calibration file written (examples/calibrate-pfc-sandstone.toml), not yet run"},
@@ -277,7 +270,10 @@ std::string materials_docs() {
        "strain at the peak, do not depend on how E is read; the E its record lists (not a "
        "target) is the platen reading of d3d7783. `radkow` was calibrated at 8e2780a (the "
        "same labelling) in 6 trials; its UCS, 59.98 MPa on the 2,500-grain calibration sample, "
-       "comes out 5.0 % high on the larger verification samples, just past its tolerance.\n";
+       "comes out 5.0 % high on the larger verification samples, just past its tolerance. "
+       "`tumlin` was calibrated at 8e2780a (the same labelling) from the parameters of its "
+       "first, platen-read calibration, which the file names as its start; its time includes "
+       "12 min of an interrupted start beside the Berea run.\n";
   s += "\n## Young's modulus is read on the sample\n\n"
        "E_t50 and Poisson's ratio come from strain gauges on the sample (grain layers at 1/4 and "
        "3/4 of the height; the lateral faces of the middle half), as the ISRM method for "
