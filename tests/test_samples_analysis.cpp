@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numbers>
 
 #include "breccia/analysis/compression.hpp"
@@ -44,6 +45,43 @@ TEST(Analysis, WorkedExampleModuliAndPoisson) {
   EXPECT_NEAR(r.e_t50.slope, 14.00e9, 1e-6 * 14e9);
   EXPECT_NEAR(r.e_s50, 17.06e9, 0.005e9);
   EXPECT_NEAR(r.poisson, 0.25, 1e-12);
+}
+
+TEST(Analysis, ModuliComeFromTheGaugesWhenEveryRowHasThem) {
+  // The worked example's curve with a sample gauge that reads half the platen strain and a
+  // lateral gauge that reads the lateral strain: E_t50 and the secant double, nu doubles
+  // (-d e_l / d e_gauge = 0.25 x 2), the platen E_t50 stays 14.00 GPa, and the peak strain is
+  // the platen's. One row without a gauge reading (a test that has none) falls back whole.
+  CompressionSeries s;
+  for (int k = 0; k <= 20; ++k) {
+    const double e = 0.5e-3 * k;
+    s.axial_strain.push_back(e);
+    s.deviatoric.push_back(20e9 * e * (1 - e / 0.02));
+    s.lateral_strain.push_back(-0.25 * e);
+    s.volumetric_strain.push_back(0.5 * e);
+    s.gauge_axial_strain.push_back(0.5 * e);
+    s.gauge_lateral_strain.push_back(-0.25 * e);
+    s.broken_bonds.push_back(0.0);
+  }
+  s.axial_strain.push_back(0.0105);
+  s.deviatoric.push_back(99e6);
+  s.lateral_strain.push_back(-0.25 * 0.0105);
+  s.volumetric_strain.push_back(0.0);
+  s.gauge_axial_strain.push_back(0.5 * 0.0105);
+  s.gauge_lateral_strain.push_back(-0.25 * 0.0105);
+  s.broken_bonds.push_back(0.0);
+  const CompressionResult r = analyse_compression(s);
+  ASSERT_TRUE(r.moduli_from_gauges);
+  EXPECT_NEAR(r.e_t50.slope, 28.00e9, 1e-6 * 28e9);
+  EXPECT_NEAR(r.e_t50_platen.slope, 14.00e9, 1e-6 * 14e9);
+  EXPECT_NEAR(r.e_s50, 2 * 17.06e9, 0.01e9);
+  EXPECT_NEAR(r.poisson, 0.5, 1e-12);
+  EXPECT_NEAR(r.strain_at_peak, 0.01, 1e-15);
+  s.gauge_axial_strain[3] = std::numeric_limits<double>::quiet_NaN();
+  const CompressionResult platen = analyse_compression(s);
+  EXPECT_FALSE(platen.moduli_from_gauges);
+  EXPECT_NEAR(platen.e_t50.slope, 14.00e9, 1e-6 * 14e9);
+  EXPECT_NEAR(platen.poisson, 0.25, 1e-12);
 }
 
 TEST(Analysis, WorkedExampleCrackDamageAndInitiation) {

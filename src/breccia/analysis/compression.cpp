@@ -11,15 +11,17 @@ namespace {
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-bool has_gauges(const CompressionSeries& s, std::size_t rows) {
-  if (s.gauge_axial_strain.size() < rows || s.gauge_lateral_strain.size() < rows) return false;
+}  // namespace
+
+bool has_gauges(const CompressionSeries& s) {
+  const std::size_t rows = std::min(s.axial_strain.size(), s.deviatoric.size());
+  if (rows == 0 || s.gauge_axial_strain.size() < rows || s.gauge_lateral_strain.size() < rows)
+    return false;
   for (std::size_t k = 0; k < rows; ++k)
     if (!std::isfinite(s.gauge_axial_strain[k]) || !std::isfinite(s.gauge_lateral_strain[k]))
       return false;
-  return rows > 0;
+  return true;
 }
-
-}  // namespace
 
 CompressionResult analyse_compression(const CompressionSeries& s) {
   CompressionResult r;
@@ -39,7 +41,7 @@ CompressionResult analyse_compression(const CompressionSeries& s) {
   r.sigma1_at_peak = peak.stress + s.confining_stress;
   r.strain_at_peak = peak.strain;
   // The strains the moduli are measured with: the sample gauges when every row has them.
-  r.moduli_from_gauges = has_gauges(s, n);
+  r.moduli_from_gauges = has_gauges(s);
   const auto& em = r.moduli_from_gauges ? s.gauge_axial_strain : e;
   const auto& lateral = r.moduli_from_gauges ? s.gauge_lateral_strain : s.lateral_strain;
   // E_t50 with the window widening of §1.3.

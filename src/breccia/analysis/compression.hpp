@@ -38,6 +38,9 @@ struct CompressionResult {
   std::vector<std::string> flags;
 };
 
+// True when every row has finite gauge readings: the moduli are then read with the gauges.
+bool has_gauges(const CompressionSeries& s);
+
 CompressionResult analyse_compression(const CompressionSeries& s);
 
 struct MohrCoulombFit {

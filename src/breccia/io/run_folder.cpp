@@ -758,8 +758,7 @@ void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
   double qmax = 0.0;
   for (double q : s.deviatoric) qmax = std::max(qmax, q);
   // The sample gauges where the test has them (they leave out the platen contacts).
-  const bool gauges = !s.gauge_axial_strain.empty() && std::isfinite(s.gauge_axial_strain[0]) &&
-                      std::isfinite(s.gauge_lateral_strain[0]);
+  const bool gauges = analysis::has_gauges(s);
   std::vector<double> x, y, lat;
   for (std::size_t k = 0; k < s.deviatoric.size(); ++k)
     if (s.deviatoric[k] >= 0.2 * qmax && qmax > 0.0) {

@@ -23,13 +23,11 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
   if (planar_) lateral_ = LateralBoundary::Prism;
   const double inf = std::numeric_limits<double>::infinity();
   Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-  double r_max = 0.0;
   for (const PosRad& q : p.pos_rad) {
     for (int k = 0; k < 3; ++k) {
       lo[k] = std::min(lo[k], q.x[k] - q.r);
       hi[k] = std::max(hi[k], q.x[k] + q.r);
     }
-    r_max = std::max(r_max, q.r);
   }
   Vec3 up{};
   up[axis_] = 1.0;
