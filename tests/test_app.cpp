@@ -134,7 +134,7 @@ TEST(App, SmallUcsWritesACompleteRunFolder) {
   EXPECT_LT(nu, 0.5);
   // The resolved experiment reads back to the same spec.
   const ExperimentSpec again = load_experiment((folder / "experiment.toml").string(), {});
-  EXPECT_EQ(again.parallel_bond.tensile_strength, 30e6);
+  EXPECT_EQ(std::get<ParallelBond::Params>(again.bond).tensile_strength, 30e6);
   EXPECT_EQ(again.density_scaling, 100.0);
   // history.csv rows; cracks.csv rows match the count.
   std::ifstream h(folder / "history.csv");

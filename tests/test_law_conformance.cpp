@@ -1,12 +1,17 @@
 // Conformance suite run over every law in the registry (law/registry.hpp): a law added there is
 // checked here without further work. Each check is physics any pair law must obey (physics.md §0.3,
 // design.md "Tests and benchmarks").
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "breccia/core/quat.hpp"
 #include "breccia/core/rng.hpp"
+#include "breccia/io/experiment.hpp"
 #include "pair_harness.hpp"
 
 using namespace breccia;
@@ -206,4 +211,74 @@ TYPED_TEST(BondLawConformance, RigidBodyMotionLeavesTheBondUnloaded) {
   }
   EXPECT_LT(worst, 1e-6);
   EXPECT_FALSE(s.failure.broken);
+}
+
+// ---- the experiment file reads every law's keys from the law's own table ----
+
+namespace {
+
+// A value inside the field's range that differs from its default.
+template <class Law>
+double probe_value(const ParamField<typename Law::Params>& f) {
+  const typename Law::Params d{};
+  const double v = d.*std::get<double Law::Params::*>(f.member);
+  for (const double candidate : {v * 1.25, v * 0.75, v + 0.5, 0.5 * (f.min + f.max), 1.0})
+    if (candidate != v && f.in_range(candidate)) return candidate;
+  ADD_FAILURE() << "no probe value for " << f.key;
+  return v;
+}
+
+// Sets every real key of `Law` in its section, reads the file, and checks the spec holds the law
+// with those values, and that the resolved experiment (to_toml) reads back to the same.
+template <class Law, class List, class Variant>
+void check_law_keys(const char* section, Variant ExperimentSpec::*member) {
+  std::string text = fmt::format("[{}]\nlaw = \"{}\"\n", section, Law::name);
+  std::vector<std::pair<double Law::Params::*, double>> set;
+  for (const auto& f : Law::fields()) {
+    if (f.is_flag()) continue;
+    const double v = probe_value<Law>(f);
+    text += fmt::format("{} = {:.17g}\n", f.key, v);
+    set.emplace_back(std::get<double Law::Params::*>(f.member), v);
+  }
+  const ExperimentSpec spec = parse_experiment(text, "laws.toml", {});
+  ASSERT_TRUE(std::holds_alternative<typename Law::Params>(spec.*member));
+  EXPECT_EQ(name_of_params<List>(spec.*member), Law::name);
+  const ExperimentSpec again = parse_experiment(to_toml(spec), "resolved.toml", {});
+  for (const auto& [field, v] : set) {
+    EXPECT_EQ(std::get<typename Law::Params>(spec.*member).*field, v);
+    EXPECT_EQ(std::get<typename Law::Params>(again.*member).*field, v);
+  }
+  // An unknown key names the law and lists its keys.
+  try {
+    parse_experiment(fmt::format("[{}]\nlaw = \"{}\"\nno_such_key = 1\n", section, Law::name),
+                     "laws.toml", {});
+    ADD_FAILURE() << "an unknown key was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(std::string(Law::name)), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+
+TYPED_TEST(BondLawConformance, EveryKeyIsReadFromTheExperimentFile) {
+  check_law_keys<TypeParam, BondLaws>("bond", &ExperimentSpec::bond);
+}
+TYPED_TEST(ContactLawConformance, EveryKeyIsReadFromTheExperimentFile) {
+  check_law_keys<TypeParam, ContactLaws>("contact", &ExperimentSpec::contact);
+}
+
+TEST(LawChoice, NamingTheChosenLawKeepsItsParametersAndAnotherStartsFromDefaults) {
+  // The Berea preset sets Hertz-Mindlin contacts; naming that law again keeps its values, naming
+  // another law starts from that law's defaults.
+  const ExperimentSpec preset = parse_experiment("[material]\npreset = \"berea\"\n", "p", {});
+  ASSERT_TRUE(std::holds_alternative<HertzMindlin::Params>(preset.contact));
+  const ExperimentSpec same = parse_experiment(
+      "[material]\npreset = \"berea\"\n[contact]\nlaw = \"hertz_mindlin\"\n", "p", {});
+  EXPECT_EQ(std::get<HertzMindlin::Params>(same.contact).shear_modulus,
+            std::get<HertzMindlin::Params>(preset.contact).shear_modulus);
+  const ExperimentSpec other =
+      parse_experiment("[material]\npreset = \"berea\"\n", "p", {"contact.law=linear"});
+  ASSERT_TRUE(std::holds_alternative<LinearContact::Params>(other.contact));
+  EXPECT_EQ(std::get<LinearContact::Params>(other.contact).modulus,
+            LinearContact::Params{}.modulus);
 }

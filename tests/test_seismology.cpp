@@ -391,14 +391,17 @@ TEST(EnergyEstimates, ElasticEnergyDensityAndFractureEnergy) {
   c.sigma = 50e6;
   c.tau = 0.0;
   c.mode = CrackMode::Tensile;
-  EXPECT_NEAR(fracture_energy(c, 20e9, 2.5, false, 1.0), 3.93e-7, 0.005e-7);
+  ParallelBond::Params pb;
+  pb.modulus = 20e9;
+  pb.stiffness_ratio = 2.5;
+  EXPECT_NEAR(fracture_energy(c, ParallelBond::moduli(pb), false, 1.0), 3.93e-7, 0.005e-7);
   // Shear: tau over G_b = E_b / kappa; 2D: bond volume 2 R t L.
   c.mode = CrackMode::Shear;
   c.sigma = 0.0;
   c.tau = 50e6;
-  EXPECT_NEAR(fracture_energy(c, 20e9, 2.5, false, 1.0), 2.5 * 3.927e-7, 0.01e-7);
+  EXPECT_NEAR(fracture_energy(c, ParallelBond::moduli(pb), false, 1.0), 2.5 * 3.927e-7, 0.01e-7);
   c.mode = CrackMode::Tensile;
   c.sigma = 50e6;
   // v = 2 x 0.1 mm x 1 mm x 0.2 mm = 4e-11 m^3: (50e6)^2 x 4e-11 / 4e10 = 2.5e-6 J.
-  EXPECT_NEAR(fracture_energy(c, 20e9, 2.5, true, 1e-3), 2.5e-6, 1e-15);
+  EXPECT_NEAR(fracture_energy(c, ParallelBond::moduli(pb), true, 1e-3), 2.5e-6, 1e-15);
 }

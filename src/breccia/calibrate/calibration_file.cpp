@@ -375,9 +375,9 @@ void check_parameters(CalibrationSpec& c, const toml::table& root, const std::st
     }
     const auto start = resolved_number(c.base, f.key);
     if (!start)
-      throw InputError(
-          where, key, "",
-          "not a number of this experiment's laws (contact law \"" + c.base.contact_law + "\")");
+      throw InputError(where, key, "",
+                       "not a number of this experiment's laws (contact law \"" +
+                           std::string(c.base.contact_law()) + "\")");
     f.start = *start;
     if (f.start < f.lower || f.start > f.upper)
       throw InputError(where, key, fmt::format("[{}, {}]", f.lower, f.upper),

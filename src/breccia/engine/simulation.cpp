@@ -743,6 +743,16 @@ std::size_t Simulation::intact_bonds() const noexcept {
   return n;
 }
 
+BondModuli Simulation::bond_moduli(std::string_view law) const noexcept {
+  BondModuli out;
+  std::apply(
+      [&]<class... Laws>(const BondSet<Laws>&... set) {
+        ((Laws::name == law ? (out = Laws::moduli(set.params), 0) : 0), ...);
+      },
+      bonds_);
+  return out;
+}
+
 std::size_t Simulation::active_contacts() const noexcept {
   std::size_t n = 0;
   std::visit(

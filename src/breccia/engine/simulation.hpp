@@ -182,6 +182,9 @@ class Simulation {
   const BondSets& bonds() const noexcept { return bonds_; }
   const ContactModel& contact_model() const noexcept { return contact_; }
   std::size_t intact_bonds() const noexcept;
+  // The moduli of the bond law called `law` with this simulation's parameters (crack records
+  // name their law); zero for a name that is not a bond law.
+  BondModuli bond_moduli(std::string_view law) const noexcept;
   std::size_t active_contacts() const noexcept;
   std::size_t neighbour_pairs() const noexcept;
   // Pair forces of the last step as a stress sum and contact counts (physics.md §6.5, §7.2).

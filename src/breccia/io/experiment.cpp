@@ -107,6 +107,30 @@ Key choice_key(std::string section, std::string name, std::vector<std::string> c
   return k;
 }
 
+// The law of [contact] or [bond], from the law registry. Naming another law starts from its
+// defaults; naming the chosen one again keeps its parameters (a preset's, say).
+template <class List, class Variant>
+Key law_choice_key(std::string section, std::string doc, Variant ExperimentSpec::*member) {
+  std::string allowed = "allowed: ";
+  for_each_type<List>([&]<class Law>() {
+    allowed += (allowed.size() > 9 ? ", " : "") + std::string("\"") + std::string(Law::name) + "\"";
+  });
+  Key k{section, "law", "", "string", allowed, std::move(doc), {}, {}};
+  k.set = [allowed, member](ExperimentSpec& s, const toml::node& n, const std::string& where,
+                            const std::string& key) {
+    const std::string v = get_string(n, where, key);
+    const bool known = with_named<List>(v, [&]<class Law>() {
+      if (!std::holds_alternative<typename Law::Params>(s.*member))
+        s.*member = typename Law::Params{};
+    });
+    if (!known) throw InputError(where, key, "\"" + v + "\"", allowed);
+  };
+  k.get = [member](const ExperimentSpec& s) {
+    return fmt::format("\"{}\"", name_of_params<List>(s.*member));
+  };
+  return k;
+}
+
 // A TOML basic string: quotes, backslashes and control characters escaped.
 std::string toml_quoted(const std::string& v) {
   std::string out = "\"";
@@ -353,14 +377,13 @@ const std::vector<Key>& key_table() {
                          "that list no bonds); a calibration parameter (physics.md §7.6)",
                          &ExperimentSpec::bond_gap_tolerance));
     // [contact] and [bond]: the law keys come from the law tables (see make_law_keys).
-    k.push_back(choice_key("contact", "law", {"linear", "hertz_mindlin"},
-                           "contact law between unbonded (or overlapping bonded) particles",
-                           &ExperimentSpec::contact_law));
+    k.push_back(law_choice_key<ContactLaws>(
+        "contact", "contact law between unbonded (or overlapping bonded) particles",
+        &ExperimentSpec::contact));
     k.push_back(real_key("contact", "wall_friction", "", 0, kInf, false,
                          "friction coefficient between particles and walls (0: lubricated)",
                          &ExperimentSpec::wall_friction));
-    k.push_back(
-        choice_key("bond", "law", {"parallel_bond"}, "bond law", &ExperimentSpec::bond_law));
+    k.push_back(law_choice_key<BondLaws>("bond", "bond law", &ExperimentSpec::bond));
     // [test]: the kind here, its keys from the test's own table (see apply_table).
     {
       std::vector<std::string> kinds;
@@ -588,17 +611,15 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
       bool found = false;
       std::string allowed;
       if (name == "contact") {
-        if (spec.contact_law == "linear") {
-          set_law_key<LinearContact>(spec.linear, item, value, where, full, found);
-          allowed = law_key_list<LinearContact>();
-        } else {
-          set_law_key<HertzMindlin>(spec.hertz, item, value, where, full, found);
-          allowed = law_key_list<HertzMindlin>();
-        }
-        allowed = "law, wall_friction, " + allowed;
+        visit_params<ContactLaws>(spec.contact, [&]<class Law>(typename Law::Params& p) {
+          set_law_key<Law>(p, item, item_node, where, full, found);
+          allowed = "law, wall_friction, " + law_key_list<Law>();
+        });
       } else if (name == "bond") {
-        set_law_key<ParallelBond>(spec.parallel_bond, item, value, where, full, found);
-        allowed = "law, " + law_key_list<ParallelBond>();
+        visit_params<BondLaws>(spec.bond, [&]<class Law>(typename Law::Params& p) {
+          set_law_key<Law>(p, item, item_node, where, full, found);
+          allowed = "law, " + law_key_list<Law>();
+        });
       } else if (name == "test") {
         with_lab_test(spec.test_kind, [&]<class T>() {
           set_law_key<T>(std::get<typename T::Params>(spec.test), item, item_node, where, full,
@@ -614,7 +635,9 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
             where, full, show(value),
             "unknown key" +
                 (name == "contact" || name == "bond"
-                     ? " for law \"" + (name == "contact" ? spec.contact_law : spec.bond_law) + "\""
+                     ? " for law \"" +
+                           std::string(name == "contact" ? spec.contact_law() : spec.bond_law()) +
+                           "\""
                  : name == "test" ? " for test kind \"" + spec.test_kind + "\""
                                   : std::string()) +
                 "; allowed: " + allowed);
@@ -667,7 +690,7 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
       s.geometry_file.empty())
     throw InputError(source, "sample.file", "\"\"",
                      "a file is required when source = \"" + s.sample_source + "\"");
-  if (s.dimension == 2 && s.contact_law == "hertz_mindlin")
+  if (s.dimension == 2 && s.contact_law() == "hertz_mindlin")
     throw InputError(source, "contact.law", "\"hertz_mindlin\"",
                      "2D disks use \"linear\" contacts (Hertz has no disk form, physics.md §3.4)");
   if (s.sample_source == "generate") {
@@ -730,11 +753,8 @@ void apply_preset(ExperimentSpec& s, const std::string& name, const std::string&
   // keep the values of the one before.
   const ExperimentSpec plain;
   s.density = plain.density;
-  s.contact_law = plain.contact_law;
-  s.linear = plain.linear;
-  s.hertz = plain.hertz;
-  s.bond_law = plain.bond_law;
-  s.parallel_bond = plain.parallel_bond;
+  s.contact = plain.contact;
+  s.bond = plain.bond;
   if (name == "custom") return;
   for (const auto& m : embedded_materials()) {
     if (m.name != name) continue;
@@ -775,6 +795,11 @@ ExperimentSpec default_experiment() {
   s.test = UcsTest::Params{.platen_speed = 0.03};
   s.source = "built-in default";
   return s;
+}
+
+BondModuli bond_moduli(const ExperimentSpec& spec) {
+  return visit_params<BondLaws>(
+      spec.bond, []<class Law>(const typename Law::Params& p) { return Law::moduli(p); });
 }
 
 double confining_stress(const ExperimentSpec& spec) {
@@ -895,20 +920,13 @@ std::string to_toml(const ExperimentSpec& spec) {
       if (!section.empty()) out += "\n[" + section + "]\n";
     }
     out += k.name + " = " + k.get(spec) + "\n";
-    if (k.section == "contact" && k.name == "wall_friction") {
-      auto dump = [&]<class Law>(const typename Law::Params& p) {
-        for (const auto& f : Law::fields())
-          out += std::string(f.key) + " = " + f.default_text(p) + "\n";
-      };
-      if (spec.contact_law == "linear")
-        dump.template operator()<LinearContact>(spec.linear);
-      else
-        dump.template operator()<HertzMindlin>(spec.hertz);
-    }
-    if (k.section == "bond" && k.name == "law") {
-      for (const auto& f : ParallelBond::fields())
-        out += std::string(f.key) + " = " + f.default_text(spec.parallel_bond) + "\n";
-    }
+    auto dump = [&]<class Law>(const typename Law::Params& p) {
+      for (const auto& f : Law::fields())
+        out += std::string(f.key) + " = " + f.default_text(p) + "\n";
+    };
+    if (k.section == "contact" && k.name == "wall_friction")
+      visit_params<ContactLaws>(spec.contact, dump);
+    if (k.section == "bond" && k.name == "law") visit_params<BondLaws>(spec.bond, dump);
     if (k.section == "test" && k.name == "kind")
       visit_lab_test(spec.test, [&]<class T>(const typename T::Params& p) {
         for (const auto& f : T::fields())
@@ -950,8 +968,9 @@ std::string experiment_docs() {
     s += fmt::format("| `{}` | {} | {} | `{}` | {} | {} |\n", k.name, k.type,
                      k.unit.empty() ? "-" : k.unit, k.get(d), k.allowed, k.doc);
     if (k.section == "contact" && k.name == "wall_friction")
-      s += law_docs<LinearContact>("contact") + law_docs<HertzMindlin>("contact");
-    if (k.section == "bond" && k.name == "law") s += law_docs<ParallelBond>("bond");
+      for_each_type<ContactLaws>([&]<class Law>() { s += law_docs<Law>("contact"); });
+    if (k.section == "bond" && k.name == "law")
+      for_each_type<BondLaws>([&]<class Law>() { s += law_docs<Law>("bond"); });
     if (k.section == "test" && k.name == "kind") {
       for_each_lab_test([&]<class T>() { s += law_docs<T>("test", "kind"); });
       s += "\nThe old `[loading]` table (platen_speed, ramp_time, max_strain, stop_fraction, "

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "breccia/engine/simulation.hpp"
@@ -49,14 +50,10 @@ struct ExperimentSpec {
   // Bonds between pairs with gap <= this when the sample lists none (generated samples: at
   // generation).
   double bond_gap_tolerance = 5e-6;
-  // [contact]
-  std::string contact_law = "linear";
-  LinearContact::Params linear;
-  HertzMindlin::Params hertz;
+  // [contact] and [bond]: the chosen laws with their parameters (law/registry.hpp)
+  ContactParams contact = LinearContact::Params{};
   double wall_friction = 0.0;
-  // [bond]
-  std::string bond_law = "parallel_bond";
-  ParallelBond::Params parallel_bond;
+  BondParams bond = ParallelBond::Params{};
   // [test] (the old [loading] table is still read and mapped onto it)
   std::string test_kind = "ucs";
   TestParams test = UcsTest::Params{};
@@ -81,6 +78,9 @@ struct ExperimentSpec {
   std::int64_t ae_min_events = 50;
 
   std::string source;  // file the spec came from ("built-in default" otherwise)
+
+  std::string_view contact_law() const { return name_of_params<ContactLaws>(contact); }
+  std::string_view bond_law() const { return name_of_params<BondLaws>(bond); }
 };
 
 ExperimentSpec default_experiment();
@@ -90,6 +90,8 @@ double confining_stress(const ExperimentSpec& spec);
 // The compression test of the same loading at confining stress `sigma3`: "ucs" at 0, "triaxial"
 // (3D) or "biaxial" (2D) above (sweeps). Throws InputError for tests that are not compression.
 void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string& where);
+// The chosen bond law's moduli (bar-wave speed, crack energies).
+BondModuli bond_moduli(const ExperimentSpec& spec);
 // What the test knows about the sample before it is built.
 SampleInfo sample_info(const ExperimentSpec& spec);
 

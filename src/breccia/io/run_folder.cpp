@@ -189,14 +189,12 @@ std::string sample_key(const ExperimentSpec& s) {
 }  // namespace
 
 ContactModel contact_model(const ExperimentSpec& s) {
-  if (s.contact_law == "linear") {
-    LinearContact::Params w = s.linear;
-    w.friction = s.wall_friction;
-    return make_contact_model<LinearContact>(s.linear, w);
-  }
-  HertzMindlin::Params w = s.hertz;
-  w.friction = s.wall_friction;
-  return make_contact_model<HertzMindlin>(s.hertz, w);
+  // Every contact law has a friction coefficient: walls use the contact law with wall_friction.
+  return visit_params<ContactLaws>(s.contact, [&]<class Law>(const typename Law::Params& p) {
+    typename Law::Params wall = p;
+    wall.friction = s.wall_friction;
+    return make_contact_model<Law>(p, wall);
+  });
 }
 
 PackingSettings packing_settings(const ExperimentSpec& s) {
@@ -388,11 +386,13 @@ Built build(const ExperimentSpec& s, const std::function<void(const std::string&
   EngineConfig cfg = s.engine;
   cfg.gravity = s.dimension == 2 ? Vec3{0, -s.gravity, 0} : Vec3{0, 0, -s.gravity};
   Simulation sim(std::move(ps), cfg, contact_model(s));
-  sim.set_bond_params<ParallelBond>(s.parallel_bond);
-  if (!g.bonds.empty())
-    for (auto [a, b] : g.bonds) sim.add_bond<ParallelBond>(a, b);
-  else
-    sim.bond_touching_pairs<ParallelBond>(s.bond_gap_tolerance);
+  visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params& p) {
+    sim.set_bond_params<Law>(p);
+    if (!g.bonds.empty())
+      for (auto [a, b] : g.bonds) sim.add_bond<Law>(a, b);
+    else
+      sim.bond_touching_pairs<Law>(s.bond_gap_tolerance);
+  });
   std::unique_ptr<Protocol> protocol;
   visit_lab_test(s.test, [&]<class T>(const typename T::Params& p) {
     T::check(p, info, s.source);
@@ -416,7 +416,7 @@ Built build(const ExperimentSpec& s, const std::function<void(const std::string&
   }
   const double volume = (hi - lo) * (footprint_hi[0] - footprint_lo[0]) *
                         (s.dimension == 2 ? s.thickness : footprint_hi[1] - footprint_lo[1]);
-  const double v_bar = std::sqrt(s.parallel_bond.modulus / (mass / volume));
+  const double v_bar = std::sqrt(bond_moduli(s).young / (mass / volume));
   check_run_budget(s, sim, hi - lo, v_bar);
   const std::uint64_t consolidation = protocol->start(sim, v_bar);
   return Built{std::move(sim), std::move(protocol), v_bar, report, consolidation};
@@ -769,7 +769,7 @@ void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
   const analysis::LinearFit fe = analysis::fit_line(x, y, 3);
   const analysis::LinearFit fn = analysis::fit_line(x, lat, 3);
   const bool e_ok = fe.valid && fe.slope > 0.0;
-  const double E = e_ok ? fe.slope : spec.parallel_bond.modulus;
+  const double E = e_ok ? fe.slope : bond_moduli(spec).young;
   double nu = fn.valid ? -fn.slope : -1.0;
   const bool nu_ok = nu > 0.0 && nu < 0.5;
   if (!nu_ok) nu = 0.25;

@@ -94,6 +94,13 @@ struct BondEnergy {
   }
 };
 
+// A bond law's elastic moduli as the papers use them: the bar-wave speed sqrt(E / rho) of a
+// sample and the crack energy sigma^2 V / (2 E) or tau^2 V / (2 G) (analysis.md §2.3).
+struct BondModuli {
+  double young = 0.0;  // Pa
+  double shear = 0.0;  // Pa
+};
+
 enum class CrackMode : std::uint8_t { Tensile = 0, Shear = 1 };
 
 // Failure decision of a bond law in one step, with the quantities the crack record needs (§4.0).

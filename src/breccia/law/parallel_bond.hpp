@@ -65,6 +65,11 @@ struct ParallelBond {
     return p;
   }
 
+  // E_bar and the shear modulus k_s L = E_bar / kappa_bar of the papers' crack energy.
+  static BondModuli moduli(const Params& p) noexcept {
+    return {p.modulus, p.modulus / p.stiffness_ratio};
+  }
+
   struct State {
     Vec3 shear_force;  // F_s
     Vec3 bend_moment;  // M_b

@@ -1,20 +1,21 @@
 #pragma once
-// The one list of laws. Adding a law is one new header and one entry here; the conformance tests
-// (tests/test_law_conformance.cpp) run over every entry automatically.
-#include <cstddef>
+// The one list of laws. Adding a law is one new header and one entry here: the experiment file's
+// [contact] and [bond] tables, their validation, the generated docs, the engine's law sets and the
+// conformance tests (tests/test_law_conformance.cpp) all follow from the lists.
+#include <string_view>
 
+#include "breccia/core/type_list.hpp"
 #include "breccia/law/hertz_mindlin.hpp"
 #include "breccia/law/linear_contact.hpp"
 #include "breccia/law/parallel_bond.hpp"
 
 namespace breccia {
 
-template <class... Ts>
-struct TypeList {
-  static constexpr std::size_t size = sizeof...(Ts);
-};
-
 using ContactLaws = TypeList<LinearContact, HertzMindlin>;
 using BondLaws = TypeList<ParallelBond>;
+
+// The chosen laws' parameters (the experiment's [contact] and [bond] tables).
+using ContactParams = ParamsVariant<ContactLaws>;
+using BondParams = ParamsVariant<BondLaws>;
 
 }  // namespace breccia

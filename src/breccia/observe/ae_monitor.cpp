@@ -10,13 +10,13 @@
 
 namespace breccia {
 
-double fracture_energy(const CrackRecord& c, double modulus, double ratio, bool planar,
+double fracture_energy(const CrackRecord& c, const BondModuli& moduli, bool planar,
                        double thickness) {
   const double L = c.R1 + c.R2, R = c.bond_radius;
   const double v = planar ? 2.0 * R * thickness * L : std::numbers::pi * R * R * L;
   const bool tensile = c.mode == CrackMode::Tensile;
   const double s = tensile ? c.sigma : c.tau;
-  const double C = tensile ? modulus : modulus / ratio;  // E_b, or G_b = E_b / kappa
+  const double C = tensile ? moduli.young : moduli.shear;
   return C > 0.0 ? s * s * v / (2.0 * C) : 0.0;
 }
 
@@ -283,11 +283,9 @@ void AeMonitor::after_step(const Simulation& sim, double strain, double deviator
                        "the monitor must be configured before the first crack");
     build_grid(sim);
     const ParticleStore& ps = sim.particles();
-    const auto& bonds = std::get<BondSet<ParallelBond>>(sim.bonds());
     for (; seen_ < cracks.size(); ++seen_) {
       const CrackRecord& c = cracks[seen_];
-      const double ef = fracture_energy(c, bonds.params.modulus, bonds.params.stiffness_ratio,
-                                        ps.planar(), ps.thickness());
+      const double ef = fracture_energy(c, sim.bond_moduli(c.law), ps.planar(), ps.thickness());
       context_.push_back({strain, deviatoric, ef});
       std::size_t root;
       const auto i1 = static_cast<std::uint32_t>(ps.index_of(c.id1));

@@ -124,8 +124,9 @@ class AeMonitor {
   std::map<std::array<long long, 3>, std::vector<std::uint32_t>> grid_;
 };
 
-// The fracture-energy estimate of analysis.md §2.3 for a parallel-bond crack.
-double fracture_energy(const CrackRecord& c, double bond_modulus, double stiffness_ratio,
-                       bool planar, double thickness);
+// The fracture-energy estimate of analysis.md §2.3 for a bond crack: sigma^2 V / (2 E_b) in
+// tension, tau^2 V / (2 G_b) in shear, over the bond volume V = A (R1 + R2).
+double fracture_energy(const CrackRecord& c, const BondModuli& moduli, bool planar,
+                       double thickness);
 
 }  // namespace breccia
