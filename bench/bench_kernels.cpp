@@ -20,11 +20,11 @@ PairGeometry loaded_geometry(double overlap) {
 void BM_ParallelBond(benchmark::State& st) {
   const ParallelBond::Params p = ParallelBond::example_params();
   PairGeometry g = loaded_geometry(0.0);
-  ParallelBond::State s = ParallelBond::install(p, g, 1, 1);
+  ParallelBond::State s = ParallelBond::install(p, g, {}, 1, 1);
   s.n_old = g.n;
   for (auto _ : st) {
     BondFailure f;
-    benchmark::DoNotOptimize(ParallelBond::compute(p, s, g, 1e-12, f));
+    benchmark::DoNotOptimize(ParallelBond::compute(p, s, g, {}, 1e-12, f));
   }
 }
 BENCHMARK(BM_ParallelBond);

@@ -19,6 +19,7 @@ struct GTypes<TypeList<Ts...>> {
 
 struct Body {
   Vec3 x, v, w;
+  Quat q;  // orientation, body to world
   double R = 0.5e-3;
   double m = 1.388e-6;
 };
@@ -61,13 +62,13 @@ struct PairStepper {
 
   void install(std::uint64_t seed = 1, std::uint64_t tag = 1) {
     if constexpr (is_bond_law<Law>)
-      state = Law::install(params, make_geometry(a, b, planar, thickness), seed, tag);
+      state = Law::install(params, make_geometry(a, b, planar, thickness), {a.q, b.q}, seed, tag);
   }
   PairResult evaluate() {
     const PairGeometry g = make_geometry(a, b, planar, thickness);
     PairForce pf;
     if constexpr (is_bond_law<Law>)
-      pf = Law::compute(params, state, g, dt, failure);
+      pf = Law::compute(params, state, g, {a.q, b.q}, dt, failure);
     else
       pf = Law::compute(params, state, g, dt, dissipation);
     return assemble(g, pf);
@@ -75,6 +76,8 @@ struct PairStepper {
   void move() {
     a.x += a.v * dt;
     b.x += b.v * dt;
+    a.q = integrate_orientation(a.q, a.w, dt);
+    b.q = integrate_orientation(b.q, b.w, dt);
   }
   double energy() const {
     if constexpr (is_bond_law<Law>)

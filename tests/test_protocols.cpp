@@ -200,3 +200,32 @@ TEST(Brazilian, BadDiscsAreRefused) {
       test + "[sample]\nshape = \"cylinder\"\ndiameter = 0.01\nheight = 0.005\n", "d", {});
   EXPECT_THROW(set_confining_stress(disc, 5e6, "sweep"), InputError);
 }
+
+TEST(Protocols, EveryBondLawRunsATinyTestIn3DAnd2D) {
+  // The registry's bond laws through the whole command: built from the experiment file, run
+  // (orientations reach the total formulations in 3D and, as angles about z, in 2D), cracks
+  // recorded under the law's name.
+  const fs::path dir = fs::temp_directory_path() / "breccia_bond_laws";
+  fs::remove_all(dir);
+  for_each_type<BondLaws>([&]<class Law>() {
+    const std::string name(Law::name);
+    for (const char* kind : {"ucs", "biaxial"}) {
+      fs::path folder;
+      std::string toml = tiny_experiment(kind) + "[bond]\nlaw = \"" + name + "\"\n";
+      // To the peak (about 1.2 % for the Berea parallel bonds) and past it.
+      toml.replace(toml.find("max_strain = 0.003"), 18, "max_strain = 0.03");
+      const nlohmann::json s = run_file(dir, name + "-" + kind, toml, &folder);
+      EXPECT_EQ(s["status"], "complete") << name << " " << kind;
+      EXPECT_GT(s["bonds_initial"].get<int>(), 100) << name << " " << kind;
+      if (std::string(kind) == "ucs") {
+        EXPECT_GT(s["bonds_broken"].get<int>(), 0) << name;
+        std::ifstream cracks(folder / "cracks.csv");
+        std::string header, first;
+        std::getline(cracks, header);
+        std::getline(cracks, first);
+        EXPECT_NE(first.find("," + name + ","), std::string::npos) << first;
+      }
+    }
+  });
+  fs::remove_all(dir);
+}

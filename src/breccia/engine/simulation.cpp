@@ -148,8 +148,9 @@ void Simulation::install_bonds(BondSet<Law>& set) {
   set.intact.assign(n, 1);
   set.broken_since_compaction = 0;
   for (std::size_t k = 0; k < n; ++k) {
-    const PairGeometry g = geometry(set.pairs.first[k], set.pairs.second[k]);
-    set.state[k] = Law::install(set.params, g, cfg_.seed, set.tag[k]);
+    const std::uint32_t i = set.pairs.first[k], j = set.pairs.second[k];
+    set.state[k] =
+        Law::install(set.params, geometry(i, j), frames<Law>(i, j), cfg_.seed, set.tag[k]);
   }
 }
 
@@ -355,18 +356,20 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
       bool have_geometry = false;
       Vec3 force, couple;
       std::uint32_t law_index = 0;
+      bool contact_off = false;  // an intact bond whose law excludes the contact (§4.0)
       auto bond_part = [&]<class Law>(BondSet<Law>& set) {
         const std::uint32_t b = set.bond_of_pair[k];
         if (b != BondSet<Law>::kNoBond && set.intact[b]) {
           if (!have_geometry) g = geometry(i, j);
           have_geometry = true;
           BondFailure f;
-          const PairForce pf = Law::compute(set.params, set.state[b], g, dt, f);
+          const PairForce pf = Law::compute(set.params, set.state[b], g, frames<Law>(i, j), dt, f);
           if (f.broken) {
             fails.push_back({law_index, b, f});
           } else {
             force += pf.force;
             couple += pf.couple;
+            contact_off = contact_off || !Law::contact_while_bonded(set.params);
           }
         }
         ++law_index;
@@ -386,7 +389,13 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
         s = PairSlot{};
         continue;
       }
-      if (g.delta > 0.0 || has_history(c.state[k].n_old)) {
+      if (contact_off && has_history(c.state[k].n_old)) {
+        // Bonded under load with a law that excludes the contact: its spring energy is lost
+        // without work (§4.0, D_del) and the contact starts afresh when the bond breaks.
+        dis.deleted += CL::stored_energy(c.params, c.state[k]);
+        c.state[k] = {};
+      }
+      if (!contact_off && (g.delta > 0.0 || has_history(c.state[k].n_old))) {
         const PairForce pf = CL::compute(c.params, c.state[k], g, dt, dis);
         force += pf.force;
         couple += pf.couple;

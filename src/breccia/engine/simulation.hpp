@@ -230,6 +230,19 @@ class Simulation {
   void estimate_time_step();
   bool needs_rebuild() const noexcept;
   // Geometry of particle pair (i, j) at the current state (hot path: inline).
+  // Orientations for the bond laws that need them (2D: rotations about z by the angles).
+  Quat body_orientation(std::uint32_t i) const noexcept {
+    if (!p_.planar()) return p_.orientation[i];
+    const double half = 0.5 * p_.angle[i];
+    return {std::cos(half), 0.0, 0.0, std::sin(half)};
+  }
+  template <class Law>
+  BodyFrames frames(std::uint32_t i, std::uint32_t j) const noexcept {
+    if constexpr (Law::needs_frames)
+      return {body_orientation(i), body_orientation(j)};
+    else
+      return {};
+  }
   PairGeometry geometry(std::uint32_t i, std::uint32_t j) const noexcept {
     const PosRad& a = p_.pos_rad[i];
     const PosRad& b = p_.pos_rad[j];

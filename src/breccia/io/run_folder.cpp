@@ -614,7 +614,8 @@ std::string summarise_folder(const std::string& folder) {
 namespace {
 
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
-constexpr std::uint32_t kCheckpointFormat = 3;  // 2: commit and trailing hash; 3: strain gauges
+constexpr std::uint32_t kCheckpointFormat =
+    4;  // 2: commit and trailing hash; 3: strain gauges; 4: brittle-beam bond set
 constexpr const char* kCheckpointFile = "checkpoint.bin";
 
 // What the loading loop carries from one row to the next besides the engine, the protocol and

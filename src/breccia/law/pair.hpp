@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "breccia/core/quat.hpp"
 #include "breccia/core/vec3.hpp"
 
 namespace breccia {
@@ -55,6 +56,12 @@ struct PairGeometry {
   g.thickness = thickness;
   return g;
 }
+
+// Orientations (body to world) of the two bodies, for the total bond formulations that need them
+// (§4.2, §4.3; a law says so with `needs_frames`). In 2D, rotations about z by the disks' angles.
+struct BodyFrames {
+  Quat q1, q2;
+};
 
 // What a law produces for one pair in one step.
 struct PairForce {

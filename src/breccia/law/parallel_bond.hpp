@@ -20,6 +20,7 @@ struct ParallelBond {
   static constexpr std::string_view name = "parallel_bond";
   static constexpr std::string_view summary =
       "Potyondy-Cundall parallel bond (incremental), tension then Mohr-Coulomb shear failure.";
+  static constexpr bool needs_frames = false;  // incremental: velocities suffice
 
   struct Params {
     double radius_multiplier = 1.0;  // lambda_bar
@@ -69,6 +70,8 @@ struct ParallelBond {
   static BondModuli moduli(const Params& p) noexcept {
     return {p.modulus, p.modulus / p.stiffness_ratio};
   }
+  // The linear contact acts in parallel with the bond (physics.md §4.0).
+  static bool contact_while_bonded(const Params&) noexcept { return true; }
 
   struct State {
     Vec3 shear_force;  // F_s
@@ -89,8 +92,8 @@ struct ParallelBond {
 
   // Installs a stress-free bond at the current geometry. Strengths are drawn from the counter-based
   // generator keyed by the bond tag, so they do not depend on creation order.
-  static State install(const Params& p, const PairGeometry& g, std::uint64_t seed,
-                       std::uint64_t bond_tag) noexcept {
+  static State install(const Params& p, const PairGeometry& g, const BodyFrames&,
+                       std::uint64_t seed, std::uint64_t bond_tag) noexcept {
     State s;
     const double rb = p.radius_multiplier * std::min(g.R1, g.R2);
     s.bond_radius = rb;
@@ -128,8 +131,8 @@ struct ParallelBond {
 
   // One step. On failure the bond's force is not applied (§4.0 decision) and `fail` carries the
   // record; the caller removes the bond.
-  static PairForce compute(const Params& p, State& s, const PairGeometry& g, double dt,
-                           BondFailure& fail) noexcept {
+  static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames&,
+                           double dt, BondFailure& fail) noexcept {
     // The increments use v^{n-1/2}, the velocity that carried the particles from x^{n-1} to x^n.
     // A bond installed at x^n has not seen that motion, so its first step adds nothing.
     const bool fresh = s.n_old.x == 0.0 && s.n_old.y == 0.0 && s.n_old.z == 0.0;

@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "breccia/core/type_list.hpp"
+#include "breccia/law/brittle_beam.hpp"
 #include "breccia/law/hertz_mindlin.hpp"
 #include "breccia/law/linear_contact.hpp"
 #include "breccia/law/parallel_bond.hpp"
@@ -12,7 +13,7 @@
 namespace breccia {
 
 using ContactLaws = TypeList<LinearContact, HertzMindlin>;
-using BondLaws = TypeList<ParallelBond>;
+using BondLaws = TypeList<ParallelBond, BrittleBeam>;
 
 // The chosen laws' parameters (the experiment's [contact] and [bond] tables).
 using ContactParams = ParamsVariant<ContactLaws>;
