@@ -456,3 +456,38 @@ TEST(App, BadGeometryFileFailsBeforeWritingAnything) {
   EXPECT_FALSE(fs::exists(dir / "runs")) << "no run folder for a run that never started";
   fs::remove_all(dir);
 }
+
+TEST(App, BuildsFromUncommittedTreesNameTheirCommitDirty) {
+  // cmake/commit.cmake on a scratch repository: a clean tree gives the bare commit, an edited
+  // tracked file or a new untracked file gives "<commit>-dirty".
+  const fs::path repo = fs::temp_directory_path() / "breccia_commit_label";
+  fs::remove_all(repo);
+  fs::create_directories(repo);
+  std::ofstream(repo / "a.txt") << "one\n";
+  const std::string git =
+      "git -C " + repo.string() + " -c user.name=t -c user.email=t@t -c commit.gpgsign=false ";
+  ASSERT_EQ(std::system((git + "init -q && " + git + "add a.txt && " + git +
+                         "commit -q -m one >/dev/null 2>&1")
+                            .c_str()),
+            0);
+  const fs::path out = repo.parent_path() / "breccia_commit_label.cpp";
+  auto label = [&] {
+    const std::string cmd = "cmake -DSOURCE_DIR=" + repo.string() + " -DOUT=" + out.string() +
+                            " -P " + BRECCIA_SOURCE_DIR + "/cmake/commit.cmake";
+    EXPECT_EQ(std::system(cmd.c_str()), 0);
+    const std::string text = read(out);
+    const auto q = text.find("kCommit = \"");
+    return text.substr(q + 11, text.find('"', q + 11) - q - 11);
+  };
+  const std::string clean = label();
+  EXPECT_EQ(clean.size(), 12u) << clean;
+  EXPECT_EQ(clean.find("dirty"), std::string::npos);
+  std::ofstream(repo / "a.txt") << "two\n";
+  EXPECT_EQ(label(), clean + "-dirty");
+  ASSERT_EQ(std::system((git + "checkout -q -- a.txt").c_str()), 0);
+  EXPECT_EQ(label(), clean);
+  std::ofstream(repo / "new.txt") << "untracked\n";
+  EXPECT_EQ(label(), clean + "-dirty");
+  fs::remove_all(repo);
+  fs::remove(out);
+}
