@@ -249,6 +249,12 @@ TEST(BrittleBeam, UnequalGrainsAcrossAGapActAtTheBeamPoint) {
   const Vec3 expected = cross(arm, -r.f2);
   EXPECT_NEAR(r.t1.z, expected.z, 1e-9 * norm(expected));
   EXPECT_NEAR(r.t1.z + r.t2.z + cross(s.b.x, r.f2).z, 0.0, 1e-9 * norm(expected));
+  // A crack there is placed at the beam point too: 0.3 d from particle 1, which lies
+  // 0.3 d - (R1 + gap / 2) = -0.4 um from the middle of the gap.
+  s.params.cohesion = 1.0;
+  s.evaluate();
+  ASSERT_TRUE(s.failure.broken);
+  EXPECT_NEAR(s.failure.point_shift, 0.3 * d - (0.3e-3 + 1e-6), 1e-15);
 }
 
 // ---- in the engine ----

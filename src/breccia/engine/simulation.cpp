@@ -437,7 +437,7 @@ void Simulation::process_failure(BondSet<Law>& set, std::uint32_t bond, const Bo
   r.id2 = p_.tag[swap ? i : j];
   r.R1 = swap ? g.R2 : g.R1;
   r.R2 = swap ? g.R1 : g.R2;
-  r.position = p_.pos_rad[i].x + g.r1;
+  r.position = p_.pos_rad[i].x + g.r1 + g.n * info.point_shift;
   r.normal = swap ? -g.n : g.n;
   r.mode = info.mode;
   r.bond_radius = info.bond_radius;

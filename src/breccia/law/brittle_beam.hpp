@@ -207,14 +207,19 @@ struct BrittleBeam {
       fail.ratio_s =
           shear_limit > 0.0 ? tau / shear_limit : std::numeric_limits<double>::quiet_NaN();
       fail.bond_radius = s.radius;
+      fail.point_shift = point_shift(s, g);
       fail.energy = energy(s);
       return {};
     }
-    // The beam meets the crack plane at x1 + arm1 d, the geometry's contact point lies at
-    // x1 + (R1 - delta / 2) n: the couple of moving the force between them keeps the lever-arm
-    // torques those of the beam (§4.2 step 8). Zero for touching grains.
-    const Vec3 offset = g.n * (g.d * s.arm1 - g.R1 + 0.5 * g.delta);
-    return {force, couple + cross(offset, force)};
+    // The couple of moving the force from the geometry's contact point to the beam's keeps the
+    // lever-arm torques those of the beam (§4.2 step 8).
+    return {force, couple + cross(g.n * point_shift(s, g), force)};
+  }
+
+  // The beam meets the crack plane at x1 + arm1 d; the geometry's contact point lies at
+  // x1 + (R1 - delta / 2) n. Zero for touching grains.
+  static double point_shift(const State& s, const PairGeometry& g) noexcept {
+    return g.d * s.arm1 - g.R1 + 0.5 * g.delta;
   }
 
   static BondEnergy energy(const State& s) noexcept {

@@ -121,6 +121,9 @@ struct BondFailure {
   double sigma = 0.0, tau = 0.0;        // peak stresses, sigma tension-positive
   double ratio_t = 0.0, ratio_s = 0.0;  // criterion ratios; NaN where undefined
   double bond_radius = 0.0;
+  // From the §0.2 contact point to the law's own point on the branch, along n (beam bonds act
+  // at x1 + d R1 / (R1 + R2), §4.2 step 8): where the crack record places the crack.
+  double point_shift = 0.0;
   BondEnergy energy;  // released energy by component
 };
 
