@@ -17,17 +17,26 @@ PairGeometry loaded_geometry(double overlap) {
                        false, 1.0);
 }
 
-void BM_ParallelBond(benchmark::State& st) {
-  const ParallelBond::Params p = ParallelBond::example_params();
-  PairGeometry g = loaded_geometry(0.0);
-  ParallelBond::State s = ParallelBond::install(p, g, {}, 1, 1);
-  s.n_old = g.n;
+// A loaded bond: installed at the geometry, then evaluated with the grains turned a little (for
+// total laws) and moving (for incremental ones).
+template <class Law>
+void BM_Bond(benchmark::State& st) {
+  const typename Law::Params p = Law::example_params();
+  const PairGeometry g0 = pair_geometry({0, 0, 0}, 0.5e-3, unit(Vec3{0.8, 0.35, -0.2}) * 1e-3,
+                                        0.5e-3, {}, {}, {}, {}, 1.4e-6, 1.4e-6, false, 1.0);
+  typename Law::State s = Law::install(p, g0, {}, 1, 1);
+  const PairGeometry g = loaded_geometry(0.0);
+  BondFailure warm;
+  Law::compute(p, s, g, {}, 1e-12, warm);  // an incremental law's first step adds nothing
+  const BodyFrames turned{from_axis_angle({0.2, 1, 0.3}, 1e-5),
+                          from_axis_angle({1, 0, 0.4}, -2e-5)};
   for (auto _ : st) {
     BondFailure f;
-    benchmark::DoNotOptimize(ParallelBond::compute(p, s, g, {}, 1e-12, f));
+    benchmark::DoNotOptimize(Law::compute(p, s, g, turned, 1e-12, f));
   }
 }
-BENCHMARK(BM_ParallelBond);
+BENCHMARK(BM_Bond<ParallelBond>);
+BENCHMARK(BM_Bond<BrittleBeam>);
 
 template <class Law>
 void BM_Contact(benchmark::State& st) {
