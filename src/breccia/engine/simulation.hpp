@@ -229,7 +229,6 @@ class Simulation {
   void compact_bonds(BondSet<Law>& set);
   void estimate_time_step();
   bool needs_rebuild() const noexcept;
-  // Geometry of particle pair (i, j) at the current state (hot path: inline).
   // Orientations for the bond laws that need them (2D: rotations about z by the angles).
   Quat body_orientation(std::uint32_t i) const noexcept {
     if (!p_.planar()) return p_.orientation[i];
@@ -243,6 +242,7 @@ class Simulation {
     else
       return {};
   }
+  // Geometry of particle pair (i, j) at the current state (hot path: inline).
   PairGeometry geometry(std::uint32_t i, std::uint32_t j) const noexcept {
     const PosRad& a = p_.pos_rad[i];
     const PosRad& b = p_.pos_rad[j];

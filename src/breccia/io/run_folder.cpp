@@ -614,8 +614,8 @@ std::string summarise_folder(const std::string& folder) {
 namespace {
 
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
-constexpr std::uint32_t kCheckpointFormat =
-    4;  // 2: commit and trailing hash; 3: strain gauges; 4: brittle-beam bond set
+// 2: commit and trailing hash; 3: strain gauges; 4, 5: brittle-beam and quaternion bond sets
+constexpr std::uint32_t kCheckpointFormat = 5;
 constexpr const char* kCheckpointFile = "checkpoint.bin";
 
 // What the loading loop carries from one row to the next besides the engine, the protocol and

@@ -9,11 +9,12 @@
 #include "breccia/law/hertz_mindlin.hpp"
 #include "breccia/law/linear_contact.hpp"
 #include "breccia/law/parallel_bond.hpp"
+#include "breccia/law/quaternion_bond.hpp"
 
 namespace breccia {
 
 using ContactLaws = TypeList<LinearContact, HertzMindlin>;
-using BondLaws = TypeList<ParallelBond, BrittleBeam>;
+using BondLaws = TypeList<ParallelBond, BrittleBeam, QuaternionBond>;
 
 // The chosen laws' parameters (the experiment's [contact] and [bond] tables).
 using ContactParams = ParamsVariant<ContactLaws>;

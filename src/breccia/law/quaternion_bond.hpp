@@ -1,0 +1,96 @@
+#pragma once
+// The quaternion bond of seed 004 (Zhao & Collins 2024), specified through its reference
+// implementation LAMMPS bond_style bpm/rotational (physics.md §4.3): the beam kinematics of §4.2
+// with chi_b = 1 and the present length d as the arm of both shear terms, and an additive
+// breakage index B = <-F_n> / F_n^max + F_s / F_s^max + M_b / M_b^max + M_t / M_t^max >= 1.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include "breccia/law/beam.hpp"
+#include "breccia/law/pair.hpp"
+#include "breccia/law/param_table.hpp"
+
+namespace breccia {
+
+struct QuaternionBond {
+  static constexpr std::string_view name = "quaternion_bond";
+  static constexpr std::string_view summary =
+      "Quaternion (total) bond of LAMMPS bpm/rotational: normal, shear, bending and twisting "
+      "loads with an additive breakage index.";
+  static constexpr bool needs_frames = true;
+
+  struct Params {
+    double modulus = 10e9;             // E_b
+    double poisson_ratio = 0.25;       // nu_b
+    double tensile_strength = 20e6;    // sigma_t,b: F_n^max = sigma A, M_b^max = sigma I / R_b
+    double shear_strength = 20e6;      // c_b: F_s^max = c A, M_t^max = c J / R_b
+    bool signed_normal = false;        // LAMMPS: -F_n (compression lowers B), else max(0, -F_n)
+    bool contact_while_bonded = true;  // false: no contact between bonded grains
+  };
+  static void prepare(Params&) noexcept {}
+  static constexpr std::array<ParamField<Params>, 6> fields() {
+    return {{
+        {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
+         "bond Young's modulus E_b: K_r = E_b A / d0, K_b = E_b I / d0"},
+        {"poisson_ratio", "-", &Params::poisson_ratio, -1, 0.5, false, false,
+         "nu_b: G_b = E_b / (2 (1 + nu_b)), K_s = G_b A / d0, K_t = G_b J / d0"},
+        {"tensile_strength", "Pa", &Params::tensile_strength, 0, kInf, false, true,
+         "sigma_t,b: F_n^max = sigma_t,b A, M_b^max = sigma_t,b I / R_b (ESyS: c_b / tan phi_b)"},
+        {"shear_strength", "Pa", &Params::shear_strength, 0, kInf, false, true,
+         "c_b: F_s^max = c_b A, M_t^max = c_b J / R_b"},
+        {"signed_normal", "-", &Params::signed_normal, 0, 0, true, true,
+         "normal term -F_n / F_n^max as LAMMPS (compression lowers the index, which is kept >= 0) "
+         "instead of max(0, -F_n) / F_n^max"},
+        {"contact_while_bonded", "-", &Params::contact_while_bonded, 0, 0, true, true,
+         "the contact law also acts between overlapping bonded grains (false: as LAMMPS without "
+         "overlay/pair; their contact energy is booked as deleted)"},
+    }};
+  }
+  static Params example_params() { return {}; }
+  static BondModuli moduli(const Params& p) noexcept {
+    return {p.modulus, p.modulus / (2.0 * (1.0 + p.poisson_ratio))};
+  }
+  static bool contact_while_bonded(const Params& p) noexcept { return p.contact_while_bonded; }
+
+  using State = beam::BeamState;
+
+  static State install(const Params& p, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
+                       std::uint64_t) noexcept {
+    return beam::install(g, fr, p.modulus, moduli(p).shear, 1.0, false);
+  }
+
+  static double max_stiffness(const State& s) noexcept { return std::max(s.kr, s.ks); }
+  static double max_moment_stiffness(const State& s) noexcept { return std::max(s.kb, s.kt); }
+  static double shear_stiffness(const State& s) noexcept { return s.ks; }
+
+  static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
+                           double, BondFailure& fail) noexcept {
+    // LAMMPS's arms: the present length for both shear terms.
+    const PairForce pf = beam::loads(s, g, fr, g.d, g.d);
+    const double tension = p.signed_normal ? -s.normal_force : std::max(0.0, -s.normal_force);
+    const double tensile_index = tension / (p.tensile_strength * s.area) +
+                                 s.bend_moment * s.radius / (p.tensile_strength * s.inertia);
+    const double shear_index =
+        s.shear_force / (p.shear_strength * s.area) +
+        (s.polar > 0.0 ? std::abs(s.twist_moment) * s.radius / (p.shear_strength * s.polar) : 0.0);
+    const double index = std::max(0.0, tensile_index + shear_index);
+    if (index >= 1.0) {
+      beam::record(s, g, fail);
+      // The index defines no mode: the larger of its tensile and shear parts names it.
+      fail.mode = tensile_index >= shear_index ? CrackMode::Tensile : CrackMode::Shear;
+      fail.sigma = -s.normal_force / s.area + s.bend_moment * s.radius / s.inertia;
+      fail.tau = s.shear_force / s.area +
+                 (s.polar > 0.0 ? std::abs(s.twist_moment) * s.radius / s.polar : 0.0);
+      fail.ratio_t = tensile_index;
+      fail.ratio_s = shear_index;
+      return {};
+    }
+    return pf;
+  }
+
+  static BondEnergy energy(const State& s) noexcept { return beam::energy(s); }
+};
+
+}  // namespace breccia
