@@ -246,8 +246,11 @@ class Simulation {
   PairGeometry geometry(std::uint32_t i, std::uint32_t j) const noexcept {
     const PosRad& a = p_.pos_rad[i];
     const PosRad& b = p_.pos_rad[j];
-    return pair_geometry(a.x, a.r, b.x, b.r, p_.vel[i], p_.angvel[i], p_.vel[j], p_.angvel[j],
-                         p_.mass[i], p_.mass[j], p_.planar(), p_.thickness());
+    PairGeometry g =
+        pair_geometry(a.x, a.r, b.x, b.r, p_.vel[i], p_.angvel[i], p_.vel[j], p_.angvel[j],
+                      p_.mass[i], p_.mass[j], p_.planar(), p_.thickness());
+    g.planar_sphere = p_.planar() && p_.planar_body() == PlanarBody::PlanarSphere;
+    return g;
   }
 
   ParticleStore p_;

@@ -77,16 +77,18 @@ struct BeamState {
 };
 
 // A stress-free beam at the present geometry: radius R_b (d0 / 2, or min(R1, R2)), a disc
-// section in 3D and a slab of the disks' thickness in 2D, K = modulus x section / d0.
+// section in 3D and a slab of the disks' thickness in 2D (a disc for planar spheres when
+// `disc_for_planar_spheres`), K = modulus x section / d0.
 inline BeamState install(const PairGeometry& g, const BodyFrames& fr, double young, double shear,
-                         double bending_factor, bool min_radius) noexcept {
+                         double bending_factor, bool min_radius,
+                         bool disc_for_planar_spheres = false) noexcept {
   BeamState s;
   s.d0 = g.d;
   s.r0 = rotate(conj(fr.q1), g.n);
   s.q0 = conj(fr.q1) * fr.q2;
   const double rb = min_radius ? std::min(g.R1, g.R2) : 0.5 * g.d;
   s.radius = rb;
-  if (g.planar) {
+  if (g.planar && !(disc_for_planar_spheres && g.planar_sphere)) {
     s.area = 2.0 * rb * g.thickness;
     s.inertia = 2.0 / 3.0 * rb * rb * rb * g.thickness;
   } else {

@@ -19,9 +19,10 @@ struct PairGeometry {
   Vec3 vc;             // relative velocity of the contact point, 2 minus 1
   Vec3 w1, w2;         // angular velocities
   double R1 = 0.0, R2 = 0.0;
-  double m1 = 0.0, m2 = 0.0;  // masses (m1 unused against a wall)
-  bool wall = false;          // body 1 is a rigid wall (then R1 is not a radius)
-  bool planar = false;        // 2D slab geometry
+  double m1 = 0.0, m2 = 0.0;   // masses (m1 unused against a wall)
+  bool wall = false;           // body 1 is a rigid wall (then R1 is not a radius)
+  bool planar = false;         // 2D slab geometry
+  bool planar_sphere = false;  // 2D run of spheres confined to the plane (§3.4), not disks
   double thickness = 1.0;
 
   double vn() const noexcept { return dot(vc, n); }

@@ -58,7 +58,8 @@ struct QuaternionBond {
 
   static State install(const Params& p, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
                        std::uint64_t) noexcept {
-    return beam::install(g, fr, p.modulus, moduli(p).shear, 1.0, false);
+    // Planar spheres keep the disc section (§4.3): a 2D run of them is a 3D run in the plane.
+    return beam::install(g, fr, p.modulus, moduli(p).shear, 1.0, false, true);
   }
 
   static double max_stiffness(const State& s) noexcept { return std::max(s.kr, s.ks); }
