@@ -160,6 +160,20 @@ inline void record(const BeamState& s, const PairGeometry& g, BondFailure& fail)
   fail.energy = energy(s);
 }
 
+// What the engine asks of every beam law's state, and the isotropic moduli of its beam
+// (G = E / (2 (1 + nu))): the two beam laws derive from it.
+struct BeamLaw {
+  using State = BeamState;
+  static constexpr bool needs_frames = true;  // total formulation: reads the orientations
+  static double max_stiffness(const State& s) noexcept { return std::max(s.kr, s.ks); }
+  static double max_moment_stiffness(const State& s) noexcept { return std::max(s.kb, s.kt); }
+  static double shear_stiffness(const State& s) noexcept { return s.ks; }
+  static BondEnergy energy(const State& s) noexcept { return beam::energy(s); }
+  static BondModuli isotropic_moduli(double young, double poisson_ratio) noexcept {
+    return {young, young / (2.0 * (1.0 + poisson_ratio))};
+  }
+};
+
 }  // namespace beam
 
 }  // namespace breccia

@@ -17,12 +17,11 @@
 
 namespace breccia {
 
-struct BrittleBeam {
+struct BrittleBeam : beam::BeamLaw {
   static constexpr std::string_view name = "brittle_beam";
   static constexpr std::string_view summary =
       "ESyS-Particle rotational brittle beam (total formulation), Mohr-Coulomb failure with a "
       "tensile cut-off.";
-  static constexpr bool needs_frames = true;  // reads the bodies' orientations
 
   struct Params {
     double modulus = 10e9;        // E_b
@@ -65,20 +64,14 @@ struct BrittleBeam {
   }
   static Params example_params() { return {}; }
   static BondModuli moduli(const Params& p) noexcept {
-    return {p.modulus, p.modulus / (2.0 * (1.0 + p.poisson_ratio))};
+    return isotropic_moduli(p.modulus, p.poisson_ratio);
   }
   static bool contact_while_bonded(const Params& p) noexcept { return p.contact_while_bonded; }
-
-  using State = beam::BeamState;
 
   static State install(const Params& p, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
                        std::uint64_t) noexcept {
     return beam::install(g, fr, p.modulus, moduli(p).shear, p.bending_factor, p.min_radius);
   }
-
-  static double max_stiffness(const State& s) noexcept { return std::max(s.kr, s.ks); }
-  static double max_moment_stiffness(const State& s) noexcept { return std::max(s.kb, s.kt); }
-  static double shear_stiffness(const State& s) noexcept { return s.ks; }
 
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
                            double, BondFailure& fail) noexcept {
@@ -106,8 +99,6 @@ struct BrittleBeam {
     }
     return pf;
   }
-
-  static BondEnergy energy(const State& s) noexcept { return beam::energy(s); }
 };
 
 }  // namespace breccia

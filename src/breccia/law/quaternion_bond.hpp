@@ -14,12 +14,11 @@
 
 namespace breccia {
 
-struct QuaternionBond {
+struct QuaternionBond : beam::BeamLaw {
   static constexpr std::string_view name = "quaternion_bond";
   static constexpr std::string_view summary =
       "Quaternion (total) bond of LAMMPS bpm/rotational: normal, shear, bending and twisting "
       "loads with an additive breakage index.";
-  static constexpr bool needs_frames = true;
 
   struct Params {
     double modulus = 10e9;             // E_b
@@ -50,21 +49,15 @@ struct QuaternionBond {
   }
   static Params example_params() { return {}; }
   static BondModuli moduli(const Params& p) noexcept {
-    return {p.modulus, p.modulus / (2.0 * (1.0 + p.poisson_ratio))};
+    return isotropic_moduli(p.modulus, p.poisson_ratio);
   }
   static bool contact_while_bonded(const Params& p) noexcept { return p.contact_while_bonded; }
-
-  using State = beam::BeamState;
 
   static State install(const Params& p, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
                        std::uint64_t) noexcept {
     // Planar spheres keep the disc section (§4.3): a 2D run of them is a 3D run in the plane.
     return beam::install(g, fr, p.modulus, moduli(p).shear, 1.0, false, true);
   }
-
-  static double max_stiffness(const State& s) noexcept { return std::max(s.kr, s.ks); }
-  static double max_moment_stiffness(const State& s) noexcept { return std::max(s.kb, s.kt); }
-  static double shear_stiffness(const State& s) noexcept { return s.ks; }
 
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
                            double, BondFailure& fail) noexcept {
@@ -90,8 +83,6 @@ struct QuaternionBond {
     }
     return pf;
   }
-
-  static BondEnergy energy(const State& s) noexcept { return beam::energy(s); }
 };
 
 }  // namespace breccia
