@@ -1,4 +1,5 @@
 #pragma once
+#include <functional>
 // A bonded FCC block between two platens, the small standard system of several tests.
 #include <cmath>
 
@@ -8,7 +9,8 @@
 namespace breccia::test {
 
 inline Simulation compressed_block(int nx, int ny, int nz, double platen_speed,
-                                   double bond_strength, double damping = 0.7) {
+                                   double bond_strength, double damping = 0.7,
+                                   const std::function<void(Simulation&)>& before_start = {}) {
   const double R = 0.5e-3;
   ParticleStore ps = fcc_block(nx, ny, nz, R, 2650);
   EngineConfig cfg;
@@ -34,6 +36,7 @@ inline Simulation compressed_block(int nx, int ny, int nz, double platen_speed,
   bottom.ramp = upper.ramp = {0.0, 2e-5};
   sim.add_wall(bottom);
   sim.add_wall(upper);
+  if (before_start) before_start(sim);
   sim.initialise();
   return sim;
 }

@@ -43,8 +43,13 @@ inline PairResult assemble(const PairGeometry& g, const PairForce& pf) {
   return r;
 }
 
+// Joint laws (physics.md §5) are installed with a joint-plane normal, not body frames.
 template <class Law>
-constexpr bool is_bond_law = requires {
+constexpr bool is_joint_law = requires {
+  Law::starts_bonded;
+};
+template <class Law>
+constexpr bool is_bond_law = !is_joint_law<Law> && requires {
   Law::install;
 };
 
@@ -59,15 +64,21 @@ struct PairStepper {
   double thickness = 1.0;
   BondFailure failure;
   PairDissipation dissipation;
+  Vec3 joint_normal{1, 0, 0};  // joint laws: the plane's normal (tilted from most branches)
 
   void install(std::uint64_t seed = 1, std::uint64_t tag = 1) {
-    if constexpr (is_bond_law<Law>)
+    if constexpr (is_joint_law<Law>)
+      state = Law::install(params, make_geometry(a, b, planar, thickness), joint_normal,
+                           Law::starts_bonded(params));
+    else if constexpr (is_bond_law<Law>)
       state = Law::install(params, make_geometry(a, b, planar, thickness), {a.q, b.q}, seed, tag);
   }
   PairResult evaluate() {
     const PairGeometry g = make_geometry(a, b, planar, thickness);
     PairForce pf;
-    if constexpr (is_bond_law<Law>)
+    if constexpr (is_joint_law<Law>)
+      pf = Law::compute(params, state, g, dt, dissipation, failure);
+    else if constexpr (is_bond_law<Law>)
       pf = Law::compute(params, state, g, {a.q, b.q}, dt, failure);
     else
       pf = Law::compute(params, state, g, dt, dissipation);
@@ -80,7 +91,7 @@ struct PairStepper {
     b.q = integrate_orientation(b.q, b.w, dt);
   }
   double energy() const {
-    if constexpr (is_bond_law<Law>)
+    if constexpr (is_bond_law<Law> || is_joint_law<Law>)
       return Law::energy(state).total();
     else
       return Law::stored_energy(params, state);

@@ -29,7 +29,7 @@ PairStepper<Law> loaded_pair(std::uint64_t seed, double speed = 1e-3, double spi
   const double R = 0.5e-3;
   s.a.x = {0, 0, 0};
   const Vec3 dir = unit({0.8, 0.35, -0.2});
-  const double overlap = is_bond_law<Law> ? 0.0 : 2e-6;
+  const double overlap = is_bond_law<Law> || is_joint_law<Law> ? 0.0 : 2e-6;
   s.b.x = dir * (2 * R - overlap);
   s.a.R = s.b.R = R;
   for (int k = 0; k < 3; ++k) {
@@ -56,8 +56,15 @@ template <class Law>
 class ContactLawConformance : public ::testing::Test {};
 TYPED_TEST_SUITE(ContactLawConformance, GTypes<ContactLaws>::type);
 
-TYPED_TEST(BondLawConformance, ZeroForceAtInstalledGeometry) {
-  auto s = loaded_pair<TypeParam>(3, 0.0, 0.0);
+// Joint laws (physics.md §5) with their example parameters (a bonded joint, so that tension and
+// compression both load it), on a plane tilted from the branch.
+template <class Law>
+class JointLawConformance : public ::testing::Test {};
+TYPED_TEST_SUITE(JointLawConformance, GTypes<JointLaws>::type);
+
+template <class Law>
+void check_zero_force_at_install() {
+  auto s = loaded_pair<Law>(3, 0.0, 0.0);
   for (int k = 0; k < 10; ++k) {
     const PairResult r = s.evaluate();
     EXPECT_EQ(norm(r.f2), 0.0);
@@ -65,6 +72,12 @@ TYPED_TEST(BondLawConformance, ZeroForceAtInstalledGeometry) {
     s.move();
   }
   EXPECT_EQ(s.energy(), 0.0);
+}
+TYPED_TEST(BondLawConformance, ZeroForceAtInstalledGeometry) {
+  check_zero_force_at_install<TypeParam>();
+}
+TYPED_TEST(JointLawConformance, ZeroForceAtInstalledGeometry) {
+  check_zero_force_at_install<TypeParam>();
 }
 
 TYPED_TEST(ContactLawConformance, ZeroForceWhenNotOverlapping) {
@@ -93,6 +106,9 @@ void check_newton_third_law() {
 TYPED_TEST(BondLawConformance, NewtonsThirdLawForForcesAndMoments) {
   check_newton_third_law<TypeParam>();
 }
+TYPED_TEST(JointLawConformance, NewtonsThirdLawForForcesAndMoments) {
+  check_newton_third_law<TypeParam>();
+}
 TYPED_TEST(ContactLawConformance, NewtonsThirdLawForForcesAndMoments) {
   check_newton_third_law<TypeParam>();
 }
@@ -110,6 +126,7 @@ void check_rigid_motion_invariance() {
     b->w = rot(q, b->w);
     b->q = q * b->q;
   }
+  t.joint_normal = rot(q, t.joint_normal);
   t.install(5);
   // A total formulation (one that reads orientations, hence positions against a reference)
   // carries the round-off of the shifted positions and rotated orientations into its forces:
@@ -141,6 +158,9 @@ void check_rigid_motion_invariance() {
   }
 }
 TYPED_TEST(BondLawConformance, InvariantUnderRigidRotationAndTranslation) {
+  check_rigid_motion_invariance<TypeParam>();
+}
+TYPED_TEST(JointLawConformance, InvariantUnderRigidRotationAndTranslation) {
   check_rigid_motion_invariance<TypeParam>();
 }
 TYPED_TEST(ContactLawConformance, InvariantUnderRigidRotationAndTranslation) {
@@ -198,14 +218,18 @@ void check_force_is_energy_gradient(double speed, double spin, int steps) {
 TYPED_TEST(BondLawConformance, ForceIsMinusEnergyGradient) {
   check_force_is_energy_gradient<TypeParam>(2e-3, 2.0, 2000);
 }
+TYPED_TEST(JointLawConformance, ForceIsMinusEnergyGradient) {
+  check_force_is_energy_gradient<TypeParam>(2e-3, 2.0, 2000);
+}
 TYPED_TEST(ContactLawConformance, ForceIsMinusEnergyGradient) {
   check_force_is_energy_gradient<TypeParam>(5e-3, 10.0, 2000);
 }
 
-TYPED_TEST(BondLawConformance, StretchToFailureReleasesTheStoredEnergy) {
+template <class Law>
+void check_stretch_to_failure() {
   // Pulling apart must end in a tensile crack whose released energy is the energy stored in the
   // breaking step (§4.0), after which the bond carries nothing.
-  PairStepper<TypeParam> s;
+  PairStepper<Law> s;
   s.b.x = {1e-3, 0, 0};
   s.install();
   s.b.v = {1e-2, 0, 0};
@@ -223,14 +247,21 @@ TYPED_TEST(BondLawConformance, StretchToFailureReleasesTheStoredEnergy) {
   // One step adds at most 2 dV/V of stored energy; here far below 1e-3.
   EXPECT_NEAR(s.failure.energy.total(), last_energy, 1e-3 * last_energy);
 }
+TYPED_TEST(BondLawConformance, StretchToFailureReleasesTheStoredEnergy) {
+  check_stretch_to_failure<TypeParam>();
+}
+TYPED_TEST(JointLawConformance, StretchToFailureReleasesTheStoredEnergy) {
+  check_stretch_to_failure<TypeParam>();
+}
 
-TYPED_TEST(BondLawConformance, RigidBodyMotionLeavesTheBondUnloaded) {
+template <class Law>
+void check_rigid_body_motion() {
   // The pair turns and translates as one rigid body (every velocity set from omega x r each
   // step): the bond must stay unloaded. For incremental laws the relative contact velocity is
   // exactly zero; the straight-line drift of each step moves the centres off the circle by
   // (omega dt)^2 d / 2, 5e-18 m here, so even a total law would see at most
   // 1000 x 5e-18 m x K (~1e7 N/m) = 5e-8 N. Hence 1e-6 N.
-  PairStepper<TypeParam> s;
+  PairStepper<Law> s;
   s.b.x = unit({0.3, -0.8, 0.5}) * 1e-3;
   s.install();
   const Vec3 omega{4.0, -7.0, 5.0}, drift{1e-3, 2e-3, -1e-3};
@@ -247,6 +278,12 @@ TYPED_TEST(BondLawConformance, RigidBodyMotionLeavesTheBondUnloaded) {
   }
   EXPECT_LT(worst, 1e-6);
   EXPECT_FALSE(s.failure.broken);
+}
+TYPED_TEST(BondLawConformance, RigidBodyMotionLeavesTheBondUnloaded) {
+  check_rigid_body_motion<TypeParam>();
+}
+TYPED_TEST(JointLawConformance, RigidBodyMotionLeavesTheBondUnloaded) {
+  check_rigid_body_motion<TypeParam>();
 }
 
 // ---- the experiment file reads every law's keys from the law's own table ----
@@ -301,6 +338,9 @@ TYPED_TEST(BondLawConformance, EveryKeyIsReadFromTheExperimentFile) {
 }
 TYPED_TEST(ContactLawConformance, EveryKeyIsReadFromTheExperimentFile) {
   check_law_keys<TypeParam, ContactLaws>("contact", &ExperimentSpec::contact);
+}
+TYPED_TEST(JointLawConformance, EveryKeyIsReadFromTheExperimentFile) {
+  check_law_keys<TypeParam, JointLaws>("joint", &ExperimentSpec::joint);
 }
 
 TEST(LawChoice, NamingTheChosenLawKeepsItsParametersAndAnotherStartsFromDefaults) {

@@ -59,9 +59,11 @@ void transfer_wall(Archive& a, Wall& w) {
 // The static name of a bond law (crack records point at it).
 std::string_view bond_law_name(const std::string& name, const std::string& where) {
   std::string_view out;
-  [&]<class... Laws>(TypeList<Laws...>) {
+  auto find = [&]<class... Laws>(TypeList<Laws...>) {
     ((name == Laws::name ? (out = Laws::name, 0) : 0), ...);
-  }(BondLaws{});
+  };
+  find(BondLaws{});
+  find(JointLaws{});
   if (out.empty())
     throw InputError(where, "crack law", name, "not a bond law of this build of Breccia");
   return out;
@@ -79,7 +81,7 @@ template <class Archive>
 void Simulation::transfer(Archive& a) {
   // Fails to compile when a member is added: add it below if it carries state from one step to
   // the next, then update the size.
-  static_assert(sizeof(Simulation) == 2560, "Simulation changed: update engine/checkpoint.cpp");
+  static_assert(sizeof(Simulation) == 3000, "Simulation changed: update engine/checkpoint.cpp");
   a.label("simulation");
   if constexpr (Archive::reading)
     p_.load(a);
@@ -140,6 +142,23 @@ void Simulation::transfer(Archive& a) {
             ...);
       },
       bonds_);
+  std::apply(
+      [&](auto&... set) {
+        (
+            [&](auto& b) {
+              a.value(b.params);
+              transfer_pairs(a, b.pairs);
+              a.vector(b.tag);
+              a.vector(b.state);
+              a.vector(b.intact);
+              a.vector(b.bond_of_pair);
+            }(set),
+            ...);
+      },
+      joints_);
+  a.vector(joint_planes_);
+  a.vector(pending_joints_);
+  a.value(joint_law_);
 
   a.label("walls");
   a.sized(walls_, 8);
@@ -195,6 +214,7 @@ void Simulation::transfer(Archive& a) {
   a.value(d_local_boundary_);
   a.value(w_external_boundary_);
   a.value(d_pairs_);
+  a.value(d_joint_slip_);
   a.value(released_);
   a.label("end of simulation");
 }
@@ -241,6 +261,22 @@ Simulation Simulation::restore(ArchiveReader& a) {
             ...);
       },
       s.bonds_);
+  std::apply(
+      [&](const auto&... set) {
+        (
+            [&](const auto& b) {
+              if (b.tag.size() != b.pairs.size() || b.state.size() != b.pairs.size() ||
+                  b.bond_of_pair.size() != pairs)
+                fail("joints");
+              for (std::size_t k = 0; k < b.pairs.size(); ++k)
+                if (b.pairs.first[k] >= n || b.pairs.second[k] >= n) fail("joint pairs");
+              for (std::uint32_t k : b.bond_of_pair)
+                if (k != b.kNoBond && k >= b.pairs.size()) fail("joint index");
+            }(set),
+            ...);
+      },
+      s.joints_);
+  if (s.joint_law_ >= JointLaws::size) fail("joint law");
   return s;
 }
 

@@ -74,6 +74,30 @@ void map_bonds_to_pairs(BondSet<Law>& set, const PairList& pairs) {
   }
 }
 
+// Merges new elements (i < j, tag, state) into a sorted bond-layout set.
+template <class Law>
+void insert_sorted(
+    BondSet<Law>& set,
+    std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint64_t, typename Law::State>>&
+        added) {
+  if (added.empty()) return;
+  for (std::size_t k = 0; k < set.size(); ++k)
+    added.emplace_back(set.pairs.first[k], set.pairs.second[k], set.tag[k], set.state[k]);
+  std::sort(added.begin(), added.end(), [](const auto& a, const auto& b) {
+    return std::pair(std::get<0>(a), std::get<1>(a)) < std::pair(std::get<0>(b), std::get<1>(b));
+  });
+  const std::size_t n = added.size();
+  set.pairs = PairList{};
+  set.pairs.first.resize(n);
+  set.pairs.second.resize(n);
+  set.tag.resize(n);
+  set.state.resize(n);
+  for (std::size_t k = 0; k < n; ++k)
+    std::tie(set.pairs.first[k], set.pairs.second[k], set.tag[k], set.state[k]) = added[k];
+  set.intact.assign(n, 1);
+  added.clear();
+}
+
 }  // namespace
 
 Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactModel contact)
@@ -116,6 +140,104 @@ std::size_t Simulation::add_wall(Wall w) {
   std::visit([&]<class Law>(std::vector<WallContacts<Law>>& v) { v.emplace_back(); },
              wall_contacts_);
   return walls_.size() - 1;
+}
+
+void Simulation::add_joint_plane(JointPlane plane) {
+  const std::string where = "joint plane " + std::to_string(joint_planes_.size() + 1);
+  if (initialised_)
+    throw InputError(where, "plane", "", "joint planes must be added before initialise()");
+  const double len = norm(plane.normal);
+  if (!(len > 0.0) || !std::isfinite(len))
+    throw InputError(where, "normal", "zero or not finite", "a nonzero finite vector is needed");
+  plane.normal *= 1.0 / len;
+  if (p_.planar() && plane.normal.z != 0.0)
+    throw InputError(where, "normal", num(plane.normal.z) + " along z",
+                     "a 2D joint is a line in the x-y plane: its normal has no z part");
+  if (!(plane.radius > 0.0))
+    throw InputError(where, "radius", num(plane.radius), "must be > 0 m (infinite: no limit)");
+  if (!(plane.spacing >= 0.0) || !std::isfinite(plane.spacing))
+    throw InputError(where, "spacing", num(plane.spacing),
+                     "must be >= 0 m (0: one plane, else a set of parallel planes)");
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(plane.point[k]))
+      throw InputError(where, "point", num(plane.point[k]), "must be finite");
+  joint_planes_.push_back(plane);
+}
+
+// The first joint plane that cuts the branch of pair (i, j), or -1.
+int Simulation::cutting_plane(std::uint32_t i, std::uint32_t j) const noexcept {
+  for (std::size_t k = 0; k < joint_planes_.size(); ++k)
+    if (joint_planes_[k].cuts(p_.pos_rad[i].x, p_.pos_rad[j].x)) return static_cast<int>(k);
+  return -1;
+}
+
+// The bonds that a joint plane cuts are removed (physics.md §5, step 5): their pairs become
+// joints. Bonded joints are installed with the bonds (same tags); unbonded ones come from the
+// neighbour pairs at the first rebuild (assign_joints).
+void Simulation::joints_replace_bonds() {
+  if (joint_planes_.empty()) return;
+  bool bonded = false;
+  with_joint_set([&]<class JL>(BondSet<JL>& set) { bonded = JL::starts_bonded(set.params); });
+  auto one = [&](auto& set) {
+    std::size_t w = 0;
+    for (std::size_t k = 0; k < set.tag.size(); ++k) {
+      const std::uint32_t i = set.pairs.first[k], j = set.pairs.second[k];
+      const int plane = cutting_plane(i, j);
+      if (plane >= 0) {
+        if (bonded)
+          pending_joints_.push_back({i, j, static_cast<std::uint32_t>(plane), set.tag[k]});
+        continue;
+      }
+      set.pairs.first[w] = i;
+      set.pairs.second[w] = j;
+      set.tag[w] = set.tag[k];
+      ++w;
+    }
+    set.pairs.first.resize(w);
+    set.pairs.second.resize(w);
+    set.tag.resize(w);
+  };
+  std::apply([&](auto&... sets) { (one(sets), ...); }, bonds_);
+}
+
+void Simulation::install_pending_joints() {
+  with_joint_set([&]<class JL>(BondSet<JL>& set) {
+    std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint64_t, typename JL::State>> add;
+    for (const PendingJoint& pj : pending_joints_)
+      add.emplace_back(
+          pj.i, pj.j, pj.tag,
+          JL::install(set.params, geometry(pj.i, pj.j), joint_planes_[pj.plane].normal, true));
+    insert_sorted(set, add);
+  });
+  pending_joints_.clear();
+}
+
+// Neighbour pairs that a joint plane cuts, not bonded, without a contact and not yet joints,
+// become unbonded joints (physics.md §5, step 4: a contact created across the plane within its
+// extent is a joint). Tested at every rebuild, before any such pair can touch.
+template <class CL>
+void Simulation::assign_joints(ContactSet<CL>& c) {
+  if (joint_planes_.empty()) return;
+  with_joint_set([&]<class JL>(BondSet<JL>& set) {
+    map_bonds_to_pairs(set, c.pairs);
+    std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint64_t, typename JL::State>> add;
+    for (std::size_t k = 0; k < c.pairs.size(); ++k) {
+      if (set.bond_of_pair[k] != BondSet<JL>::kNoBond || has_history(c.state[k].n_old)) continue;
+      bool bonded = false;
+      std::apply(
+          [&](const auto&... b) { ((bonded = bonded || b.bond_of_pair[k] != b.kNoBond), ...); },
+          bonds_);
+      if (bonded) continue;
+      const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
+      const int plane = cutting_plane(i, j);
+      if (plane < 0) continue;
+      add.emplace_back(i, j, next_bond_tag_++,
+                       JL::install(set.params, geometry(i, j), joint_planes_[plane].normal, false));
+    }
+    if (add.empty()) return;
+    insert_sorted(set, add);
+    map_bonds_to_pairs(set, c.pairs);
+  });
 }
 
 template <class Law>
@@ -183,7 +305,9 @@ void Simulation::initialise() {
     throw InputError("contact law", "law", "hertz_mindlin",
                      "Hertz contacts need 3D spheres or 2D planar spheres (physics.md §3.4); "
                      "use 'linear' for 2D disks");
+  joints_replace_bonds();
   std::apply([&](auto&... set) { (install_bonds(set), ...); }, bonds_);
+  install_pending_joints();
   const std::size_t n = p_.size();
   ext_force_.assign(n, {});
   ext_torque_.assign(n, {});
@@ -224,6 +348,23 @@ void Simulation::estimate_time_step() {
         (one(sets), ...);
       },
       bonds_);
+  // Joints (§5): forces at the contact point, no couple.
+  std::apply(
+      [&](auto&... sets) {
+        auto one = [&]<class JL>(BondSet<JL>& s) {
+          for (std::size_t k = 0; k < s.size(); ++k) {
+            const auto i = s.pairs.first[k], j = s.pairs.second[k];
+            const PairGeometry g = geometry(i, j);
+            const double kt = JL::max_stiffness(s.state[k]), ks = JL::shear_stiffness(s.state[k]);
+            k_tr[i] += kt;
+            k_tr[j] += kt;
+            k_rot[i] += ks * norm2(g.r1);
+            k_rot[j] += ks * norm2(g.r2);
+          }
+        };
+        (one(sets), ...);
+      },
+      joints_);
   // Contacts: every neighbour pair that touches or nearly touches (gap < 0.1 R_min) may carry a
   // contact during loading; so does a particle near a wall. Each particle also gets at least one
   // contact of its own size, so that free particles have a finite estimate.
@@ -304,9 +445,12 @@ void Simulation::rebuild(ContactSet<CL>& contacts) {
   build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs);
   // Every intact bond must be an interacting pair even if it stretched beyond the search range.
   std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, bonds_);
+  std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, joints_);
   contacts.pairs.build_index(p_.size());
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
+  std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
   merge_history(old_pairs, old_state, contacts.pairs, contacts.state);
+  assign_joints(contacts);
   contacts.slot.assign(contacts.pairs.size(), PairSlot{});
   // Wall candidates: particles within the skin of each wall, history carried by particle index.
   auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
@@ -344,10 +488,11 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
   const std::size_t n = c.pairs.size();
   const std::size_t nb = block_count(n);
   block_dis_.assign(nb, PairDissipation{});
+  block_joint_dis_.assign(nb, PairDissipation{});
   if (block_failures_.size() < nb) block_failures_.resize(nb);
   const double dt = dt_;
   for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
-    PairDissipation dis;
+    PairDissipation dis, joint_dis;
     auto& fails = block_failures_[blk];
     fails.clear();
     for (std::size_t k = begin; k < end; ++k) {
@@ -375,6 +520,23 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
         ++law_index;
       };
       std::apply([&](auto&... set) { (bond_part(set), ...); }, bonds_);
+      // A joint replaces the pair's contact law (physics.md §5); a bonded joint that breaks goes
+      // on unbonded, so its force of the step is applied.
+      auto joint_part = [&]<class JL>(BondSet<JL>& set) {
+        const std::uint32_t b = set.bond_of_pair[k];
+        if (b != BondSet<JL>::kNoBond) {
+          if (!have_geometry) g = geometry(i, j);
+          have_geometry = true;
+          contact_off = true;
+          BondFailure f;
+          const PairForce pf = JL::compute(set.params, set.state[b], g, dt, joint_dis, f);
+          if (f.broken) fails.push_back({law_index, b, f});
+          force += pf.force;
+          couple += pf.couple;
+        }
+        ++law_index;
+      };
+      std::apply([&](auto&... set) { (joint_part(set), ...); }, joints_);
       if (!have_geometry) {
         const PosRad& a = p_.pos_rad[i];
         const PosRad& b = p_.pos_rad[j];
@@ -405,8 +567,12 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
       s.torque2 = cross(g.r2, force) + couple;
     }
     block_dis_[blk] = dis;
+    block_joint_dis_[blk] = joint_dis;
   });
   d_pairs_ += ordered_sum(block_dis_);
+  const PairDissipation joint_dis = ordered_sum(block_joint_dis_);
+  d_pairs_ += joint_dis;
+  d_joint_slip_ += joint_dis.slip;
   // Breaks are processed as one batch in pair order (independent of the thread count).
   for (std::size_t blk = 0; blk < nb; ++blk)
     for (const Failure& f : block_failures_[blk]) {
@@ -416,6 +582,11 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
             ((law_index++ == f.law ? process_failure(set, f.bond, f.info) : void()), ...);
           },
           bonds_);
+      std::apply(
+          [&](auto&... set) {
+            ((law_index++ == f.law ? record_crack(set, f.bond, f.info) : void()), ...);
+          },
+          joints_);
     }
 }
 
@@ -423,6 +594,12 @@ template <class Law>
 void Simulation::process_failure(BondSet<Law>& set, std::uint32_t bond, const BondFailure& info) {
   set.intact[bond] = 0;
   ++set.broken_since_compaction;
+  record_crack(set, bond, info);
+}
+
+template <class Law>
+void Simulation::record_crack(const BondSet<Law>& set, std::uint32_t bond,
+                              const BondFailure& info) {
   const std::uint32_t i = set.pairs.first[bond], j = set.pairs.second[bond];
   const PairGeometry g = geometry(i, j);
   // The record names the pair by increasing tag with the normal from the first to the second
@@ -686,6 +863,22 @@ void Simulation::sample_stored_energy(ContactSet<CL>& c) {
   double contact = ordered_sum(part);
   for (const auto& wc : std::get<std::vector<WallContacts<CL>>>(wall_contacts_))
     for (const auto& st : wc.state) contact += CL::stored_energy(c.wall_params, st);
+  // Joints: a bonded joint's springs are bond energy by component, an unbonded joint's are
+  // contact energy (it replaces a contact).
+  std::apply(
+      [&](auto&... sets) {
+        auto one = [&]<class JL>(BondSet<JL>& s) {
+          for (std::size_t k = 0; k < s.size(); ++k) {
+            const BondEnergy e = JL::energy(s.state[k]);
+            if (JL::is_bonded(s.params, s.state[k]))
+              bond += e;
+            else
+              contact += e.total();
+          }
+        };
+        (one(sets), ...);
+      },
+      joints_);
 
   EnergyLedger& L = ledger_;
   L.step = step_;
@@ -695,7 +888,9 @@ void Simulation::sample_stored_energy(ContactSet<CL>& c) {
   L.boundary_work = w_walls_ + w_drive_;
   L.body_force_work = w_gravity_;
   L.external_work = w_external_ - w_external_boundary_;
+  L.joint_dilation = d_pairs_.dilation;
   L.friction = d_pairs_.slip;
+  L.joint_slip = d_joint_slip_;
   L.local_damping = d_local_ - d_local_boundary_;
   L.viscous_damping = d_pairs_.viscous;
   L.deleted = d_pairs_.deleted;
@@ -749,6 +944,21 @@ void Simulation::run(std::uint64_t steps) {
 std::size_t Simulation::intact_bonds() const noexcept {
   std::size_t n = 0;
   std::apply([&](const auto&... set) { ((n += set.intact_count()), ...); }, bonds_);
+  return n;
+}
+
+std::size_t Simulation::joint_count() const noexcept {
+  std::size_t n = 0;
+  std::apply([&](const auto&... set) { ((n += set.size()), ...); }, joints_);
+  return n;
+}
+
+std::size_t Simulation::bonded_joints() const noexcept {
+  std::size_t n = 0;
+  auto one = [&]<class JL>(const BondSet<JL>& s) {
+    for (const auto& st : s.state) n += JL::is_bonded(s.params, st) ? 1 : 0;
+  };
+  std::apply([&](const auto&... set) { (one(set), ...); }, joints_);
   return n;
 }
 

@@ -15,6 +15,7 @@
 #include "breccia/engine/events.hpp"
 #include "breccia/law/registry.hpp"
 #include "breccia/state/bond_set.hpp"
+#include "breccia/state/joint_plane.hpp"
 #include "breccia/state/particle_store.hpp"
 
 namespace breccia {
@@ -47,7 +48,9 @@ struct EnergyLedger {
   double boundary_work = 0.0;    // walls and driven particles
   double body_force_work = 0.0;  // gravity
   double external_work = 0.0;    // external per-particle loads (membranes)
-  double friction = 0.0;         // Coulomb sliding
+  double joint_dilation = 0.0;   // work into smooth joints' normal springs by dilation (§5)
+  double friction = 0.0;         // Coulomb sliding, smooth joints included
+  double joint_slip = 0.0;       // the part of `friction` that slid on smooth joints
   double local_damping = 0.0;
   double viscous_damping = 0.0;
   double deleted = 0.0;  // springs lost without work
@@ -59,7 +62,9 @@ struct EnergyLedger {
 
   double kinetic() const noexcept { return kinetic_translational + kinetic_rotational; }
   double stored() const noexcept { return kinetic() + bond.total() + contact; }
-  double work_in() const noexcept { return boundary_work + body_force_work + external_work; }
+  double work_in() const noexcept {
+    return boundary_work + body_force_work + external_work + joint_dilation;
+  }
   double dissipated() const noexcept {
     return friction + local_damping + viscous_damping + deleted + released.total();
   }
@@ -81,6 +86,10 @@ struct BondTupleOf<TypeList<Laws...>> {
   using type = std::tuple<BondSet<Laws>...>;
 };
 using BondSets = BondTupleOf<BondLaws>::type;
+// The joint elements of each joint law: pairs cut by a joint plane, in the bond-set layout. A
+// joint element is never removed: a bonded joint that breaks goes on unbonded, and an unbonded
+// one whose pair separates waits, stress-free, until the pair touches again.
+using JointSets = BondTupleOf<JointLaws>::type;
 
 template <class List>
 struct WallContactVariantOf;
@@ -140,6 +149,12 @@ class Simulation {
   template <class Law>
   std::size_t bond_touching_pairs(double gap_tolerance);
   std::size_t add_wall(Wall w);
+  // Adds a joint plane (physics.md §5): at initialise() the bonds it cuts are replaced by joints
+  // of the joint law (bonded joints when its parameters say so), and every neighbour pair it cuts
+  // that is not yet in contact becomes an unbonded joint, at every neighbour-list rebuild.
+  void add_joint_plane(JointPlane plane);
+  template <class Law>
+  void set_joint_params(const typename Law::Params& p);
   // Installs bonds, builds neighbour lists and fixes the time step. Throws InputError on an
   // inconsistent set-up (for example Hertz contacts on 2D disks).
   void initialise();
@@ -180,6 +195,11 @@ class Simulation {
   const std::vector<std::string>& warnings() const noexcept { return warnings_; }
   const EnergyLedger& ledger() const noexcept { return ledger_; }
   const BondSets& bonds() const noexcept { return bonds_; }
+  const JointSets& joints() const noexcept { return joints_; }
+  const std::vector<JointPlane>& joint_planes() const noexcept { return joint_planes_; }
+  // Joint elements (bonded or not) and the bonded ones among them.
+  std::size_t joint_count() const noexcept;
+  std::size_t bonded_joints() const noexcept;
   const ContactModel& contact_model() const noexcept { return contact_; }
   std::size_t intact_bonds() const noexcept;
   // The moduli of the bond law called `law` with this simulation's parameters (crack records
@@ -217,6 +237,19 @@ class Simulation {
   void compute_pairs(ContactSet<CL>& contacts);
   template <class Law>
   void process_failure(BondSet<Law>& set, std::uint32_t bond, const BondFailure& info);
+  template <class Law>
+  void record_crack(const BondSet<Law>& set, std::uint32_t bond, const BondFailure& info);
+  void joints_replace_bonds();
+  void install_pending_joints();
+  int cutting_plane(std::uint32_t i, std::uint32_t j) const noexcept;
+  // Calls f(set) for the joint law in use.
+  template <class F>
+  void with_joint_set(F&& f) {
+    std::uint32_t index = 0;
+    std::apply([&](auto&... set) { ((index++ == joint_law_ ? f(set) : void()), ...); }, joints_);
+  }
+  template <class CL>
+  void assign_joints(ContactSet<CL>& contacts);
   template <class CL>
   void compute_walls(ContactSet<CL>& contacts);
   template <class CL>
@@ -257,6 +290,15 @@ class Simulation {
   EngineConfig cfg_;
   ContactModel contact_;
   BondSets bonds_;
+  JointSets joints_;
+  std::vector<JointPlane> joint_planes_;
+  // Bonded joints waiting for initialise(): particle indexes and the plane that cuts them.
+  struct PendingJoint {
+    std::uint32_t i, j, plane;
+    std::uint64_t tag;
+  };
+  std::uint32_t joint_law_ = 0;  // position in JointLaws of the law that new joints get
+  std::vector<PendingJoint> pending_joints_;
   std::vector<Wall> walls_;
   WallContactVariantOf<ContactLaws>::type wall_contacts_;
 
@@ -279,12 +321,13 @@ class Simulation {
   double d_local_ = 0.0;
   double d_local_boundary_ = 0.0, w_external_boundary_ = 0.0;
   PairDissipation d_pairs_;
+  double d_joint_slip_ = 0.0;
   BondEnergy released_;
   // Per-block scratch (reused every step; no allocation in steady state).
-  std::vector<PairDissipation> block_dis_;
+  std::vector<PairDissipation> block_dis_, block_joint_dis_;
   std::vector<IntegrateBlock> block_int_;
   struct Failure {
-    std::uint32_t law;  // position of the bond law in BondLaws
+    std::uint32_t law;  // position in BondLaws, then BondLaws::size + position in JointLaws
     std::uint32_t bond;
     BondFailure info;
   };

@@ -35,6 +35,19 @@ void Simulation::set_bond_params(const typename Law::Params& params) {
 }
 
 template <class Law>
+void Simulation::set_joint_params(const typename Law::Params& params) {
+  validate_params<Law>(params, std::string("joint law '") + std::string(Law::name) + "'");
+  auto& set = std::get<BondSet<Law>>(joints_);
+  set.params = params;
+  std::uint32_t index = 0;
+  for_each_type<JointLaws>([&]<class J>() {
+    if (std::is_same_v<J, Law>) joint_law_ = index;
+    ++index;
+  });
+  if constexpr (requires { Law::prepare(set.params); }) Law::prepare(set.params);
+}
+
+template <class Law>
 std::size_t Simulation::bond_touching_pairs(double gap_tolerance) {
   if (!(gap_tolerance >= 0.0))
     throw InputError("bonding", "gap_tolerance", std::to_string(gap_tolerance), "must be >= 0 m");

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <numbers>
 #include <sstream>
 
 #include "breccia/core/error.hpp"
@@ -191,6 +192,109 @@ Key real_list_key(std::string section, std::string name, std::string unit, std::
     std::string out = "[";
     for (std::size_t i = 0; i < (s.*member).size(); ++i)
       out += (i ? ", " : "") + fmt::format("{}", (s.*member)[i]);
+    return out + "]";
+  };
+  return k;
+}
+
+// One joint plane from its TOML table; `key` names it in errors (joint.planes[2]).
+JointPlaneSpec parse_joint_plane(const toml::table& t, const std::string& where,
+                                 const std::string& key) {
+  JointPlaneSpec p;
+  auto vec3 = [&](const toml::node& n, const std::string& name, std::array<double, 3>& out) {
+    const auto* arr = n.as_array();
+    if (!arr || arr->size() < 2 || arr->size() > 3)
+      throw InputError(where, key + "." + name, show(n),
+                       "expected 3 numbers [x, y, z] (2 in 2D: [x, y])");
+    out = {0, 0, 0};
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      out[i] = get_real(*arr->get(i), where, key + "." + name);
+      if (!std::isfinite(out[i])) throw InputError(where, key + "." + name, show(n), "finite");
+    }
+  };
+  auto real = [&](const toml::node& n, const std::string& name, const Range& range) {
+    const double v = get_real(n, where, key + "." + name);
+    if (!range.contains(v)) throw InputError(where, key + "." + name, num(v), range.allowed());
+    return v;
+  };
+  bool has_dip = false;
+  for (const auto& [kk, value] : t) {
+    const std::string name(kk.str());
+    if (name == "centre") {
+      vec3(value, name, p.centre);
+    } else if (name == "normal") {
+      vec3(value, name, p.normal);
+      p.has_normal = true;
+      if (p.normal[0] == 0.0 && p.normal[1] == 0.0 && p.normal[2] == 0.0)
+        throw InputError(where, key + ".normal", show(value), "must not be the zero vector");
+    } else if (name == "dip_deg") {
+      p.dip_deg = real(value, name, Range{0, 90, true, true, "deg"});
+      has_dip = true;
+    } else if (name == "dip_direction_deg") {
+      p.dip_direction_deg = real(value, name, Range{0, 360, true, false, "deg"});
+      has_dip = true;
+    } else if (name == "radius") {
+      p.radius = real(value, name, Range{0, kInf, true, true, "m"});
+    } else if (name == "spacing") {
+      p.spacing = real(value, name, Range{0, kInf, true, true, "m"});
+    } else {
+      throw InputError(where, key + "." + name, show(value),
+                       "unknown key of a joint plane; allowed: centre, normal, dip_deg, "
+                       "dip_direction_deg, radius, spacing");
+    }
+  }
+  if (p.has_normal && has_dip)
+    throw InputError(where, key, "normal and dip",
+                     "give the orientation either as normal or as dip_deg and "
+                     "dip_direction_deg, not both");
+  if (p.spacing > 0.0 && p.radius > 0.0)
+    throw InputError(where, key + ".radius", num(p.radius),
+                     "a set of parallel planes (spacing > 0) is unlimited: radius must be 0");
+  return p;
+}
+
+std::string joint_plane_toml(const JointPlaneSpec& p) {
+  std::string s = fmt::format("{{centre = [{}, {}, {}]", p.centre[0], p.centre[1], p.centre[2]);
+  if (p.has_normal)
+    s += fmt::format(", normal = [{}, {}, {}]", p.normal[0], p.normal[1], p.normal[2]);
+  else
+    s += fmt::format(", dip_deg = {}, dip_direction_deg = {}", p.dip_deg, p.dip_direction_deg);
+  return s + fmt::format(", radius = {}, spacing = {}}}", p.radius, p.spacing);
+}
+
+Key joint_planes_key() {
+  Key k{"joint",
+        "planes",
+        "",
+        "array of tables",
+        "each with centre, normal or dip_deg and dip_direction_deg, radius >= 0, spacing >= 0",
+        "the joints: [[joint.planes]] tables (or an inline array) with centre = [x, y, z] "
+        "(m, from the centre of the sample's bounding box; default the centre), normal = "
+        "[nx, ny, nz] or dip_deg (plane from the horizontal; 2D: from the x axis) and "
+        "dip_direction_deg (clockwise from +y; 90 = dipping towards +x, the default), radius "
+        "(m: a disc joint, a segment of half-length radius in 2D; 0 = the whole plane) and "
+        "spacing (m: a set of parallel planes; 0 = one plane). Every pair whose branch crosses "
+        "a joint gets the joint law (physics.md §5)",
+        {},
+        {}};
+  k.set = [](ExperimentSpec& s, const toml::node& n, const std::string& where,
+             const std::string& key) {
+    const auto* arr = n.as_array();
+    if (!arr)
+      throw InputError(where, key, show(n),
+                       "expected an array of tables, e.g. [[joint.planes]] with dip_deg = 63");
+    s.joint_planes.clear();
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const auto* t = arr->get(i)->as_table();
+      const std::string item = fmt::format("{}[{}]", key, i + 1);
+      if (!t) throw InputError(where, item, show(*arr->get(i)), "expected a table");
+      s.joint_planes.push_back(parse_joint_plane(*t, where, item));
+    }
+  };
+  k.get = [](const ExperimentSpec& s) {
+    std::string out = "[";
+    for (std::size_t i = 0; i < s.joint_planes.size(); ++i)
+      out += (i ? ", " : "") + joint_plane_toml(s.joint_planes[i]);
     return out + "]";
   };
   return k;
@@ -384,6 +488,11 @@ const std::vector<Key>& key_table() {
                          "friction coefficient between particles and walls (0: lubricated)",
                          &ExperimentSpec::wall_friction));
     k.push_back(law_choice_key<BondLaws>("bond", "bond law", &ExperimentSpec::bond));
+    // [joint]: the law keys come from the law table, like [bond].
+    k.push_back(law_choice_key<JointLaws>(
+        "joint", "law of the pairs a joint plane cuts (used only when planes are given)",
+        &ExperimentSpec::joint));
+    k.push_back(joint_planes_key());
     // [test]: the kind here, its keys from the test's own table (see apply_table).
     {
       std::vector<std::string> kinds;
@@ -559,7 +668,7 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
       find_key("material", "preset")->set(spec, *pr, where_of(source, *pr), "material.preset");
       apply_preset(spec, spec.preset, where_of(source, *pr));
     }
-  for (const char* sec : {"contact", "bond"}) {
+  for (const char* sec : {"contact", "bond", "joint"}) {
     if (const auto* t = root[sec].as_table())
       if (const auto* law = t->get("law"))
         find_key(sec, "law")->set(spec, *law, where_of(source, *law), std::string(sec) + ".law");
@@ -581,7 +690,8 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
       if (!key)
         throw InputError(where_of(source, node), name, show(node),
                          "unknown top-level key; allowed: name, and the tables [engine], "
-                         "[material], [sample], [contact], [bond], [test], [output], [ae]");
+                         "[material], [sample], [contact], [bond], [joint], [test], [output], "
+                         "[ae]");
       key->set(spec, node, where_of(source, node), name);
       continue;
     }
@@ -595,13 +705,13 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
     if (!section_known)
       throw InputError(where_of(source, node), "[" + name + "]", "",
                        "unknown table; allowed: [engine], [material], [sample], [contact], "
-                       "[bond], [test], [output], [ae]");
+                       "[bond], [joint], [test], [output], [ae]");
     for (const auto& [kk, value] : tbl) {
       const toml::node& item_node = value;  // clang 14 cannot capture a structured binding
       const std::string item(kk.str());
       const std::string full = name + "." + item;
       const std::string where = where_of(source, value);
-      if (item == "law" && (name == "contact" || name == "bond")) continue;
+      if (item == "law" && (name == "contact" || name == "bond" || name == "joint")) continue;
       if (item == "kind" && name == "test") continue;
       if (item == "preset" && name == "material") continue;
       if (const Key* key = find_key(name, item)) {
@@ -620,6 +730,11 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
           set_law_key<Law>(p, item, item_node, where, full, found);
           allowed = "law, " + law_key_list<Law>();
         });
+      } else if (name == "joint") {
+        visit_params<JointLaws>(spec.joint, [&]<class Law>(typename Law::Params& p) {
+          set_law_key<Law>(p, item, item_node, where, full, found);
+          allowed = "law, planes, " + law_key_list<Law>();
+        });
       } else if (name == "test") {
         with_lab_test(spec.test_kind, [&]<class T>() {
           set_law_key<T>(std::get<typename T::Params>(spec.test), item, item_node, where, full,
@@ -631,16 +746,17 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
           if (key.section == name) allowed += (allowed.empty() ? "" : ", ") + key.name;
       }
       if (!found)
-        throw InputError(
-            where, full, show(value),
-            "unknown key" +
-                (name == "contact" || name == "bond"
-                     ? " for law \"" +
-                           std::string(name == "contact" ? spec.contact_law() : spec.bond_law()) +
-                           "\""
-                 : name == "test" ? " for test kind \"" + spec.test_kind + "\""
-                                  : std::string()) +
-                "; allowed: " + allowed);
+        throw InputError(where, full, show(value),
+                         "unknown key" +
+                             (name == "contact" || name == "bond" || name == "joint"
+                                  ? " for law \"" +
+                                        std::string(name == "contact" ? spec.contact_law()
+                                                    : name == "bond"  ? spec.bond_law()
+                                                                      : spec.joint_law()) +
+                                        "\""
+                              : name == "test" ? " for test kind \"" + spec.test_kind + "\""
+                                               : std::string()) +
+                             "; allowed: " + allowed);
     }
   }
 }
@@ -729,6 +845,23 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
           fmt::format("[{}, {}, {}] ({:.4g} particles)", s.cells[0], s.cells[1], s.cells[2], n),
           "more particles than sample.max_particles = " + std::to_string(s.max_particles));
   }
+  if (!s.joint_planes.empty())
+    visit_params<JointLaws>(s.joint, [&]<class Law>(const typename Law::Params& p) {
+      if constexpr (requires { Law::check(p, source); }) Law::check(p, source);
+    });
+  for (std::size_t i = 0; i < s.joint_planes.size() && s.dimension == 2; ++i) {
+    const JointPlaneSpec& p = s.joint_planes[i];
+    const std::string key = fmt::format("joint.planes[{}]", i + 1);
+    if (p.has_normal && p.normal[2] != 0.0)
+      throw InputError(source, key + ".normal", num(p.normal[2]) + " along z",
+                       "a 2D joint is a line in the x-y plane: its normal has no z part");
+    if (p.centre[2] != 0.0)
+      throw InputError(source, key + ".centre", num(p.centre[2]) + " along z",
+                       "2D joints lie in the x-y plane");
+    if (!p.has_normal && p.dip_direction_deg != 90.0 && p.dip_direction_deg != 270.0)
+      throw InputError(source, key + ".dip_direction_deg", num(p.dip_direction_deg),
+                       "in 2D a joint dips towards +x (90) or -x (270)");
+  }
   visit_lab_test(
       s.test, [&]<class T>(const typename T::Params& p) { T::check(p, sample_info(s), source); });
   if (s.density_scaling > 1.0 && s.gravity > 0.0)
@@ -795,6 +928,18 @@ ExperimentSpec default_experiment() {
   s.test = UcsTest::Params{.platen_speed = 0.03};
   s.source = "built-in default";
   return s;
+}
+
+Vec3 joint_normal(const JointPlaneSpec& p, int dimension) {
+  if (p.has_normal) {
+    const Vec3 n{p.normal[0], p.normal[1], p.normal[2]};
+    return n * (1.0 / norm(n));
+  }
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  const double dip = p.dip_deg * kDeg, dir = p.dip_direction_deg * kDeg;
+  const Vec3 n{std::sin(dip) * std::sin(dir), std::sin(dip) * std::cos(dir), std::cos(dip)};
+  // 2D: the plane of the run is x-y with y up, so the 3D (x, z) of the formula becomes (x, y).
+  return dimension == 2 ? Vec3{n.x, n.z, 0.0} * (1.0 / std::hypot(n.x, n.z)) : n;
 }
 
 BondModuli bond_moduli(const ExperimentSpec& spec) {
@@ -927,6 +1072,7 @@ std::string to_toml(const ExperimentSpec& spec) {
     if (k.section == "contact" && k.name == "wall_friction")
       visit_params<ContactLaws>(spec.contact, dump);
     if (k.section == "bond" && k.name == "law") visit_params<BondLaws>(spec.bond, dump);
+    if (k.section == "joint" && k.name == "law") visit_params<JointLaws>(spec.joint, dump);
     if (k.section == "test" && k.name == "kind")
       visit_lab_test(spec.test, [&]<class T>(const typename T::Params& p) {
         for (const auto& f : T::fields())
@@ -971,6 +1117,8 @@ std::string experiment_docs() {
       for_each_type<ContactLaws>([&]<class Law>() { s += law_docs<Law>("contact"); });
     if (k.section == "bond" && k.name == "law")
       for_each_type<BondLaws>([&]<class Law>() { s += law_docs<Law>("bond"); });
+    if (k.section == "joint" && k.name == "planes")
+      for_each_type<JointLaws>([&]<class Law>() { s += law_docs<Law>("joint"); });
     if (k.section == "test" && k.name == "kind") {
       for_each_lab_test([&]<class T>() { s += law_docs<T>("test", "kind"); });
       s += "\nThe old `[loading]` table (platen_speed, ramp_time, max_strain, stop_fraction, "

@@ -13,6 +13,19 @@
 
 namespace breccia {
 
+// One joint of the [joint] table (physics.md §5): a plane through the sample centre plus `centre`,
+// oriented by `normal` or by dip and dip direction, limited to a disc of `radius` (0: unlimited),
+// or a set of parallel planes `spacing` apart.
+struct JointPlaneSpec {
+  std::array<double, 3> centre{};  // m, from the centre of the sample's bounding box
+  bool has_normal = false;
+  std::array<double, 3> normal{0, 0, 1};
+  double dip_deg = 0.0;             // angle of the plane from the horizontal (x-y plane; 2D: x)
+  double dip_direction_deg = 90.0;  // azimuth of the dip, clockwise from +y (North); 90 = +x
+  double radius = 0.0;              // m; 0 = the whole plane
+  double spacing = 0.0;             // m; 0 = one plane
+};
+
 struct ExperimentSpec {
   std::string name = "ucs-berea";
   // [engine]
@@ -54,6 +67,9 @@ struct ExperimentSpec {
   ContactParams contact = LinearContact::Params{};
   double wall_friction = 0.0;
   BondParams bond = ParallelBond::Params{};
+  // [joint]: the joint law and its planes (none: no joints)
+  JointParams joint = SmoothJoint::Params{};
+  std::vector<JointPlaneSpec> joint_planes;
   // [test] (the old [loading] table is still read and mapped onto it)
   std::string test_kind = "ucs";
   TestParams test = UcsTest::Params{};
@@ -81,7 +97,12 @@ struct ExperimentSpec {
 
   std::string_view contact_law() const { return name_of_params<ContactLaws>(contact); }
   std::string_view bond_law() const { return name_of_params<BondLaws>(bond); }
+  std::string_view joint_law() const { return name_of_params<JointLaws>(joint); }
 };
+
+// The unit normal of a joint plane (from `normal`, or from dip and dip direction: physics.md §5
+// with x = East, y = North, z = Up; in 2D the loading axis y is "up").
+Vec3 joint_normal(const JointPlaneSpec& plane, int dimension);
 
 ExperimentSpec default_experiment();
 

@@ -376,6 +376,30 @@ void check_run_budget(const ExperimentSpec& s, const Simulation& sim, double len
                     kMaxSnapshotsPerRun, num(max_strain), num(max_strain / kMaxSnapshotsPerRun)));
 }
 
+// The experiment's joint planes, placed about the centre of the sample's bounding box, with the
+// joint law's parameters.
+void add_joints(const ExperimentSpec& s, Simulation& sim) {
+  if (s.joint_planes.empty()) return;
+  visit_params<JointLaws>(
+      s.joint, [&]<class Law>(const typename Law::Params& p) { sim.set_joint_params<Law>(p); });
+  Vec3 lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
+  for (const PosRad& q : sim.particles().pos_rad)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], q.x[k] - q.r);
+      hi[k] = std::max(hi[k], q.x[k] + q.r);
+    }
+  Vec3 centre = (lo + hi) * 0.5;
+  if (s.dimension == 2) centre.z = 0.0;
+  for (const JointPlaneSpec& j : s.joint_planes) {
+    JointPlane plane;
+    plane.point = centre + Vec3{j.centre[0], j.centre[1], j.centre[2]};
+    plane.normal = joint_normal(j, static_cast<int>(s.dimension));
+    plane.radius = j.radius > 0.0 ? j.radius : kInf;
+    plane.spacing = j.spacing;
+    sim.add_joint_plane(plane);
+  }
+}
+
 Built build(const ExperimentSpec& s, const std::function<void(const std::string&)>& log) {
   json report;
   SampleInfo info;
@@ -393,6 +417,7 @@ Built build(const ExperimentSpec& s, const std::function<void(const std::string&
     else
       sim.bond_touching_pairs<Law>(s.bond_gap_tolerance);
   });
+  add_joints(s, sim);
   std::unique_ptr<Protocol> protocol;
   visit_lab_test(s.test, [&]<class T>(const typename T::Params& p) {
     T::check(p, info, s.source);
@@ -434,6 +459,8 @@ json ledger_json(const EnergyLedger& L) {
               {"boundary_work_j", L.boundary_work},
               {"body_force_work_j", L.body_force_work},
               {"friction_j", L.friction},
+              {"joint_slip_j", L.joint_slip},
+              {"joint_dilation_work_j", L.joint_dilation},
               {"local_damping_j", L.local_damping},
               {"viscous_damping_j", L.viscous_damping},
               {"deleted_springs_j", L.deleted},
@@ -615,7 +642,7 @@ namespace {
 
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // 2: commit and trailing hash; 3: strain gauges; 4, 5: brittle-beam and quaternion bond sets
-constexpr std::uint32_t kCheckpointFormat = 5;
+constexpr std::uint32_t kCheckpointFormat = 6;
 constexpr const char* kCheckpointFile = "checkpoint.bin";
 
 // What the loading loop carries from one row to the next besides the engine, the protocol and
@@ -1092,6 +1119,11 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
         {"snapshots", ss.snaps.count()},
         {"warnings", warnings}};
     if (manifest.contains("resumed")) summary["resumed"] = manifest["resumed"];
+    if (!spec.joint_planes.empty())
+      summary["joints"] = {{"law", spec.joint_law()},
+                           {"planes", spec.joint_planes.size()},
+                           {"elements", sim.joint_count()},
+                           {"bonded_at_end", sim.bonded_joints()}};
     summary["crack_pattern"] = crack_pattern_json(test, sim);
     if (const auto* b = dynamic_cast<const BrazilianTest*>(&test)) {
       summary["tensile_strength_pa"] = an.peak_deviatoric;

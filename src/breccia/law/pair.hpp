@@ -72,14 +72,17 @@ struct PairForce {
 
 // Energy that left the elastic springs of one item in one step (booked by the engine, §2.4).
 struct PairDissipation {
-  double slip = 0.0;     // Coulomb sliding
-  double viscous = 0.0;  // dashpots
-  double deleted = 0.0;  // spring energy lost without work (contact separated with shear load,
-                         // Hertz stiffness change)
+  double slip = 0.0;      // Coulomb sliding
+  double viscous = 0.0;   // dashpots
+  double deleted = 0.0;   // spring energy lost without work (contact separated with shear load,
+                          // Hertz stiffness change)
+  double dilation = 0.0;  // work put into smooth joints' normal springs by dilation (§5): an
+                          // input, not a loss
   PairDissipation& operator+=(const PairDissipation& o) noexcept {
     slip += o.slip;
     viscous += o.viscous;
     deleted += o.deleted;
+    dilation += o.dilation;
     return *this;
   }
 };

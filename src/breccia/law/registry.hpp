@@ -10,14 +10,19 @@
 #include "breccia/law/linear_contact.hpp"
 #include "breccia/law/parallel_bond.hpp"
 #include "breccia/law/quaternion_bond.hpp"
+#include "breccia/law/smooth_joint.hpp"
 
 namespace breccia {
 
 using ContactLaws = TypeList<LinearContact, HertzMindlin>;
 using BondLaws = TypeList<ParallelBond, BrittleBeam, QuaternionBond>;
+// Laws of the pairs that a joint plane cuts (physics.md §5): they replace the pair's bond and
+// contact law, and the experiment's [joint] table places them.
+using JointLaws = TypeList<SmoothJoint>;
 
 // The chosen laws' parameters (the experiment's [contact] and [bond] tables).
 using ContactParams = ParamsVariant<ContactLaws>;
 using BondParams = ParamsVariant<BondLaws>;
+using JointParams = ParamsVariant<JointLaws>;
 
 }  // namespace breccia
