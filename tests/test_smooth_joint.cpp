@@ -368,6 +368,80 @@ TEST(SmoothJointEngine, JointedBlockBreaksJointsSlidesAndRestoresBitwiseFromAChe
   EXPECT_LT(std::abs(a.ledger().residual_relative), 1e-3);
 }
 
+namespace {
+
+// Two blocks of two square layers each (spacing 2R), the upper one nested in the hollows of the
+// lower (layer gap R sqrt 2): the most interlocked stacking. The lower block is held, the upper
+// one moved rigidly: pressed down by 1e-7 m, then slid along +x by 0.05 R. Returns the total pair
+// force on the upper block at the end of each phase.
+std::pair<Vec3, Vec3> slide_nested_blocks(bool jointed, std::uint64_t* rebuilds = nullptr) {
+  ParticleStore ps(Dimension::Three, 1.0);
+  std::uint64_t tag = 1;
+  const double h = kR * std::sqrt(2.0);
+  const double z_layer[4] = {0, 2 * kR, 2 * kR + h, 4 * kR + h};
+  for (int layer = 0; layer < 4; ++layer)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        const double shift = layer >= 2 ? kR : 0.0;
+        ps.add({.tag = tag++,
+                .position = {2 * kR * i + shift, 2 * kR * j + shift, z_layer[layer]},
+                .radius = kR,
+                .density = 2650,
+                .motion = layer >= 2 ? Motion::Driven : Motion::Fixed});
+      }
+  LinearContact::Params contact;
+  contact.friction = 0.2;
+  EngineConfig cfg;
+  cfg.skin =
+      2e-6;  // a neighbour-list rebuild every micrometre of sliding: joints must survive them
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(contact, {}));
+  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  if (jointed) {
+    sim.set_joint_params<SmoothJoint>(joint_params(false, 0.2));
+    JointPlane plane;
+    plane.point = {0, 0, 2 * kR + 0.5 * h};
+    plane.normal = {0, 0, 1};
+    sim.add_joint_plane(plane);
+  }
+  sim.initialise();
+  auto drive = [&](const Vec3& v, int steps) {
+    ParticleStore& q = sim.particles_mut();
+    for (std::size_t i = 0; i < q.size(); ++i)
+      if (q.motion[i] == Motion::Driven) q.drive_vel[i] = v;
+    sim.run(static_cast<std::uint64_t>(steps));
+    Vec3 f;
+    for (std::size_t i = 0; i < q.size(); ++i)
+      if (q.motion[i] == Motion::Driven) f += q.force[i];
+    return f;
+  };
+  const double dt = sim.time_step();
+  const int press = 100, slide = 1000;
+  drive({0, 0, -1e-7 / (press * dt)}, press);
+  // A step at rest: the pair laws see the velocity of the step before (the last of the press).
+  const Vec3 pressed = drive({}, 1);
+  const Vec3 slid = drive({0.05 * kR / (slide * dt), 0, 0}, slide);
+  if (rebuilds) *rebuilds = sim.neighbour_rebuilds();
+  return {pressed, slid};
+}
+
+}  // namespace
+
+TEST(SmoothJointEngine, NestedBlocksSlideAlongTheJointAtItsFriction) {
+  // Across a smooth joint the nested upper block slides as on a flat plane: the normal force of
+  // the press stays (the grains do not ride up the hollows) and the shear force is mu times it.
+  // Ordinary contacts between the same grains ride up: the normal force grows and the shear
+  // resistance exceeds mu (the test's own check that the geometry is rough).
+  std::uint64_t rebuilds = 0;
+  const auto [pressed, slid] = slide_nested_blocks(true, &rebuilds);
+  ASSERT_GT(pressed.z, 0.0);
+  EXPECT_NEAR(slid.z, pressed.z, 1e-9 * pressed.z);
+  EXPECT_NEAR(slid.x, -0.2 * slid.z, 1e-9 * slid.z);
+  EXPECT_GT(rebuilds, 10u);
+  const auto [pressed_c, slid_c] = slide_nested_blocks(false);
+  EXPECT_GT(slid_c.z, 1.5 * pressed_c.z);
+  EXPECT_GT(-slid_c.x, 0.3 * slid_c.z);
+}
+
 // ---- the experiment file ----
 
 TEST(SmoothJointExperiment, PlanesAreReadAndBadOnesNamed) {
