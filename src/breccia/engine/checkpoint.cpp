@@ -28,6 +28,21 @@ void transfer_pairs(Archive& a, PairList& l) {
                      "array lengths differ: the checkpoint is corrupt");
 }
 
+// The bonds (or joints) of one law: parameters, pairs, tags, states and the index into the
+// neighbour pairs. Joints are never compacted, so their count of broken entries stays 0.
+template <class Archive, class Law>
+void transfer_set(Archive& a, BondSet<Law>& b) {
+  a.value(b.params);
+  transfer_pairs(a, b.pairs);
+  a.vector(b.tag);
+  a.vector(b.state);
+  a.vector(b.intact);
+  a.vector(b.bond_of_pair);
+  std::uint64_t broken = b.broken_since_compaction;
+  a.value(broken);
+  b.broken_since_compaction = broken;
+}
+
 // Walls hold a name (not plain data): transferred field by field. The size check fails to
 // compile when a field is added, as a reminder to add it here.
 static_assert(sizeof(Wall) == 304, "Wall changed: update the checkpoint (engine/checkpoint.cpp)");
@@ -125,37 +140,8 @@ void Simulation::transfer(Archive& a) {
       wall_contacts_);
 
   a.label("bonds");
-  std::apply(
-      [&](auto&... set) {
-        (
-            [&](auto& b) {
-              a.value(b.params);
-              transfer_pairs(a, b.pairs);
-              a.vector(b.tag);
-              a.vector(b.state);
-              a.vector(b.intact);
-              a.vector(b.bond_of_pair);
-              std::uint64_t broken = b.broken_since_compaction;
-              a.value(broken);
-              b.broken_since_compaction = broken;
-            }(set),
-            ...);
-      },
-      bonds_);
-  std::apply(
-      [&](auto&... set) {
-        (
-            [&](auto& b) {
-              a.value(b.params);
-              transfer_pairs(a, b.pairs);
-              a.vector(b.tag);
-              a.vector(b.state);
-              a.vector(b.intact);
-              a.vector(b.bond_of_pair);
-            }(set),
-            ...);
-      },
-      joints_);
+  std::apply([&](auto&... set) { (transfer_set(a, set), ...); }, bonds_);
+  std::apply([&](auto&... set) { (transfer_set(a, set), ...); }, joints_);
   a.vector(joint_planes_);
   a.vector(pending_joints_);
   a.value(joint_law_);
@@ -246,36 +232,17 @@ Simulation Simulation::restore(ArchiveReader& a) {
       },
       s.contact_);
   const std::size_t pairs = s.neighbour_pairs();
-  std::apply(
-      [&](const auto&... set) {
-        (
-            [&](const auto& b) {
-              if (b.tag.size() != b.pairs.size() || b.state.size() != b.pairs.size() ||
-                  b.intact.size() != b.pairs.size() || b.bond_of_pair.size() != pairs)
-                fail("bonds");
-              for (std::size_t k = 0; k < b.pairs.size(); ++k)
-                if (b.pairs.first[k] >= n || b.pairs.second[k] >= n) fail("bond pairs");
-              for (std::uint32_t k : b.bond_of_pair)
-                if (k != b.kNoBond && k >= b.pairs.size()) fail("bond index");
-            }(set),
-            ...);
-      },
-      s.bonds_);
-  std::apply(
-      [&](const auto&... set) {
-        (
-            [&](const auto& b) {
-              if (b.tag.size() != b.pairs.size() || b.state.size() != b.pairs.size() ||
-                  b.bond_of_pair.size() != pairs)
-                fail("joints");
-              for (std::size_t k = 0; k < b.pairs.size(); ++k)
-                if (b.pairs.first[k] >= n || b.pairs.second[k] >= n) fail("joint pairs");
-              for (std::uint32_t k : b.bond_of_pair)
-                if (k != b.kNoBond && k >= b.pairs.size()) fail("joint index");
-            }(set),
-            ...);
-      },
-      s.joints_);
+  auto check_set = [&](const auto& b) {
+    if (b.tag.size() != b.pairs.size() || b.state.size() != b.pairs.size() ||
+        b.intact.size() != b.pairs.size() || b.bond_of_pair.size() != pairs)
+      fail("bonds");
+    for (std::size_t k = 0; k < b.pairs.size(); ++k)
+      if (b.pairs.first[k] >= n || b.pairs.second[k] >= n) fail("bond pairs");
+    for (std::uint32_t k : b.bond_of_pair)
+      if (k != b.kNoBond && k >= b.pairs.size()) fail("bond index");
+  };
+  std::apply([&](const auto&... set) { (check_set(set), ...); }, s.bonds_);
+  std::apply([&](const auto&... set) { (check_set(set), ...); }, s.joints_);
   if (s.joint_law_ >= JointLaws::size) fail("joint law");
   return s;
 }

@@ -523,7 +523,8 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
       // A joint replaces the pair's contact law (physics.md §5); a bonded joint that breaks goes
       // on unbonded, so its force of the step is applied.
       auto joint_part = [&]<class JL>(BondSet<JL>& set) {
-        const std::uint32_t b = set.bond_of_pair[k];
+        // Most samples have no joints: no load of the pair's index then.
+        const std::uint32_t b = set.size() == 0 ? BondSet<JL>::kNoBond : set.bond_of_pair[k];
         if (b != BondSet<JL>::kNoBond) {
           if (!have_geometry) g = geometry(i, j);
           have_geometry = true;
@@ -870,7 +871,7 @@ void Simulation::sample_stored_energy(ContactSet<CL>& c) {
         auto one = [&]<class JL>(BondSet<JL>& s) {
           for (std::size_t k = 0; k < s.size(); ++k) {
             const BondEnergy e = JL::energy(s.state[k]);
-            if (JL::is_bonded(s.params, s.state[k]))
+            if (JL::is_bonded(s.state[k]))
               bond += e;
             else
               contact += e.total();
@@ -956,7 +957,7 @@ std::size_t Simulation::joint_count() const noexcept {
 std::size_t Simulation::bonded_joints() const noexcept {
   std::size_t n = 0;
   auto one = [&]<class JL>(const BondSet<JL>& s) {
-    for (const auto& st : s.state) n += JL::is_bonded(s.params, st) ? 1 : 0;
+    for (const auto& st : s.state) n += JL::is_bonded(st) ? 1 : 0;
   };
   std::apply([&](const auto&... set) { (one(set), ...); }, joints_);
   return n;

@@ -89,7 +89,6 @@ struct SmoothJoint {
   }
 
   static bool starts_bonded(const Params& p) noexcept { return p.bonded; }
-  static bool is_bonded(const Params&, const auto& s) noexcept { return s.bonded; }
 
   struct State {
     Vec3 normal;                // n_j, fixed in space, oriented so that n_j . n >= 0 at assignment
@@ -124,6 +123,7 @@ struct SmoothJoint {
     return s;
   }
 
+  static bool is_bonded(const State& s) noexcept { return s.bonded; }
   static double max_stiffness(const State& s) noexcept { return std::max(s.kn, s.ks); }
   static double shear_stiffness(const State& s) noexcept { return s.ks; }
   static double max_moment_stiffness(const State&) noexcept { return 0.0; }
