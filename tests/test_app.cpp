@@ -284,8 +284,9 @@ TEST(StressStrain, TangentModulusOfASyntheticCurve) {
 }
 
 TEST(App, ExamplesAreValid) {
-  for (const char* name : {"hex-2d.toml", "triangle-from-file.toml", "brazilian.toml",
-                           "preconsolidated-2d.toml", "triaxial-jointed.toml"}) {
+  for (const char* name :
+       {"hex-2d.toml", "triangle-from-file.toml", "brazilian.toml", "preconsolidated-2d.toml",
+        "triaxial-smooth-joint.toml", "ucs-brittle-beam.toml", "ucs-quaternion-bond.toml"}) {
     const std::string path = std::string(BRECCIA_SOURCE_DIR) + "/examples/" + name;
     EXPECT_NO_THROW(load_experiment(path, {})) << path;
   }

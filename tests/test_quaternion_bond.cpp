@@ -217,3 +217,55 @@ TEST(QuaternionBond, PlanarSpheresIn2DMoveAsIn3D) {
   EXPECT_GT(e3, 0.01 * solid.ledger().kinetic());
   EXPECT_NEAR(flat.ledger().bond.total(), e3, 1e-6 * e3);
 }
+
+TEST(QuaternionBond, ThreeGrainsShareATurnedGrainAsTheFormulasSay) {
+  // An L of three held grains: 2 at +x and 3 at +y of grain 1, each touching it and bonded to
+  // it. Grain 1 turns about x by theta (driven spin, one step): bond 1-2 is twisted by theta,
+  // bond 1-3 is bent by theta, and grain 1's rim at +y moves along +z by R theta. By hand
+  // (d = d0 = 2R, quaternion-bond shear arm d):
+  //   M_1x = -(K_t + K_b + R K_s d / 2) theta,  M_2x = K_t theta,
+  //   M_3x = (K_b - R K_s d / 2) theta,         F_3z = -F_1z = K_s d theta / 2,  F_2 = 0.
+  // Terms of order theta^2 are 1e-6 of these at theta = 1e-6, hence the tolerance 1e-5.
+  ParticleStore ps(Dimension::Three, 1e-3);
+  const double dt = 1e-8, omega = 100.0, theta = omega * dt;
+  ps.add({.tag = 1,
+          .position = {},
+          .radius = kR,
+          .density = 2650,
+          .angular_velocity = {omega, 0, 0},
+          .motion = Motion::Driven});
+  ps.add(
+      {.tag = 2, .position = {kL, 0, 0}, .radius = kR, .density = 2650, .motion = Motion::Driven});
+  ps.add(
+      {.tag = 3, .position = {0, kL, 0}, .radius = kR, .density = 2650, .motion = Motion::Driven});
+  EngineConfig cfg;
+  cfg.time_step = dt;
+  cfg.energy_interval = 0;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>({}, {}));
+  QuaternionBond::Params p;
+  p.modulus = kE;
+  p.poisson_ratio = 0.25;
+  p.tensile_strength = p.shear_strength = 1e12;  // elastic
+  p.contact_while_bonded = false;
+  sim.set_bond_params<QuaternionBond>(p);
+  sim.add_bond<QuaternionBond>(1, 2);
+  sim.add_bond<QuaternionBond>(1, 3);
+  sim.initialise();
+  sim.step();  // forces at the installed state (zero), then grain 1 turns by theta
+  sim.step();  // forces at the turned state
+  const double J = 0.5 * kPi * std::pow(kR, 4), I = 0.5 * J;
+  const double Kt = kG * J / kL, Kb = kE * I / kL;
+  const double shear = 0.5 * kKs * kL * theta, shear_moment = kR * shear;
+  const ParticleStore& s = sim.particles();
+  const double m1 = (Kt + Kb) * theta + shear_moment;
+  EXPECT_NEAR(s.torque[0].x, -m1, 1e-5 * m1);
+  EXPECT_NEAR(s.torque[1].x, Kt * theta, 1e-5 * Kt * theta);
+  EXPECT_NEAR(s.torque[2].x, Kb * theta - shear_moment, 1e-5 * m1);
+  EXPECT_NEAR(s.force[2].z, shear, 1e-5 * shear);
+  EXPECT_NEAR(s.force[0].z, -shear, 1e-5 * shear);
+  EXPECT_LT(norm(s.force[1]), 1e-5 * shear);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_LT(std::abs(s.torque[i].y) + std::abs(s.torque[i].z), 1e-5 * m1) << i;
+    EXPECT_LT(std::abs(s.force[i].x) + std::abs(s.force[i].y), 1e-5 * shear) << i;
+  }
+}

@@ -7,7 +7,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 out="${1:-/tmp/breccia-seed-003}"
 bin="$root/build/breccia"
-example="$root/examples/triaxial-jointed.toml"
+example="$root/examples/triaxial-smooth-joint.toml"
 dir="output.directory=\"$out\""
 OMP_NUM_THREADS=1 "$bin" run "$example" --set "$dir" &
 OMP_NUM_THREADS=1 "$bin" run "$example" --set "$dir" --set 'name="triaxial-intact"' \
