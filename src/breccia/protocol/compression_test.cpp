@@ -20,7 +20,9 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
   planar_ = p.planar();
   thickness_ = p.thickness();
   axis_ = planar_ ? 1 : 2;
-  if (planar_) lateral_ = LateralBoundary::Prism;
+  // Membranes are 2D only, a cylindrical wall 3D only.
+  if (planar_ && lateral_ == LateralBoundary::Cylinder) lateral_ = LateralBoundary::Prism;
+  if (!planar_ && lateral_ == LateralBoundary::Membrane) lateral_ = LateralBoundary::Prism;
   const double inf = std::numeric_limits<double>::infinity();
   Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
   for (const PosRad& q : p.pos_rad) {
@@ -39,7 +41,7 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
   double shell = 0.0;  // cylinder radius: outermost particle surface
   for (const PosRad& q : p.pos_rad)
     shell = std::max(shell, std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r);
-  if (confined()) {
+  if (confined() && lateral_ != LateralBoundary::Membrane) {
     if (lateral_ == LateralBoundary::Cylinder) {
       side_.push_back(sim.add_wall(
           Wall::cylinder("confining_cylinder", {centre_.x, centre_.y, 0}, {0, 0, 1}, shell)));
@@ -51,7 +53,7 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
         side_.push_back(sim.add_wall(Wall::plane("confining_y1", hi, {0, -1, 0})));
       }
     }
-  } else {
+  } else if (!confined()) {
     find_face_grains(sim, -inf, inf, face_);  // they measure the lateral strain (§1.1)
   }
   servo_ = StressServo{st_.confining_stress, st_.servo_relaxation, 10.0 * st_.platen_speed};
@@ -119,6 +121,13 @@ double PlatenCompression::height(const Simulation& sim) const {
 
 void PlatenCompression::widths(const Simulation& sim, double w[2]) const {
   const auto& W = sim.walls();
+  if (confined() && lateral_ == LateralBoundary::Membrane) {
+    if (membrane_.chains()[0].empty())
+      membrane_.find(sim.particles(), W[bottom_].point[axis_], W[top_].point[axis_]);
+    w[0] = membrane_.width(sim.particles());
+    w[1] = thickness_;
+    return;
+  }
   if (confined()) {
     if (lateral_ == LateralBoundary::Cylinder) {
       w[0] = w[1] = 2.0 * W[side_[0]].radius;
@@ -163,6 +172,7 @@ double PlatenCompression::current_area(const Simulation& sim) const {
 
 double PlatenCompression::lateral_stress(const Simulation& sim) const {
   if (!confined()) return 0.0;
+  if (lateral_ == LateralBoundary::Membrane) return membrane_.stress();
   const auto& W = sim.walls();
   const double h = height(sim);
   if (lateral_ == LateralBoundary::Cylinder) {
@@ -182,6 +192,10 @@ double PlatenCompression::lateral_stress(const Simulation& sim) const {
 
 void PlatenCompression::drive_lateral(Simulation& sim) const {
   auto& W = sim.walls();
+  if (lateral_ == LateralBoundary::Membrane) {
+    membrane_.apply(sim, st_.confining_stress, W[bottom_].point[axis_], W[top_].point[axis_]);
+    return;
+  }
   const double h = height(sim), dt = sim.time_step();
   if (lateral_ == LateralBoundary::Cylinder) {
     servo_.drive_cylinder(W[side_[0]], h, dt, k_min_);
@@ -312,7 +326,8 @@ bool PlatenCompression::finished(const AxialState& s, std::size_t broken_bonds) 
     stop_reason_ = "reached the maximum strain " + num(st_.max_strain);
     return true;
   }
-  if (broken_bonds > 0 && peak_ > 0.0 && s.deviatoric < st_.stop_fraction * peak_) {
+  if (st_.stop_fraction > 0.0 && broken_bonds > 0 && peak_ > 0.0 &&
+      s.deviatoric < st_.stop_fraction * peak_) {
     stop_reason_ = "deviatoric stress fell below " + num(st_.stop_fraction) + " of the peak";
     return true;
   }
@@ -332,6 +347,7 @@ std::string PlatenCompression::label() const {
 
 std::string PlatenCompression::lateral_boundary() const {
   if (!confined()) return "none";
+  if (lateral_ == LateralBoundary::Membrane) return "flexible membranes on the outer grain chains";
   return lateral_ == LateralBoundary::Cylinder ? "cylindrical servo wall"
                                                : "servo-controlled plane walls";
 }

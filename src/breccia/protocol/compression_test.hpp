@@ -1,7 +1,8 @@
 #pragma once
-// Compression between two rigid platens (physics.md §6.1): unconfined (UCS), or confined by
-// servo-controlled lateral walls (§6.2) at a constant confining stress: triaxial in 3D (four plane
-// walls around a prism, or a cylindrical wall around a cylinder) and biaxial in 2D (two walls).
+// Compression between two rigid platens (physics.md §6.1): unconfined (UCS), or confined at a
+// constant confining stress: triaxial in 3D by servo-controlled lateral walls (§6.2; four plane
+// walls around a prism, or a cylindrical wall around a cylinder) and biaxial in 2D by flexible
+// membranes on the outermost grain chains (§6.3, boundary/membrane.hpp) or two servo walls.
 // Stages: consolidation (platens and lateral walls servo to sigma_3 until steady), then axial
 // loading at a prescribed platen speed reached through a cosine ramp, stopping at a maximum strain
 // or once the stress has fallen to a fraction of the peak. Axis: z in 3D, y in 2D.
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "breccia/boundary/membrane.hpp"
 #include "breccia/boundary/servo.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/engine/simulation.hpp"
@@ -20,7 +22,9 @@
 
 namespace breccia {
 
-enum class LateralBoundary { Prism, Cylinder };
+// Prism: plane walls (2 in 2D, 4 in 3D); Cylinder: a cylindrical wall; Membrane (2D only): the
+// follower load of Membrane2D on each side's outermost grain chain.
+enum class LateralBoundary { Prism, Cylinder, Membrane };
 
 struct PlatenCompressionSettings {
   double platen_speed = 0.05;  // m/s, each platen
@@ -121,6 +125,9 @@ class PlatenCompression final : public Protocol {
   bool consolidated_ = true;
   StressServo servo_;
   std::string stop_reason_;
+  // Recomputed from the particles every step (nothing of it is checkpointed), hence mutable:
+  // the const measurements find the chains when a restored run has not stepped yet.
+  mutable Membrane2D membrane_;
 };
 
 // --- the registered tests that run on PlatenCompression (protocol/registry.hpp) ---
@@ -136,7 +143,8 @@ constexpr std::array<ParamField<P>, 4 + N> compression_fields(
        "cosine ramp of the platen speed; 0 = 10 bar-wave transit times"},
       {"max_strain", "-", &P::max_strain, 0, 1, false, true, "stop at this axial strain"},
       {"stop_fraction", "-", &P::stop_fraction, 0, 1, true, false,
-       "after the peak, stop once the deviatoric stress is below this fraction of it"},
+       "after the peak, stop once the deviatoric stress is below this fraction of it (0: run "
+       "to max_strain)"},
   }};
   for (std::size_t k = 0; k < N; ++k) f[4 + k] = extra[k];
   return f;
@@ -187,10 +195,23 @@ struct ConfinedCompressionTest {
   struct Params {
     double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
     double confining_stress = 5e6, servo_relaxation = 0.5;
+    bool membrane = Dim == 2;  // 2D: flexible membranes (true) or servo walls
   };
-  static constexpr std::array<ParamField<Params>, 6> fields() {
-    return compression_fields<Params, 2>(confining_fields<Params>(
-        Dim == 3 ? "sigma_3 held by the lateral walls" : "sigma_3 held by the side walls"));
+  static constexpr auto fields() {
+    if constexpr (Dim == 3) {
+      return compression_fields<Params, 2>(
+          confining_fields<Params>("sigma_3 held by the lateral walls"));
+    } else {
+      const auto c = confining_fields<Params>(
+          "sigma_3 held by the membranes (or the side walls with membrane = false)");
+      return compression_fields<Params, 3>(std::array<ParamField<Params>, 3>{
+          c[0], c[1],
+          ParamField<Params>{"membrane", "-", &Params::membrane, 0, 0, true, true,
+                             "flexible membranes (physics.md §6.3): sigma_3 acts as a follower "
+                             "load per unit length on the outermost grain chain of each side, "
+                             "found again every step; false: rigid side walls servo-controlled "
+                             "to sigma_3 (servo_relaxation)"}});
+    }
   }
   static void check(const Params&, const SampleInfo& s, const std::string& where) {
     if (s.dimension != Dim)
@@ -199,7 +220,7 @@ struct ConfinedCompressionTest {
                                 : "a biaxial test needs a 2D sample; 3D samples take \"triaxial\"");
   }
   static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s) {
-    return std::make_unique<PlatenCompression>(sim, confined_settings(p), lateral_of(s),
+    return std::make_unique<PlatenCompression>(sim, confined_settings(p), lateral_of(p, s),
                                                name.data());
   }
   static std::unique_ptr<Protocol> restore(ArchiveReader& a) {
@@ -217,7 +238,8 @@ struct ConfinedCompressionTest {
     s.servo_relaxation = p.servo_relaxation;
     return s;
   }
-  static LateralBoundary lateral_of(const SampleInfo& s) {
+  static LateralBoundary lateral_of(const Params& p, const SampleInfo& s) {
+    if (Dim == 2) return p.membrane ? LateralBoundary::Membrane : LateralBoundary::Prism;
     return s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism;
   }
 };

@@ -1,0 +1,106 @@
+#include "breccia/boundary/membrane.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "breccia/engine/simulation.hpp"
+
+namespace breccia {
+
+void Membrane2D::find_chains(const ParticleStore& p, double y_bottom, double y_top) {
+  double r_sum = 0.0;
+  for (const PosRad& q : p.pos_rad) r_sum += q.r;
+  const double bin = 2.0 * r_sum / static_cast<double>(std::max<std::size_t>(p.size(), 1));
+  const double height = y_top - y_bottom;
+  const auto bins = static_cast<std::size_t>(std::max(1.0, std::ceil(height / bin)));
+  for (int side = 0; side < 2; ++side) best_[side].assign(bins, -1);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const PosRad& q = p.pos_rad[i];
+    if (q.x.y < y_bottom || q.x.y > y_top) continue;
+    const auto k = std::min(bins - 1, static_cast<std::size_t>((q.x.y - y_bottom) / bin));
+    // Left: the surface reaching furthest towards -x; right: towards +x.
+    for (int side = 0; side < 2; ++side) {
+      std::int64_t& b = best_[side][k];
+      const double reach = side == 0 ? -(q.x.x - q.r) : q.x.x + q.r;
+      if (b < 0) {
+        b = static_cast<std::int64_t>(i);
+        continue;
+      }
+      const PosRad& o = p.pos_rad[static_cast<std::size_t>(b)];
+      if (reach > (side == 0 ? -(o.x.x - o.r) : o.x.x + o.r)) b = static_cast<std::int64_t>(i);
+    }
+  }
+  for (int side = 0; side < 2; ++side) {
+    chains_[side].clear();
+    for (std::int64_t b : best_[side])
+      if (b >= 0) chains_[side].push_back(static_cast<std::uint32_t>(b));
+  }
+}
+
+void Membrane2D::find(const ParticleStore& p, double y_bottom, double y_top) {
+  find_chains(p, y_bottom, y_top);
+  measure_lengths(p, y_bottom, y_top);
+}
+
+void Membrane2D::measure_lengths(const ParticleStore& p, double y_bottom, double y_top) {
+  for (int side = 0; side < 2; ++side) {
+    const auto& chain = chains_[side];
+    auto& len = lengths_[side];
+    len.assign(chain.size(), 0.0);
+    if (chain.empty()) continue;
+    len.front() += p.pos_rad[chain.front()].x.y - y_bottom;
+    len.back() += y_top - p.pos_rad[chain.back()].x.y;
+    for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
+      const Vec3 d = p.pos_rad[chain[k + 1]].x - p.pos_rad[chain[k]].x;
+      const double half = 0.5 * std::hypot(d.x, d.y);
+      len[k] += half;
+      len[k + 1] += half;
+    }
+  }
+}
+
+void Membrane2D::apply(Simulation& sim, double sigma3, double y_bottom, double y_top) {
+  const ParticleStore& p = sim.particles();
+  find(p, y_bottom, y_top);
+  std::vector<Vec3>& load = sim.external_force();
+  const double pressure_per_length = sigma3 * p.thickness();
+  double inward = 0.0;
+  for (int side = 0; side < 2; ++side) {
+    const auto& chain = chains_[side];
+    if (chain.empty()) continue;
+    // A segment from a to b (b the higher end) pushes inwards with sigma_3 t times the segment
+    // turned clockwise (left side, inward +x) or anticlockwise (right side, inward -x).
+    const double turn = side == 0 ? 1.0 : -1.0;
+    auto push = [&](const Vec3& a, const Vec3& b) {
+      const Vec3 d = b - a;
+      const Vec3 f{turn * d.y * pressure_per_length, -turn * d.x * pressure_per_length, 0.0};
+      inward += turn * f.x;
+      return f;
+    };
+    const Vec3 first = p.pos_rad[chain.front()].x, last = p.pos_rad[chain.back()].x;
+    load[chain.front()] += push({first.x, y_bottom, 0.0}, first);
+    load[chain.back()] += push(last, {last.x, y_top, 0.0});
+    for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
+      const Vec3 f = push(p.pos_rad[chain[k]].x, p.pos_rad[chain[k + 1]].x);
+      load[chain[k]] += f * 0.5;
+      load[chain[k + 1]] += f * 0.5;
+    }
+  }
+  stress_ = inward / (2.0 * (y_top - y_bottom) * p.thickness());
+}
+
+double Membrane2D::width(const ParticleStore& p) const {
+  double surface[2] = {0.0, 0.0};
+  for (int side = 0; side < 2; ++side) {
+    double sum = 0.0, weight = 0.0;
+    for (std::size_t k = 0; k < chains_[side].size(); ++k) {
+      const PosRad& q = p.pos_rad[chains_[side][k]];
+      sum += lengths_[side][k] * (side == 0 ? q.x.x - q.r : q.x.x + q.r);
+      weight += lengths_[side][k];
+    }
+    surface[side] = weight > 0.0 ? sum / weight : 0.0;
+  }
+  return surface[1] - surface[0];
+}
+
+}  // namespace breccia
