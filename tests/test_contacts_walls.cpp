@@ -266,3 +266,33 @@ TEST(Wall, ServoWallsHoldTheTargetStressOnABondedBlock) {
   EXPECT_GT(sim.walls()[west].point.x, lo.x);
   EXPECT_LT(sim.walls()[east].point.x, hi.x);
 }
+
+TEST(Servo, IntegralTermRemovesTheLagBehindADilatingSample) {
+  // A wall against a sample of stiffness k_eff = k_sum / 6 (the sample behind the contacts is
+  // softer than they are) that dilates into it at v_d. The wall's overlap u grows by
+  // (V + v_d) dt per step and its stress is k_eff u / A. The proportional servo settles where
+  // it retreats at v_d, G e = -v_d with G = alpha A / (k_sum dt): a lag of
+  // v_d k_sum dt / (alpha A) above the target, 2.4 kPa here. The proportional-integral drive of
+  // the 2D side walls settles on the target.
+  const double area = 1e-4, k_sum = 6e8, k_eff = 1e8, dt = 1e-8, v_d = 0.02, target = 2e6;
+  const StressServo servo{target, 0.5, 1.0};
+  const double lag = v_d * k_sum * dt / (0.5 * area);
+  for (const bool integral : {false, true}) {
+    Wall w = Wall::plane("side", {}, {1, 0, 0});
+    w.contact_stiffness = k_sum;
+    double u = target * area / k_eff, carried = 0.0;
+    for (int s = 0; s < 20000; ++s) {
+      w.force = w.normal * (k_eff * u);
+      if (integral)
+        servo.drive_pi(w, area, dt, k_sum, carried);
+      else
+        servo.drive(w, area, dt, k_sum);
+      u += (dot(w.velocity, w.normal) + v_d) * dt;
+    }
+    const double error = k_eff * u / area - target;
+    if (integral)
+      EXPECT_LT(std::abs(error), 1e-6 * lag);
+    else
+      EXPECT_NEAR(error, lag, 1e-6 * lag);
+  }
+}

@@ -33,6 +33,22 @@ struct StressServo {
     w.velocity = w.normal * speed(stress, area, w.contact_stiffness, dt, min_stiffness);
   }
 
+  // Proportional-integral drive of a plane wall (the side walls of a 2D biaxial test). The
+  // proportional drive above lags behind a dilating sample by v_dilation / G_eff, and G_eff is a
+  // fraction of G: the sample behind the wall's contacts is softer than the contacts themselves.
+  // On a 2D hexagonal block at 2 MPa the lag reached 5.6 % of sigma_3 before the peak. Each step
+  // adds kIntegralShare of the proportional correction to `integral` (a velocity, held by the
+  // caller and clamped like the velocity), which takes the lag out.
+  static constexpr double kIntegralShare = 0.05;
+  void drive_pi(Wall& w, double area, double dt, double min_stiffness,
+                double& integral) const noexcept {
+    const double stress = dot(w.force, w.normal) / area;
+    const double p = speed(stress, area, w.contact_stiffness, dt, min_stiffness);
+    integral = std::clamp(integral + kIntegralShare * p, -max_speed, max_speed);
+    w.controlled = true;
+    w.velocity = w.normal * std::clamp(p + integral, -max_speed, max_speed);
+  }
+
   // Drives a cylinder wall of length `height` through its radius (positive speed shrinks it);
   // its stress is the summed radial contact force over the lateral area 2 pi R H (§6.3).
   void drive_cylinder(Wall& w, double height, double dt, double min_stiffness) const noexcept {

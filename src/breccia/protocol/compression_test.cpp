@@ -203,8 +203,13 @@ void PlatenCompression::drive_lateral(Simulation& sim) const {
   }
   double w[2];
   widths(sim, w);
-  for (std::size_t k = 0; k < side_.size(); ++k)
-    servo_.drive(W[side_[k]], h * (k < 2 ? w[1] : w[0]), dt, k_min_);
+  for (std::size_t k = 0; k < side_.size(); ++k) {
+    const double area = h * (k < 2 ? w[1] : w[0]);
+    if (planar_)
+      servo_.drive_pi(W[side_[k]], area, dt, k_min_, side_integral_[k]);
+    else
+      servo_.drive(W[side_[k]], area, dt, k_min_);
+  }
 }
 
 void PlatenCompression::control(Simulation& sim) {
@@ -378,6 +383,7 @@ void PlatenCompression::transfer(Archive& a) {
   a.value(k_min_);
   a.value(consolidated_);
   a.value(servo_);
+  a.value(side_integral_);
   a.string(stop_reason_);
 }
 

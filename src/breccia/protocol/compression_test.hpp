@@ -124,6 +124,8 @@ class PlatenCompression final : public Protocol {
   double peak_ = 0.0, k_min_ = 0.0;
   bool consolidated_ = true;
   StressServo servo_;
+  // The integral terms of the 2D side walls' servo (StressServo::drive_pi), a velocity each.
+  mutable std::array<double, 4> side_integral_{};
   std::string stop_reason_;
   // Recomputed from the particles every step (nothing of it is checkpointed), hence mutable:
   // the const measurements find the chains when a restored run has not stepped yet.
