@@ -191,9 +191,10 @@ struct ConfinedCompressionTest {
                  "platens and lateral walls servo-controlled (four plane walls around a prism, a "
                  "cylindrical wall around a cylinder; physics.md §6.2), then loaded axially "
                  "while the lateral walls hold sigma_3."
-               : "Biaxial compression (2D): consolidation to sigma_3 by servo-controlled side "
-                 "walls and platens, then axial loading with the side walls holding sigma_3 "
-                 "(physics.md §6.2).";
+               : "Biaxial compression (2D): consolidation to sigma_3 with servo-controlled "
+                 "platens, then axial loading while flexible membranes on the outermost grain "
+                 "chains hold sigma_3 on the sides (physics.md §6.3; membrane = false: "
+                 "servo-controlled side walls, §6.2).";
   struct Params {
     double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
     double confining_stress = 5e6, servo_relaxation = 0.5;
