@@ -96,3 +96,41 @@ TEST(StrainGauge, ColumnOfGrainsReadsTheBondedPairsIn3D) {
 TEST(StrainGauge, ColumnOfGrainsReadsTheBondedPairsIn2D) {
   expect_hand_moduli(true);
 }
+
+TEST(PlatenCompression, BondsBrokenBeforeLoadingDoNotArmThePostPeakStop) {
+  // A preconsolidated sample breaks bonds while it unloads to sigma_3, before axial loading.
+  // Those cracks must not arm the post-peak rule, or the first dip of the ramp-up ends the
+  // test (examples/preconsolidated-2d.toml stopped at a "peak" of 0.12 MPa). Here weak bonds
+  // broken by random motion before start() stand in for them.
+  ParticleStore ps(Dimension::Three, 1.0);
+  const double R = 0.5e-3;
+  std::uint64_t tag = 1;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 6; ++k)
+        ps.add({.tag = tag++,
+                .position = {2 * R * i, 2 * R * j, 2 * R * k},
+                .radius = R,
+                .density = 2650,
+                .velocity = {0.5 * ((i + j + k) % 3 - 1.0), 0.3 * ((i * k) % 2 - 0.5), 0.0}});
+  EngineConfig cfg;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>({}, {}));
+  ParallelBond::Params bp;
+  bp.tensile_strength = bp.cohesion = 1e3;
+  sim.set_bond_params<ParallelBond>(bp);
+  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  PlatenCompressionSettings st;
+  st.stop_fraction = 0.6;
+  PlatenCompression test(sim, st, LateralBoundary::Prism, "ucs");
+  sim.initialise();
+  sim.run(200);
+  const std::size_t before = sim.cracks().size();
+  ASSERT_GT(before, 0u) << "the set-up must break bonds before loading";
+  test.start(sim, 1000.0);
+  AxialState s;
+  s.deviatoric = 1e6;
+  EXPECT_FALSE(test.finished(s, before));
+  s.deviatoric = 0.1e6;  // far below 0.6 of the peak
+  EXPECT_FALSE(test.finished(s, before)) << "no bond has broken since loading began";
+  EXPECT_TRUE(test.finished(s, before + 1));
+}

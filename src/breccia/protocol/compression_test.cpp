@@ -289,6 +289,9 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
     W[w].update_motion(sim.time());
   }
   peak_ = 0.0;
+  // Bonds broken before axial loading (a preconsolidated sample unloading to sigma_3) do not
+  // arm the post-peak stop rule.
+  broken_at_start_ = sim.cracks().size();
   return sim.step_count() - step0;
 }
 
@@ -331,7 +334,7 @@ bool PlatenCompression::finished(const AxialState& s, std::size_t broken_bonds) 
     stop_reason_ = "reached the maximum strain " + num(st_.max_strain);
     return true;
   }
-  if (st_.stop_fraction > 0.0 && broken_bonds > 0 && peak_ > 0.0 &&
+  if (st_.stop_fraction > 0.0 && broken_bonds > broken_at_start_ && peak_ > 0.0 &&
       s.deviatoric < st_.stop_fraction * peak_) {
     stop_reason_ = "deviatoric stress fell below " + num(st_.stop_fraction) + " of the peak";
     return true;
@@ -380,6 +383,7 @@ void PlatenCompression::transfer(Archive& a) {
   a.value(gauge_length0_);
   a.value(waist0_);
   a.value(peak_);
+  a.value(broken_at_start_);
   a.value(k_min_);
   a.value(consolidated_);
   a.value(servo_);

@@ -52,7 +52,8 @@ class PlatenCompression final : public Protocol {
 
   AxialState measure(const Simulation& sim) const override;
   // Updates the peak tracking; true when the test should stop. The post-peak rule applies only
-  // once bonds have started to break, so that ramp-up oscillations cannot end a test.
+  // once bonds have started to break during axial loading, so that ramp-up oscillations cannot
+  // end a test.
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 
@@ -122,6 +123,7 @@ class PlatenCompression final : public Protocol {
   std::vector<std::uint32_t> waist_[4];
   double gauge_length0_ = 0.0, waist0_[2] = {0.0, 0.0};
   double peak_ = 0.0, k_min_ = 0.0;
+  std::size_t broken_at_start_ = 0;  // cracks when axial loading began
   bool consolidated_ = true;
   StressServo servo_;
   // The integral terms of the 2D side walls' servo (StressServo::drive_pi), a velocity each.
