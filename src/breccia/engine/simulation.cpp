@@ -329,42 +329,23 @@ void Simulation::initialise() {
 void Simulation::estimate_time_step() {
   const std::size_t n = p_.size();
   std::vector<double> k_tr(n, 0.0), k_rot(n, 0.0);
-  // Bonds (§1.5): translational max(K_n, K_s); rotational max(K_b, K_t) + K_s |r|^2.
-  std::apply(
-      [&](auto&... sets) {
-        auto one = [&]<class Law>(BondSet<Law>& s) {
-          for (std::size_t k = 0; k < s.size(); ++k) {
-            const auto i = s.pairs.first[k], j = s.pairs.second[k];
-            const PairGeometry g = geometry(i, j);
-            const auto& st = s.state[k];
-            const double kt = Law::max_stiffness(st), ks = Law::shear_stiffness(st);
-            const double km = Law::max_moment_stiffness(st);
-            k_tr[i] += kt;
-            k_tr[j] += kt;
-            k_rot[i] += km + ks * norm2(g.r1);
-            k_rot[j] += km + ks * norm2(g.r2);
-          }
-        };
-        (one(sets), ...);
-      },
-      bonds_);
-  // Joints (§5): forces at the contact point, no couple.
-  std::apply(
-      [&](auto&... sets) {
-        auto one = [&]<class JL>(BondSet<JL>& s) {
-          for (std::size_t k = 0; k < s.size(); ++k) {
-            const auto i = s.pairs.first[k], j = s.pairs.second[k];
-            const PairGeometry g = geometry(i, j);
-            const double kt = JL::max_stiffness(s.state[k]), ks = JL::shear_stiffness(s.state[k]);
-            k_tr[i] += kt;
-            k_tr[j] += kt;
-            k_rot[i] += ks * norm2(g.r1);
-            k_rot[j] += ks * norm2(g.r2);
-          }
-        };
-        (one(sets), ...);
-      },
-      joints_);
+  // Bonds and joints (§1.5, §5): translational max(K_n, K_s); rotational max(K_b, K_t) +
+  // K_s |r|^2 (a joint has no couple: its max_moment_stiffness is 0).
+  auto add_set = [&]<class Law>(BondSet<Law>& s) {
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      const auto i = s.pairs.first[k], j = s.pairs.second[k];
+      const PairGeometry g = geometry(i, j);
+      const auto& st = s.state[k];
+      const double kt = Law::max_stiffness(st), ks = Law::shear_stiffness(st);
+      const double km = Law::max_moment_stiffness(st);
+      k_tr[i] += kt;
+      k_tr[j] += kt;
+      k_rot[i] += km + ks * norm2(g.r1);
+      k_rot[j] += km + ks * norm2(g.r2);
+    }
+  };
+  std::apply([&](auto&... sets) { (add_set(sets), ...); }, bonds_);
+  std::apply([&](auto&... sets) { (add_set(sets), ...); }, joints_);
   // Contacts: every neighbour pair that touches or nearly touches (gap < 0.1 R_min) may carry a
   // contact during loading; so does a particle near a wall. Each particle also gets at least one
   // contact of its own size, so that free particles have a finite estimate.
