@@ -190,7 +190,7 @@ double PlatenCompression::lateral_stress(const Simulation& sim) const {
   return sum / static_cast<double>(side_.size());
 }
 
-void PlatenCompression::drive_lateral(Simulation& sim) const {
+void PlatenCompression::drive_lateral(Simulation& sim) {
   auto& W = sim.walls();
   if (lateral_ == LateralBoundary::Membrane) {
     membrane_.apply(sim, st_.confining_stress, W[bottom_].point[axis_], W[top_].point[axis_]);

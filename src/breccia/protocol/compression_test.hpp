@@ -102,7 +102,7 @@ class PlatenCompression final : public Protocol {
   // axial loading starts.
   void place_gauges(const Simulation& sim);
   double gauge_length(const Simulation& sim) const;
-  void drive_lateral(Simulation& sim) const;
+  void drive_lateral(Simulation& sim);
   double lateral_stress(const Simulation& sim) const;
 
   PlatenCompressionSettings st_;
@@ -127,7 +127,7 @@ class PlatenCompression final : public Protocol {
   bool consolidated_ = true;
   StressServo servo_;
   // The integral terms of the 2D side walls' servo (StressServo::drive_pi), a velocity each.
-  mutable std::array<double, 4> side_integral_{};
+  std::array<double, 4> side_integral_{};
   std::string stop_reason_;
   // Recomputed from the particles every step (nothing of it is checkpointed), hence mutable:
   // the const measurements find the chains when a restored run has not stepped yet.
