@@ -29,8 +29,11 @@ struct PairResult {
 };
 
 inline PairGeometry make_geometry(const Body& a, const Body& b, bool planar = false,
-                                  double thickness = 1.0) {
-  return pair_geometry(a.x, a.R, b.x, b.R, a.v, a.w, b.v, b.w, a.m, b.m, planar, thickness);
+                                  double thickness = 1.0, bool planar_sphere = false) {
+  PairGeometry g =
+      pair_geometry(a.x, a.R, b.x, b.R, a.v, a.w, b.v, b.w, a.m, b.m, planar, thickness);
+  g.planar_sphere = planar && planar_sphere;
+  return g;
 }
 
 inline PairResult assemble(const PairGeometry& g, const PairForce& pf) {
@@ -60,7 +63,10 @@ struct PairStepper {
   typename Law::State state{};
   Body a, b;
   double dt = 1e-8;
-  bool planar = false;
+  // 2D laws (RICEBAL) run on planar spheres in the x-y plane; the tests keep their motion there
+  // through in_plane() and about_z().
+  bool planar = planar_only_law<Law>;
+  bool planar_sphere = planar_only_law<Law>;
   double thickness = 1.0;
   BondFailure failure;
   PairDissipation dissipation;
@@ -68,13 +74,14 @@ struct PairStepper {
 
   void install(std::uint64_t seed = 1, std::uint64_t tag = 1) {
     if constexpr (is_joint_law<Law>)
-      state = Law::install(params, make_geometry(a, b, planar, thickness), joint_normal,
-                           Law::starts_bonded(params));
+      state = Law::install(params, make_geometry(a, b, planar, thickness, planar_sphere),
+                           joint_normal, Law::starts_bonded(params));
     else if constexpr (is_bond_law<Law>)
-      state = Law::install(params, make_geometry(a, b, planar, thickness), {a.q, b.q}, seed, tag);
+      state = Law::install(params, make_geometry(a, b, planar, thickness, planar_sphere),
+                           {a.q, b.q}, seed, tag);
   }
   PairResult evaluate() {
-    const PairGeometry g = make_geometry(a, b, planar, thickness);
+    const PairGeometry g = make_geometry(a, b, planar, thickness, planar_sphere);
     PairForce pf;
     if constexpr (is_joint_law<Law>)
       pf = Law::compute(params, state, g, dt, dissipation, failure);
@@ -97,6 +104,17 @@ struct PairStepper {
       return Law::stored_energy(params, state);
   }
 };
+
+// A vector as a law's own dimension sees it: unchanged in 3D; for 2D laws the in-plane part of a
+// position or velocity, and the z part of a rotation.
+template <class Law>
+Vec3 in_plane(const Vec3& v) {
+  return planar_only_law<Law> ? Vec3{v.x, v.y, 0.0} : v;
+}
+template <class Law>
+Vec3 about_z(const Vec3& w) {
+  return planar_only_law<Law> ? Vec3{0.0, 0.0, w.z} : w;
+}
 
 // Rotation matrix applied through a quaternion.
 inline Vec3 rot(const Quat& q, const Vec3& v) {

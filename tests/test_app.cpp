@@ -232,8 +232,10 @@ TEST(App, BadExperimentFilesFailClearly) {
   expect_input_error("[sample]\ncells = [1, 2]\n", {"sample.cells", "3 integers"});
   expect_input_error("[sample]\nsource = \"file\"\n", {"sample.file", "required"});
   expect_input_error("[magic]\nx = 1\n", {"[magic]", "unknown table"});
-  expect_input_error("[engine]\ndimension = 2\n[contact]\nlaw = \"hertz_mindlin\"\n",
-                     {"contact.law", "2D"});
+  expect_input_error(
+      "[engine]\ndimension = 2\n[sample]\nplanar_body = \"disk\"\n[contact]\nlaw = "
+      "\"hertz_mindlin\"\n",
+      {"contact.law", "2D disks", "planar_sphere"});
   expect_input_error("[engine\n", {"exp.toml:1", "TOML syntax"});
   // Sample generation keys.
   expect_input_error("[sample]\nradius_min = -1e-3\n", {"sample.radius_min", "value > 0"});

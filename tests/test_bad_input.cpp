@@ -110,8 +110,8 @@ std::vector<BadCase> cases() {
        2,
        {"e.toml:3", "test.confining_stress", "1e+308"}},
       {"hertz_2d",
-       exp("[engine]\ndimension = 2\n[sample]\nshape = \"rectangle\"\n[contact]\nlaw = "
-           "\"hertz_mindlin\"\n"),
+       exp("[engine]\ndimension = 2\n[sample]\nshape = \"rectangle\"\nplanar_body = "
+           "\"disk\"\n[contact]\nlaw = \"hertz_mindlin\"\n"),
        e,
        2,
        {"contact.law"}},

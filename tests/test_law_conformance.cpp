@@ -28,7 +28,7 @@ PairStepper<Law> loaded_pair(std::uint64_t seed, double speed = 1e-3, double spi
   PairStepper<Law> s;
   const double R = 0.5e-3;
   s.a.x = {0, 0, 0};
-  const Vec3 dir = unit({0.8, 0.35, -0.2});
+  const Vec3 dir = unit(in_plane<Law>({0.8, 0.35, -0.2}));
   const double overlap = is_bond_law<Law> || is_joint_law<Law> ? 0.0 : 2e-6;
   s.b.x = dir * (2 * R - overlap);
   s.a.R = s.b.R = R;
@@ -37,6 +37,10 @@ PairStepper<Law> loaded_pair(std::uint64_t seed, double speed = 1e-3, double spi
     s.b.v[k] = speed * standard_normal(seed, 2, k);
     s.a.w[k] = spin * standard_normal(seed, 3, k);
     s.b.w[k] = spin * standard_normal(seed, 4, k);
+  }
+  for (Body* b : {&s.a, &s.b}) {
+    b->v = in_plane<Law>(b->v);
+    b->w = about_z<Law>(b->w);
   }
   s.install(seed);
   return s;
@@ -117,8 +121,10 @@ template <class Law>
 void check_rigid_motion_invariance() {
   // The same motion seen in a rotated and translated frame gives the rotated forces.
   auto s = loaded_pair<Law>(5);
-  const Quat q = normalized(Quat{0.7, 0.1, -0.4, 0.3});
-  const Vec3 shift{3.1e-3, -2.0e-3, 7.5e-3};
+  // 2D laws: a turn about z and a shift in the plane.
+  const Quat q = planar_only_law<Law> ? normalized(Quat{0.7, 0.0, 0.0, 0.3})
+                                      : normalized(Quat{0.7, 0.1, -0.4, 0.3});
+  const Vec3 shift = in_plane<Law>({3.1e-3, -2.0e-3, 7.5e-3});
   PairStepper<Law> t = s;
   for (Body* b : {&t.a, &t.b}) {
     b->x = rot(q, b->x) + shift;
@@ -135,9 +141,10 @@ void check_rigid_motion_invariance() {
   // position per step), times the stiffness; for couples the same in orientation units times
   // the moment stiffness, plus the force error times the radius. Incremental laws work from
   // velocities and are held to 1e-9 of the force alone.
+  // RICEBAL's normal spring is total too: -K_n (d - d0) from the positions.
   double f_ulp = 0.0, m_ulp = 0.0;
   if constexpr (is_bond_law<Law>) {
-    if constexpr (Law::needs_frames) {
+    if constexpr (Law::needs_frames || requires { &Law::State::d0; }) {
       const double eps = std::numeric_limits<double>::epsilon();
       f_ulp = eps * 1e-2 * Law::max_stiffness(s.state);
       m_ulp = eps * Law::max_moment_stiffness(s.state) + f_ulp * s.a.R;
@@ -189,7 +196,7 @@ void check_force_is_energy_gradient(double speed, double spin, int steps) {
   for (int k = 0; k < steps; ++k) {
     // Velocities change smoothly along the path (a curved, non-proportional load path).
     const double phase = 0.01 * k;
-    s.b.w.x += 1e-3 * std::cos(phase) * spin;
+    (planar_only_law<Law> ? s.b.w.z : s.b.w.x) += 1e-3 * std::cos(phase) * spin;
     s.b.v.y += 1e-3 * std::sin(phase) * speed;
     const Body a0 = s.a, b0 = s.b;
     s.move();
@@ -262,9 +269,9 @@ void check_rigid_body_motion() {
   // (omega dt)^2 d / 2, 5e-18 m here, so even a total law would see at most
   // 1000 x 5e-18 m x K (~1e7 N/m) = 5e-8 N. Hence 1e-6 N.
   PairStepper<Law> s;
-  s.b.x = unit({0.3, -0.8, 0.5}) * 1e-3;
+  s.b.x = unit(in_plane<Law>({0.3, -0.8, 0.5})) * 1e-3;
   s.install();
-  const Vec3 omega{4.0, -7.0, 5.0}, drift{1e-3, 2e-3, -1e-3};
+  const Vec3 omega = about_z<Law>({4.0, -7.0, 5.0}), drift = in_plane<Law>({1e-3, 2e-3, -1e-3});
   double worst = 0.0;
   for (int k = 0; k < 1000; ++k) {
     const Vec3 c = (s.a.x + s.b.x) * 0.5;
@@ -305,7 +312,10 @@ double probe_value(const ParamField<typename Law::Params>& f) {
 // with those values, and that the resolved experiment (to_toml) reads back to the same.
 template <class Law, class List, class Variant>
 void check_law_keys(const char* section, Variant ExperimentSpec::*member) {
-  std::string text = fmt::format("[{}]\nlaw = \"{}\"\n", section, Law::name);
+  // 2D laws are read from a 2D experiment.
+  const std::string dimension =
+      planar_only_law<Law> ? "[engine]\ndimension = 2\n[sample]\nshape = \"rectangle\"\n" : "";
+  std::string text = dimension + fmt::format("[{}]\nlaw = \"{}\"\n", section, Law::name);
   std::vector<std::pair<double Law::Params::*, double>> set;
   for (const auto& f : Law::fields()) {
     if (f.is_flag()) continue;
@@ -323,8 +333,9 @@ void check_law_keys(const char* section, Variant ExperimentSpec::*member) {
   }
   // An unknown key names the law and lists its keys.
   try {
-    parse_experiment(fmt::format("[{}]\nlaw = \"{}\"\nno_such_key = 1\n", section, Law::name),
-                     "laws.toml", {});
+    parse_experiment(
+        dimension + fmt::format("[{}]\nlaw = \"{}\"\nno_such_key = 1\n", section, Law::name),
+        "laws.toml", {});
     ADD_FAILURE() << "an unknown key was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(std::string(Law::name)), std::string::npos) << e.what();

@@ -15,6 +15,8 @@ namespace breccia {
 
 namespace {
 
+constexpr std::uint32_t kNoHeldBond = 0xffffffffu;  // no bond of the pair awaits judging
+
 bool has_history(const Vec3& n_old) noexcept {
   return n_old.x != 0.0 || n_old.y != 0.0 || n_old.z != 0.0;
 }
@@ -305,6 +307,13 @@ void Simulation::initialise() {
     throw InputError("contact law", "law", "hertz_mindlin",
                      "Hertz contacts need 3D spheres or 2D planar spheres (physics.md §3.4); "
                      "use 'linear' for 2D disks");
+  auto refuse_3d = [&]<class Law>(const BondSet<Law>& set) {
+    if constexpr (planar_only_law<Law>)
+      if (!p_.planar() && set.size() > 0)
+        throw InputError("bond law", "law", std::string(Law::name),
+                         "a 2D law (disks or planar spheres): set engine.dimension = 2");
+  };
+  std::apply([&](const auto&... set) { (refuse_3d(set), ...); }, bonds_);
   joints_replace_bonds();
   std::apply([&](auto&... set) { (install_bonds(set), ...); }, bonds_);
   install_pending_joints();
@@ -483,11 +492,21 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
       Vec3 force, couple;
       std::uint32_t law_index = 0;
       bool contact_off = false;  // an intact bond whose law excludes the contact (§4.0)
+      // A bond judged on the interface totals (§4.4) waits for its pair's contact force.
+      PairForce held;
+      std::uint32_t held_law = kNoHeldBond, held_bond = 0;
       auto bond_part = [&]<class Law>(BondSet<Law>& set) {
         const std::uint32_t b = set.bond_of_pair[k];
         if (b != BondSet<Law>::kNoBond && set.intact[b]) {
           if (!have_geometry) g = geometry(i, j);
           have_geometry = true;
+          if constexpr (judged_on_interface<Law>) {
+            held = Law::loads(set.state[b], g, dt);
+            held_law = law_index;
+            held_bond = b;
+            ++law_index;
+            return;
+          }
           BondFailure f;
           const PairForce pf = Law::compute(set.params, set.state[b], g, frames<Law>(i, j), dt, f);
           if (f.broken) {
@@ -539,10 +558,31 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
         dis.deleted += CL::stored_energy(c.params, c.state[k]);
         c.state[k] = {};
       }
+      Vec3 contact_force;
       if (!contact_off && (g.delta > 0.0 || has_history(c.state[k].n_old))) {
         const PairForce pf = CL::compute(c.params, c.state[k], g, dt, dis);
         force += pf.force;
         couple += pf.couple;
+        contact_force = pf.force;
+      }
+      if (held_law != kNoHeldBond) {
+        std::uint32_t li = 0;
+        auto judge = [&]<class Law>(BondSet<Law>& set) {
+          if constexpr (judged_on_interface<Law>) {
+            if (li == held_law) {
+              BondFailure f;
+              Law::judge(set.params, set.state[held_bond], g, contact_force, f);
+              if (f.broken) {
+                fails.push_back({held_law, held_bond, f});
+              } else {
+                force += held.force;
+                couple += held.couple;
+              }
+            }
+          }
+          ++li;
+        };
+        std::apply([&](auto&... set) { (judge(set), ...); }, bonds_);
       }
       s.force = force;
       s.torque1 = cross(g.r1, -force) - couple;

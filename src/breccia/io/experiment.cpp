@@ -14,6 +14,7 @@
 #include "breccia/core/format.hpp"
 #include "breccia/io/toml_node.hpp"
 #include "breccia/material/library.hpp"
+#include "breccia/sample/radius_distribution.hpp"
 
 namespace breccia {
 
@@ -470,8 +471,16 @@ const std::vector<Key>& key_table() {
     k.push_back(real_key("sample", "density", "kg/m^3", 0, kInf, true,
                          "grain density (not bulk density)", &ExperimentSpec::density));
     k.push_back(real_key("sample", "thickness", "m", 0, kInf, true,
-                         "2D disk thickness t (forces are for this thickness)",
+                         "2D thickness t: disks' thickness (forces are for this thickness); "
+                         "for planar spheres the effective thickness that turns forces into "
+                         "stresses, 2 x the mean radius when not given (physics.md §3.4)",
                          &ExperimentSpec::thickness));
+    k.push_back(choice_key("sample", "planar_body", {"auto", "disk", "planar_sphere"},
+                           "2D grains: disks of thickness t, or spheres confined to the plane "
+                           "(sphere mass and inertia; needed by Hertz-Mindlin contacts, "
+                           "physics.md §3.4); auto: planar spheres with hertz_mindlin, disks "
+                           "otherwise",
+                           &ExperimentSpec::planar_body));
     k.push_back(string_key("sample", "file",
                            "geometry file when source = \"file\" (relative "
                            "paths are taken from the experiment file's folder)",
@@ -511,6 +520,11 @@ const std::vector<Key>& key_table() {
     k.push_back(int_key("output", "history_interval", 1, 1000000000,
                         "steps between rows of history.csv",
                         [](ExperimentSpec& s) -> std::int64_t& { return s.history_interval; }));
+    k.push_back(real_key("output", "history_strain_interval", "", 0, 1, false,
+                         "axial strain between rows of history.csv (seed 002: 0.001), at the "
+                         "platens' full speed: a row every strain x length / (2 v dt) steps; 0 = "
+                         "every history_interval steps",
+                         &ExperimentSpec::history_strain_interval));
     k.push_back(real_key("output", "snapshot_strain_interval", "", 0, 1, false,
                          "axial strain between ParaView snapshots (VTK, snapshots/); 0 = only "
                          "the first and last",
@@ -806,9 +820,16 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
       s.geometry_file.empty())
     throw InputError(source, "sample.file", "\"\"",
                      "a file is required when source = \"" + s.sample_source + "\"");
-  if (s.dimension == 2 && s.contact_law() == "hertz_mindlin")
+  visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params&) {
+    if (planar_only_law<Law> && s.dimension != 2)
+      throw InputError(source, "bond.law", "\"" + std::string(Law::name) + "\"",
+                       "a 2D law of disks and planar spheres: it needs engine.dimension = 2");
+  });
+  if (s.dimension == 2 && s.contact_law() == "hertz_mindlin" && s.planar_body == "disk")
     throw InputError(source, "contact.law", "\"hertz_mindlin\"",
-                     "2D disks use \"linear\" contacts (Hertz has no disk form, physics.md §3.4)");
+                     "2D disks (sample.planar_body = \"disk\") use \"linear\" contacts: Hertz "
+                     "has no disk form; set sample.planar_body = \"planar_sphere\" (or "
+                     "\"auto\") for RICEBAL-style planar spheres (physics.md §3.4)");
   if (s.sample_source == "generate") {
     if (s.dimension == 2 && s.shape != "rectangle" && s.shape != "disk")
       throw InputError(source, "sample.shape", "\"" + s.shape + "\"",
@@ -1016,6 +1037,35 @@ toml::table parse_toml(const std::string& text, const std::string& source) {
   }
 }
 
+// The 2D body and thickness that "auto" and an absent thickness stand for (physics.md §3.4):
+// planar spheres with Hertz-Mindlin contacts, and for them t_eff = 2 R_bar of the grains the
+// sample will have.
+void resolve_planar_body(ExperimentSpec& s, bool thickness_given, const std::string& source) {
+  if (s.dimension != 2) return;
+  if (s.planar_body == "auto")
+    s.planar_body = s.contact_law() == "hertz_mindlin" ? "planar_sphere" : "disk";
+  if (s.planar_body != "planar_sphere" || thickness_given) return;
+  if (s.sample_source == "lattice") {
+    s.thickness = 2.0 * s.radius;
+  } else if (s.sample_source == "generate") {
+    RadiusDistribution d;
+    d.kind = RadiusDistribution::kind_from(s.distribution, source);
+    d.r_min = s.radius_min;
+    d.r_max = s.radius_max;
+    d.mean = s.radius_mean;
+    d.sd = s.radius_sd;
+    d.class_radius = s.class_radii;
+    d.class_mass_fraction = s.class_mass_fractions;
+    d.planar = true;
+    d.validate(source);
+    s.thickness = 2.0 * d.number_mean(s.engine.seed);
+  } else {
+    throw InputError(source, "sample.thickness", "(not set)",
+                     "planar spheres read from a file need the effective thickness that turns "
+                     "their forces into stresses (physics.md §3.4: 2 x the mean radius)");
+  }
+}
+
 ExperimentSpec spec_from_table(toml::table root, const std::string& source,
                                const std::vector<std::string>& overrides) {
   apply_overrides(root, overrides);
@@ -1023,6 +1073,7 @@ ExperimentSpec spec_from_table(toml::table root, const std::string& source,
   spec.source = source;
   apply_table(spec, root, source);
   check_consistency(spec, source);
+  resolve_planar_body(spec, root.at_path("sample.thickness").node() != nullptr, source);
   return spec;
 }
 

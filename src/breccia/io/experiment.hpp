@@ -58,7 +58,10 @@ struct ExperimentSpec {
   std::array<std::int64_t, 3> cells{6, 6, 12};  // lattice
   double radius = 0.5e-3;                       // lattice
   double density = 2650.0;
-  double thickness = 1e-3;    // 2D only
+  double thickness = 1e-3;  // 2D only; planar spheres: 2 R_bar unless the file sets it
+  // 2D grain bodies (physics.md §3.4): "disk", "planar_sphere", or "auto" (planar spheres with
+  // Hertz-Mindlin contacts, disks otherwise; resolved when the file is read)
+  std::string planar_body = "auto";
   std::string geometry_file;  // file, table, gengeo
   // Bonds between pairs with gap <= this when the sample lists none (generated samples: at
   // generation).
@@ -76,6 +79,7 @@ struct ExperimentSpec {
   // [output]
   std::string output_directory = "runs";
   std::int64_t history_interval = 200;      // steps
+  double history_strain_interval = 0.0;     // axial strain between rows; 0: every interval steps
   double snapshot_strain_interval = 0.002;  // axial strain between ParaView snapshots; 0 = none
   bool plot = true;                         // stress-strain PNG at the end (needs matplotlib)
   bool progress = true;
@@ -94,6 +98,11 @@ struct ExperimentSpec {
   std::int64_t ae_min_events = 50;
 
   std::string source;  // file the spec came from ("built-in default" otherwise)
+
+  // The resolved 2D body (Disk in 3D, where it does not apply).
+  PlanarBody grain_body() const {
+    return planar_body == "planar_sphere" ? PlanarBody::PlanarSphere : PlanarBody::Disk;
+  }
 
   std::string_view contact_law() const { return name_of_params<ContactLaws>(contact); }
   std::string_view bond_law() const { return name_of_params<BondLaws>(bond); }

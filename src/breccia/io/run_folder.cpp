@@ -208,6 +208,7 @@ PackingSettings packing_settings(const ExperimentSpec& s) {
   p.height = s.height;
   p.diameter = s.diameter;
   p.thickness = s.thickness;
+  p.planar_body = s.grain_body();
   p.radii.kind = RadiusDistribution::kind_from(s.distribution, s.source);
   p.radii.r_min = s.radius_min;
   p.radii.r_max = s.radius_max;
@@ -406,7 +407,7 @@ Built build(const ExperimentSpec& s, const std::function<void(const std::string&
   GeometryData g = load_sample(s, report, info, log);
   // Density scaling (physics.md §1.5): masses and inertias grow, so does the stable time step.
   for (ParticleSpec& q : g.particles) q.density *= s.density_scaling;
-  ParticleStore ps = g.make_store();
+  ParticleStore ps = g.make_store(s.grain_body());
   EngineConfig cfg = s.engine;
   cfg.gravity = s.dimension == 2 ? Vec3{0, -s.gravity, 0} : Vec3{0, 0, -s.gravity};
   Simulation sim(std::move(ps), cfg, contact_model(s));
@@ -642,8 +643,8 @@ namespace {
 
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // 2: commit and trailing hash; 3: strain gauges; 4, 5: brittle-beam and quaternion bond sets;
-// 6: smooth joints; 7: the 2D side-wall servo's integral terms
-constexpr std::uint32_t kCheckpointFormat = 7;
+// 6: smooth joints; 7: the 2D side-wall servo's integral terms; 8: RICEBAL bond set
+constexpr std::uint32_t kCheckpointFormat = 8;
 constexpr const char* kCheckpointFile = "checkpoint.bin";
 
 // What the loading loop carries from one row to the next besides the engine, the protocol and
@@ -871,6 +872,17 @@ void check_finite_state(const Simulation& sim, const AxialState& a) {
           sim.step_count(), a.strain, a.stress, a.force_bottom, a.force_top));
 }
 
+// Steps between history rows: output.history_interval, or the steps in which the platens, at
+// full speed, strain the sample by output.history_strain_interval.
+std::uint64_t history_step_interval(const ExperimentSpec& spec, const Protocol& test,
+                                    const Simulation& sim) {
+  const double strain_rate = 2.0 * test.platen_speed() / test.length0();
+  if (spec.history_strain_interval <= 0.0 || !(strain_rate > 0.0))
+    return static_cast<std::uint64_t>(spec.history_interval);
+  const double steps = spec.history_strain_interval / (strain_rate * sim.time_step());
+  return static_cast<std::uint64_t>(std::clamp(std::round(steps), 1.0, 1e9));
+}
+
 // Loads the loop, runs it to its end (or the next interruption), and writes the summary and the
 // final manifest. `t_start` is when this session began.
 RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& manifest, Session& ss,
@@ -912,7 +924,7 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
     result.particles = sim.particles().size();
     result.bonds = L.bonds_initial;
     result.confining_stress = test.confining_stress();
-    const auto interval = static_cast<std::uint64_t>(spec.history_interval);
+    const std::uint64_t interval = history_step_interval(spec, test, sim);
     std::string stop = "";
     std::string status = "complete";
     auto last_bar = std::chrono::steady_clock::now(), last_checkpoint = last_bar;

@@ -10,15 +10,34 @@
 #include "breccia/law/linear_contact.hpp"
 #include "breccia/law/parallel_bond.hpp"
 #include "breccia/law/quaternion_bond.hpp"
+#include "breccia/law/ricebal_bond.hpp"
 #include "breccia/law/smooth_joint.hpp"
 
 namespace breccia {
 
 using ContactLaws = TypeList<LinearContact, HertzMindlin>;
-using BondLaws = TypeList<ParallelBond, BrittleBeam, QuaternionBond>;
+using BondLaws = TypeList<ParallelBond, BrittleBeam, QuaternionBond, RicebalBond>;
 // Laws of the pairs that a joint plane cuts (physics.md §5): they replace the pair's bond and
 // contact law, and the experiment's [joint] table places them.
 using JointLaws = TypeList<SmoothJoint>;
+
+// A bond law whose failure envelope reads the interface totals, bond plus contact (physics.md
+// §4.4), splits its step into loads() and judge(); the engine judges it once the pair's contact
+// force of the step is known.
+template <class Law>
+constexpr bool judged_on_interface = requires(typename Law::State& s, const PairGeometry& g) {
+  Law::loads(s, g, 0.0);
+};
+// A law defined for disks and planar spheres only (2D).
+template <class Law>
+consteval bool is_planar_only() {
+  if constexpr (requires { Law::planar_only; })
+    return Law::planar_only;
+  else
+    return false;
+}
+template <class Law>
+constexpr bool planar_only_law = is_planar_only<Law>();
 
 // The chosen laws' parameters (the experiment's [contact] and [bond] tables).
 using ContactParams = ParamsVariant<ContactLaws>;

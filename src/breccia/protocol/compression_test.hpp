@@ -193,12 +193,16 @@ struct ConfinedCompressionTest {
                  "platens and lateral walls servo-controlled (four plane walls around a prism, a "
                  "cylindrical wall around a cylinder; physics.md §6.2), then loaded axially "
                  "while the lateral walls hold sigma_3."
-               : "Biaxial compression (2D): consolidation to sigma_3 with servo-controlled "
-                 "platens, then axial loading while flexible membranes on the outermost grain "
-                 "chains hold sigma_3 on the sides (physics.md §6.3; membrane = false: "
+               : "Biaxial compression (2D, seed 002): consolidation to sigma_3 with "
+                 "servo-controlled platens, then axial loading at constant platen speed to "
+                 "max_strain (10.3 %) while flexible membranes on the outermost grain chains "
+                 "hold sigma_3 on the sides (physics.md §6.3; membrane = false: "
                  "servo-controlled side walls, §6.2).";
+  // The biaxial test is seed 002's: loaded to 10.3 % axial strain whatever the peak, so that the
+  // post-peak stages, the shear band and the energy partition are all recorded.
   struct Params {
-    double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
+    double platen_speed = 0.02, ramp_time = 0.0;
+    double max_strain = Dim == 2 ? 0.103 : 0.03, stop_fraction = Dim == 2 ? 0.0 : 0.6;
     double confining_stress = 5e6, servo_relaxation = 0.5;
     bool membrane = Dim == 2;  // 2D: flexible membranes (true) or servo walls
   };

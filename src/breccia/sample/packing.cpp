@@ -147,7 +147,7 @@ const char* contact_law_name(const ContactModel& m) {
 Simulation vessel_simulation(const std::vector<PosRad>& particles, const Region& region,
                              const PackingSettings& s) {
   const bool planar = region.planar();
-  ParticleStore store(planar ? Dimension::Two : Dimension::Three, region.thickness);
+  ParticleStore store(planar ? Dimension::Two : Dimension::Three, region.thickness, s.planar_body);
   for (std::size_t i = 0; i < particles.size(); ++i)
     store.add(
         {.tag = i + 1, .position = particles[i].x, .radius = particles[i].r, .density = s.density});
@@ -287,7 +287,8 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> bond_pairs(const std::vecto
 // them; nothing moves before they are computed): the stress the test starts from (§6.5).
 std::array<double, 9> contact_stress_sum(const std::vector<PosRad>& p, const Region& region,
                                          const PackingSettings& s) {
-  ParticleStore store(region.planar() ? Dimension::Two : Dimension::Three, region.thickness);
+  ParticleStore store(region.planar() ? Dimension::Two : Dimension::Three, region.thickness,
+                      s.planar_body);
   for (std::size_t i = 0; i < p.size(); ++i)
     store.add({.tag = i + 1, .position = p[i].x, .radius = p[i].r, .density = s.density});
   EngineConfig cfg;

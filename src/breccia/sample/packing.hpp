@@ -35,7 +35,8 @@ struct PackingSettings {
   // Prism: width (x), depth (y), height (z); cylinder: diameter and height (axis z);
   // rectangle (2D): width (x) and height (y). Lowest corner (or the axis foot) at the origin.
   double width = 0.0, depth = 0.0, height = 0.0, diameter = 0.0;
-  double thickness = 1.0;  // 2D disk thickness
+  double thickness = 1.0;  // 2D thickness (disks), or planar spheres' effective thickness
+  PlanarBody planar_body = PlanarBody::Disk;  // 2D grain mass and inertia (physics.md §3.4)
   RadiusDistribution radii;
   double density = 2650.0;
   PackingMethod method = PackingMethod::Expansion;

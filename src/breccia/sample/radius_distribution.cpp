@@ -105,6 +105,29 @@ double RadiusDistribution::draw(std::uint64_t seed, std::uint64_t k) const {
   return r_min;
 }
 
+double RadiusDistribution::number_mean(std::uint64_t seed) const {
+  switch (kind) {
+    case Kind::Uniform:
+      return 0.5 * (r_min + r_max);
+    case Kind::Classes: {
+      const double power = planar ? 2.0 : 3.0;
+      double count = 0.0, sum = 0.0;
+      for (std::size_t c = 0; c < class_radius.size(); ++c) {
+        const double n = class_mass_fraction[c] / std::pow(class_radius[c], power);
+        count += n;
+        sum += n * class_radius[c];
+      }
+      return sum / count;
+    }
+    case Kind::Lognormal:
+      break;
+  }
+  constexpr std::uint64_t kDraws = 4096;
+  double sum = 0.0;
+  for (std::uint64_t k = 0; k < kDraws; ++k) sum += draw(seed, k);
+  return sum / static_cast<double>(kDraws);
+}
+
 std::vector<double> draw_radii_for_volume(const RadiusDistribution& dist, std::uint64_t seed,
                                           double solid_volume, bool planar, double thickness,
                                           std::size_t max_particles) {

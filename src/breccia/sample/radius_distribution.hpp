@@ -21,6 +21,9 @@ struct RadiusDistribution {
   void validate(const std::string& where) const;
   // The k-th radius drawn with `seed` (a pure function of seed and k).
   double draw(std::uint64_t seed, std::uint64_t k) const;
+  // Mean radius by number (what a large sample drawn from it has): exact for uniform and
+  // classes, the mean of 4,096 draws with `seed` for the truncated lognormal.
+  double number_mean(std::uint64_t seed) const;
   static Kind kind_from(const std::string& name, const std::string& where);
   static const char* name(Kind k);
 };
