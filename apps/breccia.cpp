@@ -192,6 +192,7 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
     std::string file, output;
     std::vector<std::string> overrides;
     std::vector<double> confining_mpa;
+    int jobs = 0;
   };
   auto o = std::make_shared<Options>();
   auto* c = app.add_subcommand(
@@ -202,6 +203,10 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
       ->required()
       ->expected(1, 100);
   c->add_option("--output", o->output, "folder that receives the sweep folder");
+  c->add_option("--jobs", o->jobs,
+                "runs at once, as separate processes sharing the cores (0: as many as the cores "
+                "allow, 1: one after another)")
+      ->check(CLI::Range(0, 1024));
   return {c, [o, command_line] {
             if (!o->output.empty())
               o->overrides.push_back("output.directory=\"" + o->output + "\"");
@@ -212,6 +217,9 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
             opt.interrupt = &breccia::interrupt_flag();
             opt.show_progress = spec.progress && isatty(fileno(stderr));
             opt.log = log_to_stderr;
+            opt.jobs = o->jobs;
+            std::error_code ec;
+            opt.executable = std::filesystem::read_symlink("/proc/self/exe", ec).string();
             std::vector<double> pa;
             for (double m : o->confining_mpa) pa.push_back(m * 1e6);
             const breccia::SweepResult r = breccia::run_sweep(spec, pa, opt);

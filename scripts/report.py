@@ -430,6 +430,121 @@ def run_report(folder):
     return figures
 
 
+def nan_if_none(v):
+    return float("nan") if v is None else float(v)
+
+
+def indicator_row_at(rows, strain):
+    """The indicator row of the last window that ends at or before `strain` (the state at it)."""
+    best = None
+    for r in rows:
+        try:
+            if float(r["axial_strain"]) <= strain + 1e-12:
+                best = r
+        except (KeyError, ValueError):
+            pass
+    return best or {}
+
+
+def run_trends(folder, entry):
+    """One test of a sweep as the numbers its trends plot: strengths at the stage boundaries,
+    crack modes, damage index, b-value and D2 at failure, and the energy partition at the end."""
+    run = os.path.join(folder, entry["folder"])
+    summary = json.load(open(os.path.join(run, "summary.json")))
+    ind = read_csv(os.path.join(run, "indicators.csv"))
+    peak = summary.get("axial_strain_at_peak") or 0.0
+    at_peak = indicator_row_at(ind, peak)
+    num = lambda row, k: float(row[k]) if row.get(k) not in (None, "", "nan") else float("nan")
+    t = {"confining_stress_mpa": entry["confining_stress_pa"] * 1e-6,
+         "peak_q_mpa": entry["peak_deviatoric_stress_pa"] * 1e-6,
+         "sigma1_at_peak_mpa": entry["sigma1_at_peak_pa"] * 1e-6,
+         "axial_strain_at_peak": peak,
+         "crack_initiation_mpa": nan_if_none(summary.get("crack_initiation_stress_pa")) * 1e-6,
+         "crack_damage_mpa": nan_if_none(summary.get("crack_damage_stress_pa")) * 1e-6,
+         "youngs_modulus_gpa": nan_if_none(entry.get("youngs_modulus_pa")) * 1e-9,
+         "cracks": summary.get("bonds_broken", 0)}
+    cracks = summary.get("cracks_tensile", 0) + summary.get("cracks_shear", 0)
+    t["shear_fraction_end"] = summary.get("cracks_shear", 0) / cracks if cracks else float("nan")
+    t["shear_fraction_at_peak"] = num(at_peak, "shear_fraction")
+    t["damage_index_at_peak"] = num(at_peak, "damage_index")
+    t["porosity_at_peak"] = num(at_peak, "porosity")
+    t["b_value_at_peak"] = num(at_peak, "b_value")
+    t["d2_at_peak"] = num(at_peak, "d2")
+    end = summary.get("energy_budget", {}).get("at_end", {})
+    w = end.get("external_work_j") or float("nan")
+    bond = end.get("bond_strain_j", {}).get("total", 0.0)
+    t["fracture_share"] = end.get("released_by_breaks_j", float("nan")) / w
+    t["friction_share"] = end.get("friction_j", float("nan")) / w
+    t["strain_energy_share"] = (bond + end.get("contact_strain_j", 0.0)) / w
+    t["damping_share"] = end.get("damping_j", float("nan")) / w
+    t["axial_strain_at_end"] = end.get("axial_strain", float("nan"))
+    return t
+
+
+def write_trends_csv(folder, trends):
+    if not trends:
+        return
+    path = os.path.join(folder, "trends.csv")
+    with open(path + ".tmp", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(trends[0].keys()))
+        w.writeheader()
+        for t in trends:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in t.items()})
+    os.replace(path + ".tmp", path)
+
+
+def trend_figures(trends, outdir, figures):
+    s3 = np.array([t["confining_stress_mpa"] for t in trends])
+    get = lambda k: np.array([t[k] for t in trends], dtype=float)
+    fig, ax = plt.subplots(2, 3, figsize=(12, 7))
+    a = ax[0, 0]
+    a.plot(s3, get("peak_q_mpa"), "ko-", label="peak q")
+    a.plot(s3, get("crack_damage_mpa"), "s--", color="tab:purple", label="crack damage q_cd")
+    a.plot(s3, get("crack_initiation_mpa"), "^--", color="tab:green", label="crack initiation q_ci")
+    a.set_ylabel("deviatoric stress q (MPa)")
+    a.set_title("Strength and stage boundaries", fontsize=9)
+    a.legend(fontsize=7)
+    a = ax[0, 1]
+    a.plot(s3, 100 * get("shear_fraction_end"), "ro-", label="whole test")
+    a.plot(s3, 100 * get("shear_fraction_at_peak"), "r^--", label="up to the peak")
+    a.set_ylabel("shear cracks (%)")
+    a.set_title("Shear-crack fraction", fontsize=9)
+    a.legend(fontsize=7)
+    a = ax[0, 2]
+    a.plot(s3, get("damage_index_at_peak"), "bo-")
+    a.axhline(0, color="0.6", lw=0.8)
+    a.set_ylabel("damage index at the peak")
+    a.set_title("Damage index (n - n0) / n0 at the peak: > 0 dilatant", fontsize=9)
+    a = ax[1, 0]
+    for key, label, c in (("fracture_share", "fracture (bond breaks)", "tab:red"),
+                          ("friction_share", "friction", "tab:orange"),
+                          ("strain_energy_share", "strain energy", "tab:blue"),
+                          ("damping_share", "damping", "0.5")):
+        a.plot(s3, 100 * get(key), "o-", color=c, label=label)
+    a.set_ylabel("% of external work (end of test)")
+    a.set_title("Energy partition", fontsize=9)
+    a.legend(fontsize=7)
+    a = ax[1, 1]
+    a.plot(s3, get("b_value_at_peak"), "ko-", label="b-value")
+    a.set_ylabel("b-value at failure")
+    a2 = a.twinx()
+    a2.plot(s3, get("d2_at_peak"), "gs--", label="D2")
+    a2.set_ylabel("D2 at failure", color="g")
+    a.set_title("b-value and D2 at failure (window ending at the peak)", fontsize=9)
+    a = ax[1, 2]
+    a.plot(s3, get("youngs_modulus_gpa"), "bo-")
+    a.set_ylabel("E_t50 (GPa)")
+    a3 = a.twinx()
+    a3.plot(s3, get("cracks"), "r^-")
+    a3.set_ylabel("cracks", color="r")
+    a.set_title("Modulus and crack count", fontsize=9)
+    for a in ax.flat:
+        a.set_xlabel("sigma3 (MPa)")
+    fig.suptitle("Trends with confinement", fontsize=10)
+    fig.tight_layout()
+    save(fig, outdir, "trends.png", figures)
+
+
 def sweep_report(folder):
     sweep = json.load(open(os.path.join(folder, "sweep.json")))
     runs = [r for r in sweep["runs"] if r.get("status") == "complete"]
@@ -457,24 +572,14 @@ def sweep_report(folder):
     ax.set_title("Strength envelope", fontsize=9)
     fig.tight_layout()
     save(fig, outdir, "mohr_coulomb.png", figures)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.8))
-    a1.plot(s3, [r["peak_deviatoric_stress_pa"] * 1e-6 for r in runs], "ko-")
-    a1.set_xlabel("sigma3 (MPa)")
-    a1.set_ylabel("peak q (MPa)")
-    a2.plot(s3, [(r.get("youngs_modulus_pa") or float("nan")) * 1e-9 for r in runs], "bo-",
-            label="E_t50 (GPa)")
-    a2.set_xlabel("sigma3 (MPa)")
-    a2.set_ylabel("E_t50 (GPa)")
-    a3 = a2.twinx()
-    a3.plot(s3, [r.get("cracks", 0) for r in runs], "r^-")
-    a3.set_ylabel("cracks", color="r")
-    fig.suptitle("Trends with confinement", fontsize=9)
-    fig.tight_layout()
-    save(fig, outdir, "trends.png", figures)
+    trends = [run_trends(folder, r) for r in runs]
+    write_trends_csv(folder, trends)
+    trend_figures(trends, outdir, figures)
     rows = [("experiment", sweep.get("experiment")), ("tests", len(runs)),
             ("Mohr-Coulomb", json.dumps({k: mc.get(k) for k in
                                          ("cohesion_pa", "friction_angle_deg", "r2")})),
-            ("Hoek-Brown", json.dumps({k: hb.get(k) for k in ("sigma_ci_pa", "m_i", "rms_residual_pa")}))]
+            ("Hoek-Brown", json.dumps({k: hb.get(k) for k in ("sigma_ci_pa", "m_i", "rms_residual_pa")})),
+            ("trend table", "trends.csv in the sweep folder (one row per test)")]
     write_html(folder, f"Breccia sweep report: {sweep.get('experiment', '')}", rows, figures,
                CAPTIONS)
     return figures

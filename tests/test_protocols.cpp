@@ -1,12 +1,14 @@
 // The lab-test registry (every registered test documented and run on a tiny sample) and the
 // Brazilian test: sigma_t from the platen force by the ISRM formula, a split along the loaded
 // diameter, bad discs refused.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
@@ -266,5 +268,51 @@ TEST(Biaxial, MembranesHoldSigma3ThroughThePeakAndTheShearBand) {
   }
   EXPECT_GT(rows, 20);
   EXPECT_GT(last_strain, 0.039);
+  fs::remove_all(dir);
+}
+
+TEST(Sweep, ParallelProcessesGiveWhatOneRunAfterAnotherGives) {
+  // The tiny biaxial at 0 and 1 MPa, swept as two child processes of one thread each and then in
+  // this process one after the other (with the machine's threads): the engine is deterministic
+  // whatever the thread count, so both sweeps give the same peaks to the last digit.
+  const fs::path dir = fs::temp_directory_path() / "breccia_sweep";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path file = dir / "tiny.toml";
+  std::ofstream(file) << "name = \"tiny\"\n" + tiny_experiment("biaxial");
+  std::map<int, nlohmann::json> sweeps;
+  for (const int jobs : {2, 1}) {
+    // The parallel sweep also writes its report: the trend table and figures.
+    const Result r = run(fmt::format("sweep --jobs {} --confining-mpa 0 1 --output {} {}{}", jobs,
+                                     (dir / std::to_string(jobs)).string(), file.string(),
+                                     jobs == 2 ? " --set output.plot=true" : ""));
+    ASSERT_EQ(r.code, 0) << r.out;
+    const fs::path folder = last_line(r.out);
+    sweeps[jobs] = nlohmann::json::parse(read(folder / "sweep.json"));
+    if (jobs == 2) {
+      EXPECT_NE(r.out.find("2 at a time"), std::string::npos) << r.out;
+      EXPECT_TRUE(fs::exists(folder / "experiments" / "tiny-confining-1MPa.toml"));
+      EXPECT_TRUE(fs::exists(folder / "report" / "trends.png"));
+      std::ifstream trends(folder / "trends.csv");
+      std::string header, line;
+      std::getline(trends, header);
+      for (const char* c : {"confining_stress_mpa", "peak_q_mpa", "shear_fraction_end",
+                            "damage_index_at_peak", "fracture_share", "strain_energy_share",
+                            "b_value_at_peak", "d2_at_peak", "crack_initiation_mpa"})
+        EXPECT_NE(header.find(c), std::string::npos) << c << " in " << header;
+      int rows = 0;
+      while (std::getline(trends, line)) ++rows;
+      EXPECT_EQ(rows, 2);
+    }
+  }
+  ASSERT_EQ(sweeps[2]["runs"].size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto &a = sweeps[2]["runs"][i], &b = sweeps[1]["runs"][i];
+    EXPECT_EQ(a["status"], "complete");
+    EXPECT_EQ(a["confining_stress_pa"], b["confining_stress_pa"]);
+    EXPECT_EQ(a["peak_deviatoric_stress_pa"], b["peak_deviatoric_stress_pa"]) << i;
+    EXPECT_EQ(a["cracks"], b["cracks"]) << i;
+  }
+  EXPECT_EQ(sweeps[2]["status"], "complete");
   fs::remove_all(dir);
 }

@@ -24,6 +24,11 @@ struct RunOptions {
   // Stop cleanly, with a checkpoint, once the engine has taken this many steps in all (0 = no
   // limit): for splitting a long test into jobs, and for the restart tests.
   std::uint64_t stop_at_step = 0;
+  // Sweeps: the runs at once as child processes of `executable` (the breccia command), each
+  // with its share of the cores (0: as many as cores allow; 1: one after another, in this
+  // process). Without an executable a sweep runs in this process.
+  int jobs = 0;
+  std::string executable;
 };
 
 struct ResumeOptions {

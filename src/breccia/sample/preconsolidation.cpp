@@ -95,14 +95,29 @@ Rows surround_with_rows(std::vector<PosRad>& all, const PackingSettings& s, cons
   return rows;
 }
 
-// Normal stiffness of one contact of a row disk at a small overlap: the servo's gain (§6.2).
-double row_contact_stiffness(const Simulation& sim, double rw, double thickness) {
+// Normal tangent stiffness of one contact of a row disk when it carries `force`: the servo's
+// gain (§6.2). A linear law has one stiffness; a Hertz contact stiffens with its load, and its
+// stiffness at first touch (near zero) would make the gain, and the rows, race.
+double row_contact_stiffness(const Simulation& sim, double rw, double thickness, double force) {
   double kn = 0.0;
   std::visit(
       [&]<class CL>(const ContactSet<CL>& c) {
         PairGeometry g =
             pair_geometry({}, rw, {2 * rw, 0, 0}, rw, {}, {}, {}, {}, 1, 1, true, thickness);
-        g.delta = 1e-4 * rw;
+        auto normal_force = [&](double delta) {
+          g.delta = delta;
+          typename CL::State st{};
+          PairDissipation dis;
+          return dot(CL::compute(c.params, st, g, 0.0, dis).force, g.n);
+        };
+        // Bisection on the overlap (the force grows with it), to 1e-6 of the radius at most.
+        double lo = 0.0, hi = 0.5 * rw;
+        for (int k = 0; k < 60 && normal_force(hi) < force; ++k) lo = hi, hi *= 2.0;
+        for (int k = 0; k < 60; ++k) {
+          const double mid = 0.5 * (lo + hi);
+          (normal_force(mid) < force ? lo : hi) = mid;
+        }
+        g.delta = std::max(hi, 1e-4 * rw);
         double ks = 0.0;
         CL::timestep_stiffness(c.params, g, kn, ks);
       },
@@ -135,7 +150,9 @@ RowServo servo_side_rows(Simulation& sim, const Rows& rows, std::size_t n, doubl
   const double rw = rows.radius;
   const double area =
       (P.pos_rad[rows.left.back()].x.y - P.pos_rad[rows.left.front()].x.y - 2.0 * rw) * thickness;
-  const double kn = row_contact_stiffness(sim, rw, thickness);
+  // Half the row's disks taken as its contacts (physics.md §6.2 needs their number).
+  const double contacts = static_cast<double>(std::max<std::size_t>(1, rows.left.size() / 2));
+  const double kn = row_contact_stiffness(sim, rw, thickness, target * area / contacts);
   auto width = [&] {
     return P.pos_rad[rows.right.front()].x.x - P.pos_rad[rows.left.front()].x.x - 2.0 * rw;
   };
