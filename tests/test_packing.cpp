@@ -339,3 +339,30 @@ TEST(Packing, BadSettingsAreRefused) {
   s.method = PackingMethod::Preconsolidation;  // a 2D procedure
   EXPECT_THROW(pack_sample(s), InputError);
 }
+
+TEST(Packing, PreconsolidationOfHertzPlanarSpheresHoldsItsStress) {
+  // RICEBAL's grains (physics.md §3.4, §7.3): planar spheres with Hertz-Mindlin contacts, whose
+  // stiffness grows with the load; the row servo's gain comes from the stiffness at the target
+  // load (from the stiffness at first touch the rows raced and never settled).
+  PackingSettings s;
+  s.method = PackingMethod::Preconsolidation;
+  s.shape = SampleShape::Rectangle;
+  s.width = 2.5e-3;
+  s.height = 4e-3;
+  s.radii.r_min = 20e-6;
+  s.radii.r_max = 80e-6;
+  s.thickness = 2 * 50e-6;  // t_eff = 2 R_bar
+  s.planar_body = PlanarBody::PlanarSphere;
+  s.porosity = 0.18;
+  s.preconsolidation_stress = 10e6;
+  s.bond_gap_tolerance = 0.0;
+  HertzMindlin::Params hm;
+  hm.shear_modulus = 10e9;
+  hm.poisson_ratio = 0.2;
+  s.contact = make_contact_model<HertzMindlin>(hm, hm);
+  const PackedSample p = pack_sample(s);
+  EXPECT_TRUE(p.report.converged) << p.report.stages.back().note;
+  EXPECT_NEAR(p.report.preconsolidation_stress_reached, 10e6, 0.02 * 10e6);
+  EXPECT_GT(p.report.locked_in_mean_stress, 5e6);
+  EXPECT_EQ(p.report.contact_law, "hertz_mindlin");
+}

@@ -316,3 +316,49 @@ TEST(Sweep, ParallelProcessesGiveWhatOneRunAfterAnotherGives) {
   EXPECT_EQ(sweeps[2]["status"], "complete");
   fs::remove_all(dir);
 }
+
+TEST(Biaxial, RicebalLaboratoryRunsEndToEnd) {
+  // Seed 002's test on a tiny sample: planar spheres with Hertz-Mindlin contacts, preconsolidated
+  // to 10 MPa between particle rows, RICEBAL bonds, membranes at 2 MPa, history rows every 0.001
+  // strain (the platens' full speed; the ramp makes the first rows closer).
+  const fs::path dir = fs::temp_directory_path() / "breccia_ricebal";
+  fs::remove_all(dir);
+  const std::string toml =
+      "[output]\nplot = false\nsnapshot_strain_interval = 0\nhistory_strain_interval = 0.001\n"
+      "[engine]\ndimension = 2\ndensity_scaling = 100\n"
+      "[material]\npreset = \"custom\"\n"
+      "[contact]\nlaw = \"hertz_mindlin\"\nshear_modulus = 10e9\npoisson_ratio = 0.2\n"
+      "friction = 0.5\n"
+      "[bond]\nlaw = \"ricebal_bond\"\nmodulus = 10e9\ntensile_strength = 20e6\ncohesion = 40e6\n"
+      "[sample]\nshape = \"rectangle\"\npacking = \"preconsolidation\"\nwidth = 1.2e-3\n"
+      "height = 2.4e-3\nradius_min = 30e-6\nradius_max = 70e-6\nporosity = 0.18\n"
+      "bond_gap_tolerance = 0.2e-6\n"
+      "[test]\nkind = \"biaxial\"\nconfining_stress = 2e6\nplaten_speed = 0.05\n"
+      "max_strain = 0.02\n";
+  fs::path folder;
+  const nlohmann::json s = run_file(dir, "ricebal", toml, &folder);
+  ASSERT_EQ(s["status"], "complete");
+  EXPECT_GT(s["bonds_initial"].get<int>(), 200);
+  EXPECT_GT(s["bonds_broken"].get<int>(), 0) << "the sample must crack";
+  EXPECT_EQ(s["sample"]["locked_in_stress"]["contact_law"], "hertz_mindlin");
+  const std::string resolved = read(folder / "experiment.toml");
+  EXPECT_NE(resolved.find("planar_body = \"planar_sphere\""), std::string::npos);
+  // Rows about 0.001 strain apart once the platens are at full speed.
+  std::ifstream in(folder / "history.csv");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  for (std::stringstream ss(line); std::getline(ss, line, ',');) header.push_back(line);
+  const auto strain_col = static_cast<std::size_t>(
+      std::find(header.begin(), header.end(), "axial_strain") - header.begin());
+  std::vector<double> strain;
+  while (std::getline(in, line)) {
+    std::vector<std::string> v;
+    for (std::stringstream ss(line); std::getline(ss, line, ',');) v.push_back(line);
+    strain.push_back(std::stod(v[strain_col]));
+  }
+  ASSERT_GE(strain.size(), 15u);
+  EXPECT_LE(strain.size(), 25u);
+  EXPECT_NEAR(strain.back() - strain[strain.size() - 2], 0.001, 1e-4);
+  fs::remove_all(dir);
+}

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <string>
 
@@ -244,6 +246,18 @@ TEST(PlanarSpheres, HertzContactsIn2DMakePlanarSpheresTwoMeanRadiiThick) {
       "\"planar_sphere\"\n",
       "lab.toml", {});
   EXPECT_EQ(lat.thickness, 2e-4);
+}
+
+TEST(PlanarSpheres, ASampleFileGivesItsOwnThickness) {
+  // A sample `breccia generate` wrote records its thickness; planar spheres read from it keep it.
+  const auto path = std::filesystem::temp_directory_path() / "breccia_planar_sample.geom";
+  std::ofstream(path) << "breccia-geometry 1\ndimension 2\nthickness 7e-05\nparticles 0\n";
+  const ExperimentSpec f =
+      parse_experiment("[engine]\ndimension = 2\n[sample]\nsource = \"file\"\nfile = \"" +
+                           path.string() + "\"\n[contact]\nlaw = \"hertz_mindlin\"\n",
+                       "lab.toml", {});
+  EXPECT_EQ(f.thickness, 7e-05);
+  std::filesystem::remove(path);
 }
 
 TEST(PlanarSpheres, RefusedCombinationsSayWhy) {

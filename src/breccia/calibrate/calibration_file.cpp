@@ -77,6 +77,8 @@ struct FreeKeyInfo {
 constexpr FreeKeyInfo kFreeKeys[] = {
     {"bond.modulus", CalibrationStage::Elastic},
     {"bond.stiffness_ratio", CalibrationStage::Elastic},
+    {"bond.shear_modulus", CalibrationStage::Elastic},
+    {"bond.poisson_ratio", CalibrationStage::Elastic},
     {"bond.radius_multiplier", CalibrationStage::Elastic},
     {"contact.modulus", CalibrationStage::Elastic},
     {"contact.stiffness_ratio", CalibrationStage::Elastic},
@@ -89,6 +91,7 @@ constexpr FreeKeyInfo kFreeKeys[] = {
     {"bond.moment_factor", CalibrationStage::Strength},
     {"contact.friction", CalibrationStage::Friction},
     {"bond.friction_angle_deg", CalibrationStage::Friction},
+    {"bond.friction", CalibrationStage::Friction},
 };
 
 std::string free_key_list() {

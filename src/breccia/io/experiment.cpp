@@ -1037,6 +1037,23 @@ toml::table parse_toml(const std::string& text, const std::string& source) {
   }
 }
 
+// The thickness a breccia-geometry file records in its header (0 when it has none), for planar
+// spheres read back from a sample `breccia generate` wrote (the calibration's trials do so).
+double geometry_file_thickness(const ExperimentSpec& s) {
+  std::filesystem::path p = s.geometry_file;
+  if (p.is_relative() && s.source != "built-in default")
+    p = std::filesystem::path(s.source).parent_path() / p;
+  std::ifstream in(p);
+  std::string key;
+  double value = 0.0;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream ls(line);
+    if (!(ls >> key) || key == "particles") break;
+    if (key == "thickness" && (ls >> value)) return value;
+  }
+  return 0.0;
+}
+
 // The 2D body and thickness that "auto" and an absent thickness stand for (physics.md §3.4):
 // planar spheres with Hertz-Mindlin contacts, and for them t_eff = 2 R_bar of the grains the
 // sample will have.
@@ -1059,10 +1076,14 @@ void resolve_planar_body(ExperimentSpec& s, bool thickness_given, const std::str
     d.planar = true;
     d.validate(source);
     s.thickness = 2.0 * d.number_mean(s.engine.seed);
+  } else if (const double t = s.sample_source == "file" ? geometry_file_thickness(s) : 0.0;
+             t > 0.0) {
+    s.thickness = t;  // the one the sample was generated with
   } else {
     throw InputError(source, "sample.thickness", "(not set)",
-                     "planar spheres read from a file need the effective thickness that turns "
-                     "their forces into stresses (physics.md §3.4: 2 x the mean radius)");
+                     "planar spheres read from a file that records no thickness need the "
+                     "effective thickness that turns their forces into stresses (physics.md "
+                     "§3.4: 2 x the mean radius)");
   }
 }
 

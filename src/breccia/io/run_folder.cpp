@@ -185,7 +185,7 @@ std::string sample_key(const ExperimentSpec& s) {
   // The packing cycles with the test's contact law: its parameters define the sample too.
   const std::size_t c0 = text.find("\n[contact]"), c1 = text.find("\n[bond]");
   if (c0 != std::string::npos && c1 != std::string::npos) sample_part += text.substr(c0, c1 - c0);
-  sample_part += "|packing-6";
+  sample_part += "|packing-7";
   return fmt::format("{:016x}", fnv1a64(sample_part));
 }
 
