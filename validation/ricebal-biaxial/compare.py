@@ -1,0 +1,93 @@
+#!/usr/bin/python3
+"""Seed 002's numbers beside a Breccia confining sweep (the sweep folder's sweep.json and the
+trends.csv its report writes). Prints Markdown tables for the README.
+
+Usage: compare.py SWEEP_FOLDER [--rock berea|lac_du_bonnet]
+"""
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+
+# Seed 002 (Berea sandstone model; text of sections 4.2-4.4 and figure captions 6 and 9).
+SEED = {
+    "berea": {
+        "sigma1_mpa": {0: 85.05, 15: 143.5, 50: 238.82},
+        "shear_percent": {0: 4, 15: 18, 50: 45},
+        "fracture_percent": {0: 14.9, 15: 10.3, 50: 10.8},
+        "strain_energy_percent": {0: 16.0, 15: 5.8, 50: 3.1},
+        "friction_percent": {0: 69, 50: 86},
+        "damage_index": "positive at 0-10 MPa (text; 0-2 MPa in the figure caption), negative above",
+        "cohesion_mpa": 29.3, "friction_angle_deg": 29.0,
+        "youngs_modulus_gpa": 4.28, "ucs_mpa": 85.0,
+        "stages_15": "I 0-2.3 %, II 2.4-3.8 % (peak), III 3.9-6.2 %, IV 6.3-10.3 %",
+    },
+    "lac_du_bonnet": {
+        "sigma1_mpa": {0: 233.79, 50: 433.63},
+        "shear_percent": {15: 2},
+        "fracture_percent": {0: 47.4, 50: 16.6},
+        "strain_energy_percent": {0: 6.2, 50: 1.6},
+        "friction_percent": {0: 46, 50: 81},
+        "damage_index": "positive at every confining stress, falling with it",
+        "cohesion_mpa": 54.6, "friction_angle_deg": 40.0,
+        "youngs_modulus_gpa": 42.47, "ucs_mpa": 234.0,
+        "stages_15": "I 0-0.7 %, II 0.8-1.5 % (peak), III 1.6-3.6 %, IV 3.7-10.3 %",
+    },
+}
+
+
+def fmt(v, spec="{:.1f}"):
+    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else spec.format(v)
+
+
+def main(folder, rock):
+    seed = SEED[rock]
+    sweep = json.load(open(os.path.join(folder, "sweep.json")))
+    trends_path = os.path.join(folder, "trends.csv")
+    if not os.path.exists(trends_path):
+        subprocess.run([os.path.join(os.path.dirname(__file__), "../../build/breccia"), "report",
+                        folder], check=True)
+    rows = list(csv.DictReader(open(trends_path)))
+    num = lambda r, k: float(r[k]) if r.get(k) not in (None, "", "nan") else float("nan")
+    print("| sigma_3 (MPa) | sigma_1 at peak (MPa): Breccia | seed 002 | peak strain (%) | "
+          "shear cracks (%): Breccia | seed | damage index at peak | fracture / W_ext (%): "
+          "Breccia | seed | strain energy / W_ext (%): Breccia | seed | friction / W_ext (%): "
+          "Breccia | seed | damping / W_ext (%) | b at peak | D2 at peak |")
+    print("|" + "---|" * 16)
+    for r in rows:
+        s3 = round(num(r, "confining_stress_mpa"))
+        print("| " + " | ".join([
+            str(s3), fmt(num(r, "sigma1_at_peak_mpa")), fmt(seed["sigma1_mpa"].get(s3)),
+            fmt(100 * num(r, "axial_strain_at_peak"), "{:.2f}"),
+            fmt(100 * num(r, "shear_fraction_end"), "{:.0f}"), fmt(seed["shear_percent"].get(s3), "{:.0f}"),
+            fmt(num(r, "damage_index_at_peak"), "{:+.4f}"),
+            fmt(100 * num(r, "fracture_share")), fmt(seed["fracture_percent"].get(s3)),
+            fmt(100 * num(r, "strain_energy_share")), fmt(seed["strain_energy_percent"].get(s3)),
+            fmt(100 * num(r, "friction_share"), "{:.0f}"), fmt(seed["friction_percent"].get(s3), "{:.0f}"),
+            fmt(100 * num(r, "damping_share"), "{:.0f}"),
+            fmt(num(r, "b_value_at_peak"), "{:.2f}"), fmt(num(r, "d2_at_peak"), "{:.2f}")]) + " |")
+    mc = sweep.get("mohr_coulomb", {})
+    print()
+    print("| envelope | Breccia | seed 002 model |")
+    print("|---|---|---|")
+    print(f"| cohesion (MPa) | {fmt(mc.get('cohesion_pa', float('nan')) * 1e-6)} | {seed['cohesion_mpa']} |")
+    print(f"| friction angle (deg) | {fmt(mc.get('friction_angle_deg'))} | {seed['friction_angle_deg']} |")
+    print(f"| R^2 of the fit | {fmt(mc.get('r2'), '{:.3f}')} | - |")
+    runs = {round(r["confining_stress_pa"] * 1e-6): r for r in sweep["runs"]}
+    if 0 in runs:
+        e = runs[0].get("youngs_modulus_pa")
+        print(f"| E_t50 at 0 MPa (GPa) | {fmt(e * 1e-9 if e else None, '{:.2f}')} | "
+              f"{seed['youngs_modulus_gpa']} |")
+    print(f"\nSeed 002's damage index: {seed['damage_index']}. Its stages at 15 MPa: "
+          f"{seed['stages_15']}.")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) < 2:
+        sys.exit(__doc__)
+    rock = "berea"
+    if "--rock" in sys.argv:
+        rock = sys.argv[sys.argv.index("--rock") + 1]
+    main(sys.argv[1], rock)
