@@ -465,7 +465,8 @@ def run_trends(folder, entry):
          "cracks": summary.get("bonds_broken", 0)}
     cracks = summary.get("cracks_tensile", 0) + summary.get("cracks_shear", 0)
     t["shear_fraction_end"] = summary.get("cracks_shear", 0) / cracks if cracks else float("nan")
-    t["shear_fraction_at_peak"] = num(at_peak, "shear_fraction")
+    cum = num(at_peak, "cumulative_cracks")
+    t["shear_fraction_at_peak"] = num(at_peak, "cumulative_shear") / cum if cum > 0 else float("nan")
     t["damage_index_at_peak"] = num(at_peak, "damage_index")
     t["porosity_at_peak"] = num(at_peak, "porosity")
     t["b_value_at_peak"] = num(at_peak, "b_value")
@@ -527,6 +528,9 @@ def trend_figures(trends, outdir, figures):
     a = ax[1, 1]
     a.plot(s3, get("b_value_at_peak"), "ko-", label="b-value")
     a.set_ylabel("b-value at failure")
+    if np.all(np.isnan(get("b_value_at_peak"))):
+        a.text(0.5, 0.5, "no b-value at the peak:\ntoo few events in its window", ha="center",
+               va="center", transform=a.transAxes, fontsize=8, color="0.4")
     a2 = a.twinx()
     a2.plot(s3, get("d2_at_peak"), "gs--", label="D2")
     a2.set_ylabel("D2 at failure", color="g")

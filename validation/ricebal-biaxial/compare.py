@@ -54,8 +54,8 @@ def main(folder, rock):
     print("| sigma_3 (MPa) | sigma_1 at peak (MPa): Breccia | seed 002 | peak strain (%) | "
           "shear cracks (%): Breccia | seed | damage index at peak | fracture / W_ext (%): "
           "Breccia | seed | strain energy / W_ext (%): Breccia | seed | friction / W_ext (%): "
-          "Breccia | seed | damping / W_ext (%) | b at peak | D2 at peak |")
-    print("|" + "---|" * 16)
+          "Breccia | seed | damping / W_ext (%) | friction + damping (%) | b at peak | D2 at peak |")
+    print("|" + "---|" * 17)
     for r in rows:
         s3 = round(num(r, "confining_stress_mpa"))
         print("| " + " | ".join([
@@ -67,6 +67,7 @@ def main(folder, rock):
             fmt(100 * num(r, "strain_energy_share")), fmt(seed["strain_energy_percent"].get(s3)),
             fmt(100 * num(r, "friction_share"), "{:.0f}"), fmt(seed["friction_percent"].get(s3), "{:.0f}"),
             fmt(100 * num(r, "damping_share"), "{:.0f}"),
+            fmt(100 * (num(r, "friction_share") + num(r, "damping_share")), "{:.0f}"),
             fmt(num(r, "b_value_at_peak"), "{:.2f}"), fmt(num(r, "d2_at_peak"), "{:.2f}")]) + " |")
     mc = sweep.get("mohr_coulomb", {})
     print()

@@ -1474,7 +1474,9 @@ std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int
       one.progress = false;
       const fs::path stem = dir / one.name;
       { std::ofstream(stem.string() + ".toml") << to_toml(one); }
-      if (opt.log) opt.log(fmt::format("sweep: started {} ({} threads)", one.name, threads));
+      if (opt.log)
+        opt.log(fmt::format("sweep: started {} ({} thread{})", one.name, threads,
+                            threads == 1 ? "" : "s"));
       running.emplace_back(spawn_run(opt.executable, stem.string() + ".toml",
                                      stem.string() + ".out", stem.string() + ".log"),
                            next);
@@ -1530,8 +1532,8 @@ SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& con
   if (jobs > 1 && !opt.executable.empty()) {
     const int threads = spec.threads > 0 ? per_run : std::max(1, cores / jobs);
     if (opt.log)
-      opt.log(fmt::format("sweep: {} runs, {} at a time ({} threads each)", specs.size(), jobs,
-                          threads));
+      opt.log(fmt::format("sweep: {} runs, {} at a time ({} thread{} each)", specs.size(), jobs,
+                          threads, threads == 1 ? "" : "s"));
     out.runs = sweep_in_processes(specs, jobs, threads, out.folder, opt);
   } else {
     // Copies of one sample: a generated sample is packed once and cached in the sweep folder.
