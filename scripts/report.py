@@ -463,6 +463,11 @@ def run_trends(folder, entry):
          "crack_damage_mpa": nan_if_none(summary.get("crack_damage_stress_pa")) * 1e-6,
          "youngs_modulus_gpa": nan_if_none(entry.get("youngs_modulus_pa")) * 1e-9,
          "cracks": summary.get("bonds_broken", 0)}
+    # Where stages I-III end (analysis.md §8), as axial strain; NaN where a stage is missing.
+    stages = summary.get("stages", {}).get("by_stage", [])
+    for k, label in enumerate(("I", "II", "III")):
+        end = stages[k].get("axial_strain_to") if k < len(stages) else None
+        t[f"stage_{label}_end_strain"] = nan_if_none(end)
     cracks = summary.get("cracks_tensile", 0) + summary.get("cracks_shear", 0)
     t["shear_fraction_end"] = summary.get("cracks_shear", 0) / cracks if cracks else float("nan")
     cum = num(at_peak, "cumulative_cracks")

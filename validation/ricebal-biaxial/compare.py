@@ -83,6 +83,12 @@ def main(folder, rock):
               f"{seed['youngs_modulus_gpa']} |")
     print(f"\nSeed 002's damage index: {seed['damage_index']}. Its stages at 15 MPa: "
           f"{seed['stages_15']}.")
+    for r in rows:
+        if round(num(r, "confining_stress_mpa")) == 15:
+            ends = [100 * num(r, f"stage_{k}_end_strain") for k in ("I", "II", "III")]
+            print(f"Breccia's stages at 15 MPa end at {fmt(ends[0], '{:.2f}')} % (I), "
+                  f"{fmt(ends[1], '{:.2f}')} % (II, the peak) and {fmt(ends[2], '{:.2f}')} % (III); "
+                  "IV runs to 10.3 %.")
 
 
 if __name__ == "__main__":
