@@ -297,18 +297,28 @@ TEST(Packing, InsertionIsDenseStressFreeAndWithinItsBounds) {
   EXPECT_EQ(again.geometry.bonds, p.geometry.bonds);
 }
 
-TEST(Packing, PreconsolidationReachesItsStressIn2D) {
+namespace {
+
+// A 2.5 x 4 mm rectangle preconsolidated to 10 MPa at porosity 0.18, without bonds.
+PackingSettings preconsolidated_rectangle() {
   PackingSettings s;
   s.method = PackingMethod::Preconsolidation;
   s.shape = SampleShape::Rectangle;
   s.width = 2.5e-3;
   s.height = 4e-3;
-  s.thickness = 0.1e-3;
-  s.radii.r_min = 10e-6 * 2;  // seed 002's 10-40 um, doubled to keep the test small
-  s.radii.r_max = 40e-6 * 2;
   s.porosity = 0.18;
   s.preconsolidation_stress = 10e6;
   s.bond_gap_tolerance = 0.0;
+  return s;
+}
+
+}  // namespace
+
+TEST(Packing, PreconsolidationReachesItsStressIn2D) {
+  PackingSettings s = preconsolidated_rectangle();
+  s.thickness = 0.1e-3;
+  s.radii.r_min = 10e-6 * 2;  // seed 002's 10-40 um, doubled to keep the test small
+  s.radii.r_max = 40e-6 * 2;
   s.contact = make_contact_model<LinearContact>({.modulus = 20e9}, {.modulus = 20e9});
   const PackedSample p = pack_sample(s);
   EXPECT_TRUE(p.report.converged);
@@ -344,18 +354,11 @@ TEST(Packing, PreconsolidationOfHertzPlanarSpheresHoldsItsStress) {
   // RICEBAL's grains (physics.md §3.4, §7.3): planar spheres with Hertz-Mindlin contacts, whose
   // stiffness grows with the load; the row servo's gain comes from the stiffness at the target
   // load (from the stiffness at first touch the rows raced and never settled).
-  PackingSettings s;
-  s.method = PackingMethod::Preconsolidation;
-  s.shape = SampleShape::Rectangle;
-  s.width = 2.5e-3;
-  s.height = 4e-3;
+  PackingSettings s = preconsolidated_rectangle();
   s.radii.r_min = 20e-6;
   s.radii.r_max = 80e-6;
   s.thickness = 2 * 50e-6;  // t_eff = 2 R_bar
   s.planar_body = PlanarBody::PlanarSphere;
-  s.porosity = 0.18;
-  s.preconsolidation_stress = 10e6;
-  s.bond_gap_tolerance = 0.0;
   HertzMindlin::Params hm;
   hm.shear_modulus = 10e9;
   hm.poisson_ratio = 0.2;

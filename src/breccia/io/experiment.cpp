@@ -14,7 +14,6 @@
 #include "breccia/core/format.hpp"
 #include "breccia/io/toml_node.hpp"
 #include "breccia/material/library.hpp"
-#include "breccia/sample/radius_distribution.hpp"
 
 namespace breccia {
 
@@ -963,6 +962,19 @@ Vec3 joint_normal(const JointPlaneSpec& p, int dimension) {
   return dimension == 2 ? Vec3{n.x, n.z, 0.0} * (1.0 / std::hypot(n.x, n.z)) : n;
 }
 
+RadiusDistribution radius_distribution(const ExperimentSpec& s) {
+  RadiusDistribution d;
+  d.kind = RadiusDistribution::kind_from(s.distribution, s.source);
+  d.r_min = s.radius_min;
+  d.r_max = s.radius_max;
+  d.mean = s.radius_mean;
+  d.sd = s.radius_sd;
+  d.class_radius = s.class_radii;
+  d.class_mass_fraction = s.class_mass_fractions;
+  d.planar = s.dimension == 2;
+  return d;
+}
+
 BondModuli bond_moduli(const ExperimentSpec& spec) {
   return visit_params<BondLaws>(
       spec.bond, []<class Law>(const typename Law::Params& p) { return Law::moduli(p); });
@@ -1065,15 +1077,7 @@ void resolve_planar_body(ExperimentSpec& s, bool thickness_given, const std::str
   if (s.sample_source == "lattice") {
     s.thickness = 2.0 * s.radius;
   } else if (s.sample_source == "generate") {
-    RadiusDistribution d;
-    d.kind = RadiusDistribution::kind_from(s.distribution, source);
-    d.r_min = s.radius_min;
-    d.r_max = s.radius_max;
-    d.mean = s.radius_mean;
-    d.sd = s.radius_sd;
-    d.class_radius = s.class_radii;
-    d.class_mass_fraction = s.class_mass_fractions;
-    d.planar = true;
+    const RadiusDistribution d = radius_distribution(s);  // 2D: counts disk areas
     d.validate(source);
     s.thickness = 2.0 * d.number_mean(s.engine.seed);
   } else if (const double t = s.sample_source == "file" ? geometry_file_thickness(s) : 0.0;

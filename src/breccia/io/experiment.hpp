@@ -10,6 +10,7 @@
 
 #include "breccia/engine/simulation.hpp"
 #include "breccia/protocol/registry.hpp"
+#include "breccia/sample/radius_distribution.hpp"
 
 namespace breccia {
 
@@ -120,6 +121,8 @@ double confining_stress(const ExperimentSpec& spec);
 // The compression test of the same loading at confining stress `sigma3`: "ucs" at 0, "triaxial"
 // (3D) or "biaxial" (2D) above (sweeps). Throws InputError for tests that are not compression.
 void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string& where);
+// The [sample] radius distribution of a generated sample.
+RadiusDistribution radius_distribution(const ExperimentSpec& spec);
 // The chosen bond law's moduli (bar-wave speed, crack energies).
 BondModuli bond_moduli(const ExperimentSpec& spec);
 // What the test knows about the sample before it is built.

@@ -212,13 +212,7 @@ PackingSettings packing_settings(const ExperimentSpec& s) {
   p.diameter = s.diameter;
   p.thickness = s.thickness;
   p.planar_body = s.grain_body();
-  p.radii.kind = RadiusDistribution::kind_from(s.distribution, s.source);
-  p.radii.r_min = s.radius_min;
-  p.radii.r_max = s.radius_max;
-  p.radii.mean = s.radius_mean;
-  p.radii.sd = s.radius_sd;
-  p.radii.class_radius = s.class_radii;
-  p.radii.class_mass_fraction = s.class_mass_fractions;
+  p.radii = radius_distribution(s);
   p.density = s.density;
   p.method = s.packing == "insertion"          ? PackingMethod::Insertion
              : s.packing == "preconsolidation" ? PackingMethod::Preconsolidation
