@@ -496,7 +496,8 @@ void Simulation::compute_pairs(ContactSet<CL>& c) {
       PairForce held;
       std::uint32_t held_law = kNoHeldBond, held_bond = 0;
       auto bond_part = [&]<class Law>(BondSet<Law>& set) {
-        const std::uint32_t b = set.bond_of_pair[k];
+        // A run uses one bond law: the others' sets are empty, and their index is not read.
+        const std::uint32_t b = set.size() == 0 ? BondSet<Law>::kNoBond : set.bond_of_pair[k];
         if (b != BondSet<Law>::kNoBond && set.intact[b]) {
           if (!have_geometry) g = geometry(i, j);
           have_geometry = true;
