@@ -128,9 +128,46 @@ TEST(PlatenCompression, BondsBrokenBeforeLoadingDoNotArmThePostPeakStop) {
   ASSERT_GT(before, 0u) << "the set-up must break bonds before loading";
   test.start(sim, 1000.0);
   AxialState s;
+  s.strain = 0.5 * st.max_strain;  // past the platens' ramp-up (see the next test)
   s.deviatoric = 1e6;
   EXPECT_FALSE(test.finished(s, before));
   s.deviatoric = 0.1e6;  // far below 0.6 of the peak
   EXPECT_FALSE(test.finished(s, before)) << "no bond has broken since loading began";
   EXPECT_TRUE(test.finished(s, before + 1));
+}
+
+TEST(PlatenCompression, ADipWhileThePlatensRampUpDoesNotStopTheTest) {
+  // The platens start from rest over a cosine ramp; the sample settles from consolidation then
+  // and its deviatoric stress may dip below a tiny early maximum while a bond breaks. That is
+  // no post-peak drop (a membrane-confined granite stopped at a "peak" of 0.01 MPa this way).
+  // The cosine ramp of length T at speed v closes the platens by v T in all: strain v T / h0.
+  ParticleStore ps(Dimension::Three, 1.0);
+  const double R = 0.5e-3;
+  std::uint64_t tag = 1;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 6; ++k)
+        ps.add({.tag = tag++, .position = {2 * R * i, 2 * R * j, 2 * R * k}, .radius = R,
+                .density = 2650});
+  EngineConfig cfg;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>({}, {}));
+  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  PlatenCompressionSettings st;
+  st.stop_fraction = 0.6;
+  st.platen_speed = 0.02;
+  st.ramp_time = 1e-3;
+  PlatenCompression test(sim, st, LateralBoundary::Prism, "ucs");
+  sim.initialise();
+  test.start(sim, 1000.0);
+  const double h0 = 5 * 2 * R + 2 * R;  // the platens touch the end grains
+  const double ramp_strain = st.platen_speed * st.ramp_time / h0;
+  AxialState s;
+  s.deviatoric = 1e4;
+  s.strain = 0.1 * ramp_strain;
+  EXPECT_FALSE(test.finished(s, 1));
+  s.deviatoric = -1e5;
+  s.strain = 0.9 * ramp_strain;
+  EXPECT_FALSE(test.finished(s, 1)) << "the platens are still ramping up";
+  s.strain = 1.1 * ramp_strain;
+  EXPECT_TRUE(test.finished(s, 1)) << "at full speed a drop after a broken bond stops the test";
 }

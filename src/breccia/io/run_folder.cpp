@@ -641,7 +641,7 @@ namespace {
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // 2: commit and trailing hash; 3: strain gauges; 4, 5: brittle-beam and quaternion bond sets;
 // 6: smooth joints; 7: the 2D side-wall servo's integral terms; 8: RICEBAL bond set
-constexpr std::uint32_t kCheckpointFormat = 8;
+constexpr std::uint32_t kCheckpointFormat = 9;
 constexpr const char* kCheckpointFile = "checkpoint.bin";
 
 // What the loading loop carries from one row to the next besides the engine, the protocol and

@@ -290,8 +290,11 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
   }
   peak_ = 0.0;
   // Bonds broken before axial loading (a preconsolidated sample unloading to sigma_3) do not
-  // arm the post-peak stop rule.
+  // arm the post-peak stop rule, nor does a dip while the platens ramp up: the sample settles
+  // from consolidation then, and a membrane-confined granite broke 3 bonds and stopped at a
+  // "peak" of 0.01 MPa. The cosine ramp closes the platens by platen_speed x ramp in all.
   broken_at_start_ = sim.cracks().size();
+  arm_strain_ = st_.platen_speed * ramp / h0_;
   return sim.step_count() - step0;
 }
 
@@ -334,8 +337,8 @@ bool PlatenCompression::finished(const AxialState& s, std::size_t broken_bonds) 
     stop_reason_ = "reached the maximum strain " + num(st_.max_strain);
     return true;
   }
-  if (st_.stop_fraction > 0.0 && broken_bonds > broken_at_start_ && peak_ > 0.0 &&
-      s.deviatoric < st_.stop_fraction * peak_) {
+  if (st_.stop_fraction > 0.0 && broken_bonds > broken_at_start_ && s.strain >= arm_strain_ &&
+      peak_ > 0.0 && s.deviatoric < st_.stop_fraction * peak_) {
     stop_reason_ = "deviatoric stress fell below " + num(st_.stop_fraction) + " of the peak";
     return true;
   }
@@ -384,6 +387,7 @@ void PlatenCompression::transfer(Archive& a) {
   a.value(waist0_);
   a.value(peak_);
   a.value(broken_at_start_);
+  a.value(arm_strain_);
   a.value(k_min_);
   a.value(consolidated_);
   a.value(servo_);

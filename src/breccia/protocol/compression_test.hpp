@@ -124,6 +124,7 @@ class PlatenCompression final : public Protocol {
   double gauge_length0_ = 0.0, waist0_[2] = {0.0, 0.0};
   double peak_ = 0.0, k_min_ = 0.0;
   std::size_t broken_at_start_ = 0;  // cracks when axial loading began
+  double arm_strain_ = 0.0;          // axial strain when the platens reach full speed
   bool consolidated_ = true;
   StressServo servo_;
   // The integral terms of the 2D side walls' servo (StressServo::drive_pi), a velocity each.
