@@ -147,7 +147,9 @@ TEST(PlatenCompression, ADipWhileThePlatensRampUpDoesNotStopTheTest) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       for (int k = 0; k < 6; ++k)
-        ps.add({.tag = tag++, .position = {2 * R * i, 2 * R * j, 2 * R * k}, .radius = R,
+        ps.add({.tag = tag++,
+                .position = {2 * R * i, 2 * R * j, 2 * R * k},
+                .radius = R,
                 .density = 2650});
   EngineConfig cfg;
   Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>({}, {}));

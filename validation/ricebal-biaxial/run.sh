@@ -3,6 +3,8 @@
 # membranes to 10.3 % axial strain) on a RICEBAL-style 2D rock, then the table beside the paper's
 # numbers (compare.py). Run by hand, not by CI: the sweep's ten tests go two at a time.
 #   validation/ricebal-biaxial/run.sh [experiment.toml] [output folder] [extra --set ...]
+# An experiment whose preset is lac_du_bonnet_2d (lac-du-bonnet-2d-small.toml) is compared with
+# the seed's granite.
 # The default experiment is berea-2d-small.toml (the 2D Berea preset on the calibration's sample
 # of about 860 grains: about 5 min per test on 1 thread); examples/biaxial-berea-2d.toml is the
 # same rock on about 3,400 grains (about 20 min per test).
@@ -16,4 +18,6 @@ sets=()
 for s in "$@"; do sets+=(--set "$s"); done
 folder=$("$root/build/breccia" sweep "$experiment" --output "$out" \
   --confining-mpa 0 2 5 10 15 20 25 30 40 50 "${sets[@]}" | tail -1)
-/usr/bin/python3 "$here/compare.py" "$folder"
+rock=berea
+grep -q 'lac_du_bonnet' "$experiment" && rock=lac_du_bonnet
+/usr/bin/python3 "$here/compare.py" "$folder" --rock "$rock"
