@@ -880,6 +880,346 @@ std::uint64_t history_step_interval(const ExperimentSpec& spec, const Protocol& 
   return static_cast<std::uint64_t>(std::clamp(std::round(steps), 1.0, 1e9));
 }
 
+// How the loading loop ended.
+struct LoopEnd {
+  std::string status = "complete";  // complete | interrupted
+  std::string reason;
+};
+
+// One history row: the tables (flushed, so an interrupted run keeps them), the analysed series,
+// the quality monitors (physics.md §6.1) and the snapshot when its strain is due.
+void record_row(const ExperimentSpec& spec, Session& ss, const AxialState& a) {
+  const Simulation& sim = ss.sim;
+  LoopState& L = ss.loop;
+  ss.history.record(sim, a);
+  ss.cracks.record(sim);
+  ss.history.flush();
+  ss.cracks.flush();
+  analysis::CompressionSeries& series = L.series;
+  series.axial_strain.push_back(a.strain);
+  series.deviatoric.push_back(a.deviatoric);
+  series.lateral_strain.push_back(a.lateral_strain);
+  series.volumetric_strain.push_back(a.volumetric_strain);
+  series.gauge_axial_strain.push_back(a.gauge_strain);
+  series.gauge_lateral_strain.push_back(a.gauge_lateral_strain);
+  series.broken_bonds.push_back(static_cast<double>(sim.cracks().size()));
+  const double fbar = 0.5 * (a.force_bottom + a.force_top);
+  const double stored = sim.ledger().bond.total() + sim.ledger().contact;
+  L.imbalance.push_back(fbar > 0.0 ? std::abs(a.force_top - a.force_bottom) / fbar : 0.0);
+  L.ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
+  const double sigma3 = ss.test->confining_stress();
+  if (sigma3 > 0.0) L.confine_err.push_back(std::abs(a.confining_stress - sigma3) / sigma3);
+  if (spec.snapshot_strain_interval > 0.0 && a.strain >= L.next_snapshot) {
+    ss.snaps.write(sim);
+    // The next multiple of the interval above this strain (one snapshot per row at most).
+    L.next_snapshot = spec.snapshot_strain_interval *
+                      (std::floor(a.strain / spec.snapshot_strain_interval) + 1.0);
+  }
+}
+
+void print_progress_bar(const Session& ss, const AxialState& a, double elapsed) {
+  const double frac = std::clamp(a.strain / ss.test->max_strain(), 1e-9, 1.0);
+  const int width = 30, fill = static_cast<int>(frac * width);
+  std::fprintf(stderr,
+               "\r[%s%s] strain %.4f  q %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
+               std::string(static_cast<std::size_t>(fill), '#').c_str(),
+               std::string(static_cast<std::size_t>(width - fill), '.').c_str(), a.strain,
+               a.deviatoric * 1e-6, ss.sim.cracks().size(), elapsed, elapsed * (1 - frac) / frac);
+  std::fflush(stderr);
+}
+
+// Steps the test until it stops, the run is interrupted (a signal or --stop-at-step: then it
+// saves a checkpoint first) or it fails. `wall` gives the run's wall time so far.
+LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptions& opt,
+                         const std::function<void()>& checkpoint,
+                         const std::function<double()>& wall,
+                         const std::function<void(const std::string&)>& log,
+                         const fs::path& folder) {
+  Simulation& sim = ss.sim;
+  Protocol& test = *ss.test;
+  const std::uint64_t interval = history_step_interval(spec, test, sim);
+  auto last_bar = std::chrono::steady_clock::now(), last_checkpoint = last_bar;
+  for (;;) {
+    const bool stop_step = opt.stop_at_step > 0 && sim.step_count() >= opt.stop_at_step;
+    if ((opt.interrupt && opt.interrupt->load()) || stop_step) {
+      // Between two steps: the checkpoint continues exactly from here.
+      checkpoint();
+      log(fmt::format("checkpoint at step {}: continue with `breccia resume {}`", sim.step_count(),
+                      folder.string()));
+      return {"interrupted",
+              stop_step ? fmt::format("stopped at step {} (--stop-at-step)", sim.step_count())
+                        : "interrupted by a signal"};
+    }
+    if (sim.step_count() % interval == 0) sim.request_energy_sample();
+    test.control(sim);
+    sim.step();
+    // Acoustic emission: cheap unless bonds broke in this step or an event is open.
+    if (sim.cracks().size() > ss.ae.cracks_seen() || ss.ae.has_open_events()) {
+      const AxialState now = test.measure(sim);
+      if (!ss.ae.configured()) configure_ae(spec, ss.loop, ss.ae);
+      ss.ae.after_step(sim, now.strain, now.deviatoric);
+    }
+    if ((sim.step_count() - 1) % interval != 0) continue;
+    const AxialState a = test.measure(sim);
+    check_finite_state(sim, a);
+    record_row(spec, ss, a);
+    if (test.finished(a, sim.cracks().size())) return {"complete", test.stop_reason()};
+    const auto now = std::chrono::steady_clock::now();
+    if (spec.checkpoint_interval > 0.0 &&
+        std::chrono::duration<double>(now - last_checkpoint).count() >= spec.checkpoint_interval) {
+      checkpoint();
+      last_checkpoint = std::chrono::steady_clock::now();
+    }
+    if (opt.show_progress && now - last_bar > std::chrono::milliseconds(250)) {
+      last_bar = now;
+      print_progress_bar(ss, a, wall());
+    }
+  }
+}
+
+// The quality monitors over the pre-peak rows once the load exceeds 10 % of the peak (the
+// ramp-up start is excluded), judged against physics.md §6.1's limits.
+struct QualityVerdict {
+  double imbalance_pre = 0.0, ke_ratio_pre = 0.0, confine_err_pre = 0.0, confine_err_all = 0.0;
+  // Before the first crack, kinetic energy comes from the loading alone; after, breaking bonds
+  // release it too (dynamic crack release that a lower platen speed does not remove).
+  double ke_ratio_intact = 0.0, imbalance_intact = 0.0;
+  bool quasi_static() const { return imbalance_pre <= 0.05 && ke_ratio_pre <= 1e-3; }
+  bool quasi_static_until_cracking() const {
+    return imbalance_intact <= 0.05 && ke_ratio_intact <= 1e-3;
+  }
+};
+
+QualityVerdict judge_quality(const LoopState& L, const analysis::CompressionResult& an) {
+  const analysis::CompressionSeries& series = L.series;
+  QualityVerdict q;
+  for (std::size_t k = 0; k < series.deviatoric.size(); ++k) {
+    if (k < L.confine_err.size()) q.confine_err_all = std::max(q.confine_err_all, L.confine_err[k]);
+    const bool pre = series.axial_strain[k] <= an.strain_at_peak &&
+                     series.deviatoric[k] >= 0.1 * an.peak_deviatoric;
+    if (!pre) continue;
+    q.imbalance_pre = std::max(q.imbalance_pre, L.imbalance[k]);
+    q.ke_ratio_pre = std::max(q.ke_ratio_pre, L.ke_ratio[k]);
+    if (series.broken_bonds[k] == 0.0) {
+      q.ke_ratio_intact = std::max(q.ke_ratio_intact, L.ke_ratio[k]);
+      q.imbalance_intact = std::max(q.imbalance_intact, L.imbalance[k]);
+    }
+    if (k < L.confine_err.size()) q.confine_err_pre = std::max(q.confine_err_pre, L.confine_err[k]);
+  }
+  return q;
+}
+
+std::vector<std::string> quality_warnings(const QualityVerdict& q, const Protocol& test) {
+  std::vector<std::string> w;
+  if (!q.quasi_static())
+    w.push_back(fmt::format(
+        "the test was not quasi-static before the peak: platen force imbalance {:.3g} (limit "
+        "0.05; {:.3g} before the first crack), kinetic/strain energy {:.3g} (limit 1e-3; {:.3g} "
+        "before the first crack); {}",
+        q.imbalance_pre, q.imbalance_intact, q.ke_ratio_pre, q.ke_ratio_intact,
+        q.quasi_static_until_cracking()
+            ? "the loading was quasi-static until bonds broke: the excess comes from bursts of "
+              "breaking bonds near the peak, which a lower platen speed does not remove"
+            : "lower test.platen_speed"));
+  if (test.confining_stress() > 0.0 && q.confine_err_pre > 0.02)
+    w.push_back(fmt::format(
+        "the confining stress left its 2 % band before the peak (largest error {:.3g} %)",
+        100 * q.confine_err_pre));
+  return w;
+}
+
+// The headline numbers of a finished (or interrupted) run, for the caller.
+RunResult run_result(const fs::path& folder, const Session& ss, const LoopEnd& end,
+                     const analysis::CompressionResult& an, double wall_seconds) {
+  const Simulation& sim = ss.sim;
+  RunResult r;
+  r.folder = folder.string();
+  r.status = end.status;
+  r.stop_reason = end.reason;
+  r.particles = sim.particles().size();
+  r.bonds = ss.loop.bonds_initial;
+  r.confining_stress = ss.test->confining_stress();
+  r.wall_seconds = wall_seconds;
+  r.steps = sim.step_count();
+  r.peak_stress = an.peak_deviatoric;
+  r.sigma1_at_peak = an.sigma1_at_peak;
+  r.strain_at_peak = an.strain_at_peak;
+  r.youngs_modulus = an.e_t50.valid ? an.e_t50.slope : std::nan("");
+  r.poisson = an.poisson;
+  r.cracks = sim.cracks().size();
+  for (const auto& c : sim.cracks()) (c.mode == CrackMode::Tensile ? r.tensile : r.shear)++;
+  r.energy_residual_relative = sim.ledger().residual_relative;
+  return r;
+}
+
+// The compression analysis's moduli, strengths and thresholds, with how each was read.
+json compression_fields(const analysis::CompressionResult& an) {
+  const char* strain_read = an.moduli_from_gauges
+                                ? "the axial strain of the sample gauge (grain layers at 1/4 and "
+                                  "3/4 of the height, clear of the platen contacts)"
+                                : "the platen approach strain";
+  return {
+      {"peak_reached", an.peak_reached},
+      {"peak_deviatoric_stress_pa", an.peak_deviatoric},
+      {"peak_deviatoric_stress_mpa", an.peak_deviatoric * 1e-6},
+      {"sigma1_at_peak_pa", an.sigma1_at_peak},
+      {"axial_strain_at_peak", an.strain_at_peak},
+      {"youngs_modulus_pa", an.e_t50.valid ? json(an.e_t50.slope) : json(nullptr)},
+      {"youngs_modulus_method",
+       fmt::format("ISRM tangent E_t50: least-squares slope of q = sigma_1 - sigma_3 against {} "
+                   "over pre-peak samples at {:.0f}-{:.0f} % of the peak",
+                   strain_read, 100 * an.e_t50_lo, 100 * an.e_t50_hi)},
+      {"youngs_modulus_fit",
+       {{"points", an.e_t50.points},
+        {"r2", an.e_t50.r2},
+        {"strain_column", an.moduli_from_gauges ? "gauge_axial_strain" : "axial_strain"},
+        {"window_fraction_of_peak", {an.e_t50_lo, an.e_t50_hi}}}},
+      {"youngs_modulus_platen_pa",
+       an.e_t50_platen.valid ? json(an.e_t50_platen.slope) : json(nullptr)},
+      {"youngs_modulus_average_pa", an.e_av.valid ? json(an.e_av.slope) : json(nullptr)},
+      {"youngs_modulus_secant50_pa", nan_null(an.e_s50)},
+      {"poisson_ratio", nan_null(an.poisson)},
+      {"poisson_ratio_method",
+       an.moduli_from_gauges ? "-slope of the gauge lateral strain (lateral-face grains of the "
+                               "middle half) against the gauge axial strain, E_t50 window"
+                             : "-slope of the lateral strain against the platen approach "
+                               "strain, E_t50 window"},
+      {"crack_initiation_stress_pa", nan_null(an.crack_initiation)},
+      {"crack_initiation_method", "q when the broken bonds reach 5 % of those at the peak"},
+      {"crack_damage_stress_pa", nan_null(an.crack_damage)},
+      {"residual_strength_pa", nan_null(an.residual)},
+      {"brittleness_index", nan_null(an.brittleness)},
+      {"analysis_flags", an.flags}};
+}
+
+json quality_fields(const QualityVerdict& q) {
+  return {{"quasi_static",
+           {{"ok", q.quasi_static()},
+            {"max_platen_force_imbalance_before_peak", q.imbalance_pre},
+            {"max_kinetic_to_strain_energy_before_peak", q.ke_ratio_pre},
+            {"max_kinetic_to_strain_energy_before_first_crack", q.ke_ratio_intact},
+            {"max_platen_force_imbalance_before_first_crack", q.imbalance_intact}}},
+          {"confining_stress_error",
+           {{"max_relative_before_peak", q.confine_err_pre},
+            {"max_relative_overall", q.confine_err_all}}}};
+}
+
+// The Brazilian test reads its peak as the tensile strength.
+void add_brazilian_fields(json& summary, const Protocol& test,
+                          const analysis::CompressionResult& an) {
+  const auto* b = dynamic_cast<const BrazilianTest*>(&test);
+  if (!b) return;
+  summary["tensile_strength_pa"] = an.peak_deviatoric;
+  summary["tensile_strength_mpa"] = an.peak_deviatoric * 1e-6;
+  summary["tensile_strength_method"] =
+      "sigma_t = 2 F / (pi D t) at the largest mean platen force F (ISRM Brazilian test)";
+  summary["peak_force_n"] =
+      0.5 * an.peak_deviatoric * std::numbers::pi * b->diameter() * b->thickness();
+  summary["disc_diameter_m"] = b->diameter();
+  summary["disc_thickness_m"] = b->thickness();
+}
+
+// summary.json: the run, the test, the analysis, the quality verdict and the warnings.
+json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult& r,
+                 const analysis::CompressionResult& an, const QualityVerdict& q,
+                 const std::vector<std::string>& warnings, const json& manifest) {
+  const Simulation& sim = ss.sim;
+  const Protocol& test = *ss.test;
+  json summary{{"status", r.status},
+               {"stop_reason", r.stop_reason},
+               {"experiment", spec.name},
+               {"test", test.label()},
+               {"test_kind", test.kind()},
+               {"confining_stress_pa", test.confining_stress()},
+               {"lateral_boundary", test.lateral_boundary()},
+               {"particles", r.particles},
+               {"bonds_initial", r.bonds},
+               {"bonds_broken", r.cracks},
+               {"cracks_tensile", r.tensile},
+               {"cracks_shear", r.shear},
+               {"steps", r.steps},
+               {"consolidation_steps", ss.loop.consolidation_steps},
+               {"simulated_time_s", sim.time()},
+               {"time_step_s", sim.time_step()},
+               {"density_scaling", spec.density_scaling},
+               {"wall_seconds", r.wall_seconds},
+               {"particle_steps_per_second",
+                static_cast<double>(r.particles) * static_cast<double>(r.steps) / r.wall_seconds}};
+  summary.update(compression_fields(an));
+  summary.update(quality_fields(q));
+  summary.update(json{{"platen_speed_m_per_s", test.platen_speed()},
+                      {"strain_rate_per_s", 2.0 * test.platen_speed() / test.length0()},
+                      {"sample_height_m", test.length0()},
+                      {"sample_area_m2", test.area0()},
+                      {"sample", manifest.value("sample", json::object())},
+                      {"energy", ledger_json(sim.ledger())},
+                      {"snapshots", ss.snaps.count()},
+                      {"warnings", warnings}});
+  if (manifest.contains("resumed")) summary["resumed"] = manifest["resumed"];
+  if (!spec.joint_planes.empty())
+    summary["joints"] = {{"law", spec.joint_law()},
+                         {"planes", spec.joint_planes.size()},
+                         {"elements", sim.joint_count()},
+                         {"bonded_at_end", sim.bonded_joints()}};
+  summary["crack_pattern"] = crack_pattern_json(test, sim);
+  add_brazilian_fields(summary, test, an);
+  return summary;
+}
+
+// The run folder's files in the manifest; a finished run drops its checkpoint, an interrupted
+// one keeps it for `breccia resume`. Plots and the report are made here when asked for.
+void list_run_files(const ExperimentSpec& spec, const fs::path& folder, const LoopEnd& end,
+                    json& manifest, const std::function<void(const std::string&)>& log) {
+  manifest["files"] = {"experiment.toml",     "history.csv",
+                       "cracks.csv",          "events.csv",
+                       "indicators.csv",      "b_value_windows.csv",
+                       "d2_windows.csv",      "fragments.csv",
+                       "summary.json",        "snapshots/particles.pvd",
+                       "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
+  if (end.status == "complete") {
+    fs::remove(folder / kCheckpointFile);
+    manifest.erase("checkpoint");
+  } else {
+    manifest["files"].push_back(kCheckpointFile);
+  }
+  if (!spec.plot) return;
+  make_plot(folder, log);
+  if (fs::exists(folder / "stress_strain.png")) manifest["files"].push_back("stress_strain.png");
+  if (fs::exists(folder / "report.html")) {
+    manifest["files"].push_back("report.html");
+    manifest["files"].push_back("report/");
+  }
+}
+
+// After the loop: the recorders' last rows, the analysis, summary.json and the manifest.
+RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json& manifest,
+                       Session& ss, const LoopEnd& end, const std::function<double()>& wall,
+                       const std::function<void(const std::string&)>& log) {
+  Simulation& sim = ss.sim;
+  ss.ae.finish();
+  ss.cracks.record(sim);
+  ss.cracks.flush();
+  ss.history.flush();
+  ss.snaps.write(sim);
+  const analysis::CompressionResult an = analysis::analyse_compression(ss.loop.series);
+  const RunResult result = run_result(folder, ss, end, an, wall());
+  const QualityVerdict q = judge_quality(ss.loop, an);
+  std::vector<std::string> warnings = ss.loop.warnings;  // those of the set-up, logged already
+  for (const std::string& w : quality_warnings(q, *ss.test)) {
+    log("warning: " + w);
+    warnings.push_back(w);
+  }
+  json summary = run_summary(spec, ss, result, an, q, warnings, manifest);
+  // Failure analysis: events, indicators, stages, fragments, energy budget (analysis.md §2-§9).
+  const json failure = write_failure_analysis(
+      folder, FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0,
+                            ss.loop.porosity0, ss.loop.length_min, ss.loop.wave_speed_method});
+  for (const auto& [key, value] : failure.items()) summary[key] = value;
+  write_json(folder / "summary.json", summary);
+  list_run_files(spec, folder, end, manifest, log);
+  return result;
+}
+
 // Loads the loop, runs it to its end (or the next interruption), and writes the summary and the
 // final manifest. `t_start` is when this session began.
 RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& manifest, Session& ss,
@@ -887,18 +1227,14 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
   auto log = [&](const std::string& m) {
     if (opt.log) opt.log(m);
   };
-  RunResult result;
-  result.folder = folder.string();
   auto wall = [&] {
     return ss.loop.wall_seconds +
            std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   };
-  auto finish = [&](const std::string& status, const std::string& reason) {
-    result.status = status;
-    result.stop_reason = reason;
+  auto finish = [&](const std::string& status, const std::string& reason, double seconds) {
     manifest["status"] = status;
     manifest["stop_reason"] = reason;
-    manifest["wall_seconds"] = result.wall_seconds;
+    manifest["wall_seconds"] = seconds;
     write_json(folder / "manifest.json", manifest);
   };
   auto checkpoint = [&] {
@@ -912,274 +1248,16 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
                               {"resume_command", "breccia resume " + folder.string()}};
     write_json(folder / "manifest.json", manifest);
   };
-
   try {
-    Simulation& sim = ss.sim;
-    Protocol& test = *ss.test;
-    LoopState& L = ss.loop;
-    analysis::CompressionSeries& series = L.series;
-    result.particles = sim.particles().size();
-    result.bonds = L.bonds_initial;
-    result.confining_stress = test.confining_stress();
-    const std::uint64_t interval = history_step_interval(spec, test, sim);
-    std::string stop = "";
-    std::string status = "complete";
-    auto last_bar = std::chrono::steady_clock::now(), last_checkpoint = last_bar;
-    for (;;) {
-      const bool stop_step = opt.stop_at_step > 0 && sim.step_count() >= opt.stop_at_step;
-      if ((opt.interrupt && opt.interrupt->load()) || stop_step) {
-        // Between two steps: the checkpoint continues exactly from here.
-        checkpoint();
-        status = "interrupted";
-        stop = stop_step ? fmt::format("stopped at step {} (--stop-at-step)", sim.step_count())
-                         : "interrupted by a signal";
-        log(fmt::format("checkpoint at step {}: continue with `breccia resume {}`",
-                        sim.step_count(), folder.string()));
-        break;
-      }
-      if (sim.step_count() % interval == 0) sim.request_energy_sample();
-      test.control(sim);
-      sim.step();
-      // Acoustic emission: cheap unless bonds broke in this step or an event is open.
-      if (sim.cracks().size() > ss.ae.cracks_seen() || ss.ae.has_open_events()) {
-        const AxialState now = test.measure(sim);
-        if (!ss.ae.configured()) configure_ae(spec, L, ss.ae);
-        ss.ae.after_step(sim, now.strain, now.deviatoric);
-      }
-      if ((sim.step_count() - 1) % interval != 0) continue;
-      const AxialState a = test.measure(sim);
-      check_finite_state(sim, a);
-      ss.history.record(sim, a);
-      ss.cracks.record(sim);
-      ss.history.flush();
-      ss.cracks.flush();
-      series.axial_strain.push_back(a.strain);
-      series.deviatoric.push_back(a.deviatoric);
-      series.lateral_strain.push_back(a.lateral_strain);
-      series.volumetric_strain.push_back(a.volumetric_strain);
-      series.gauge_axial_strain.push_back(a.gauge_strain);
-      series.gauge_lateral_strain.push_back(a.gauge_lateral_strain);
-      series.broken_bonds.push_back(static_cast<double>(sim.cracks().size()));
-      // Quality monitors, judged after the run over the pre-peak rows (physics.md §6.1).
-      const double fbar = 0.5 * (a.force_bottom + a.force_top);
-      const double stored = sim.ledger().bond.total() + sim.ledger().contact;
-      L.imbalance.push_back(fbar > 0.0 ? std::abs(a.force_top - a.force_bottom) / fbar : 0.0);
-      L.ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
-      if (test.confining_stress() > 0.0)
-        L.confine_err.push_back(std::abs(a.confining_stress - test.confining_stress()) /
-                                test.confining_stress());
-      if (spec.snapshot_strain_interval > 0.0 && a.strain >= L.next_snapshot) {
-        ss.snaps.write(sim);
-        // The next multiple of the interval above this strain (one snapshot per row at most).
-        L.next_snapshot = spec.snapshot_strain_interval *
-                          (std::floor(a.strain / spec.snapshot_strain_interval) + 1.0);
-      }
-      if (test.finished(a, sim.cracks().size())) {
-        stop = test.stop_reason();
-        break;
-      }
-      const auto now = std::chrono::steady_clock::now();
-      if (spec.checkpoint_interval > 0.0 &&
-          std::chrono::duration<double>(now - last_checkpoint).count() >=
-              spec.checkpoint_interval) {
-        checkpoint();
-        last_checkpoint = std::chrono::steady_clock::now();
-      }
-      if (opt.show_progress && now - last_bar > std::chrono::milliseconds(250)) {
-        last_bar = now;
-        const double frac = std::clamp(a.strain / test.max_strain(), 1e-9, 1.0);
-        const double el = wall();
-        const int width = 30, fill = static_cast<int>(frac * width);
-        std::fprintf(stderr,
-                     "\r[%s%s] strain %.4f  q %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
-                     std::string(static_cast<std::size_t>(fill), '#').c_str(),
-                     std::string(static_cast<std::size_t>(width - fill), '.').c_str(), a.strain,
-                     a.deviatoric * 1e-6, sim.cracks().size(), el, el * (1 - frac) / frac);
-        std::fflush(stderr);
-      }
-    }
+    const LoopEnd end = run_loading_loop(spec, ss, opt, checkpoint, wall, log, folder);
     if (opt.show_progress) std::fprintf(stderr, "\n");
-    ss.ae.finish();
-    ss.cracks.record(sim);
-    ss.cracks.flush();
-    ss.history.flush();
-    ss.snaps.write(sim);
-
-    result.wall_seconds = wall();
-    result.steps = sim.step_count();
-    const analysis::CompressionResult an = analysis::analyse_compression(series);
-    result.peak_stress = an.peak_deviatoric;
-    result.sigma1_at_peak = an.sigma1_at_peak;
-    result.strain_at_peak = an.strain_at_peak;
-    result.youngs_modulus = an.e_t50.valid ? an.e_t50.slope : std::nan("");
-    result.poisson = an.poisson;
-    result.cracks = sim.cracks().size();
-    for (const auto& c : sim.cracks())
-      (c.mode == CrackMode::Tensile ? result.tensile : result.shear)++;
-    result.energy_residual_relative = sim.ledger().residual_relative;
-    // Pre-peak rows once the load exceeds 10 % of the peak (the ramp-up start is excluded).
-    double imbalance_pre = 0.0, ke_ratio_pre = 0.0, confine_err_pre = 0.0, confine_err_all = 0.0;
-    double ke_ratio_intact = 0.0, imbalance_intact = 0.0;
-    for (std::size_t k = 0; k < series.deviatoric.size(); ++k) {
-      if (k < L.confine_err.size()) confine_err_all = std::max(confine_err_all, L.confine_err[k]);
-      const bool pre = series.axial_strain[k] <= an.strain_at_peak &&
-                       series.deviatoric[k] >= 0.1 * an.peak_deviatoric;
-      if (!pre) continue;
-      imbalance_pre = std::max(imbalance_pre, L.imbalance[k]);
-      ke_ratio_pre = std::max(ke_ratio_pre, L.ke_ratio[k]);
-      // Before cracking began, kinetic energy comes from the loading alone; after, breaking
-      // bonds release it too (dynamic crack release that a lower platen speed does not remove).
-      if (series.broken_bonds[k] == 0.0) {
-        ke_ratio_intact = std::max(ke_ratio_intact, L.ke_ratio[k]);
-        imbalance_intact = std::max(imbalance_intact, L.imbalance[k]);
-      }
-      if (k < L.confine_err.size()) confine_err_pre = std::max(confine_err_pre, L.confine_err[k]);
-    }
-    std::vector<std::string> warnings = L.warnings;
-    const std::size_t logged = warnings.size();  // those of the set-up were logged already
-    bool quasi_static = imbalance_pre <= 0.05 && ke_ratio_pre <= 1e-3;
-    if (!quasi_static) {
-      const bool crack_release = imbalance_intact <= 0.05 && ke_ratio_intact <= 1e-3;
-      warnings.push_back(fmt::format(
-          "the test was not quasi-static before the peak: platen force imbalance {:.3g} (limit "
-          "0.05; {:.3g} before the first crack), kinetic/strain energy {:.3g} (limit 1e-3; {:.3g} "
-          "before the first crack); {}",
-          imbalance_pre, imbalance_intact, ke_ratio_pre, ke_ratio_intact,
-          crack_release ? "the loading was quasi-static until bonds broke: the excess comes from "
-                          "bursts of breaking bonds near the peak, which a lower platen speed "
-                          "does not remove"
-                        : "lower test.platen_speed"));
-    }
-    if (test.confining_stress() > 0.0 && confine_err_pre > 0.02)
-      warnings.push_back(fmt::format(
-          "the confining stress left its 2 % band before the peak (largest error {:.3g} %)",
-          100 * confine_err_pre));
-    for (std::size_t k = logged; k < warnings.size(); ++k) log("warning: " + warnings[k]);
-    json summary{
-        {"status", status},
-        {"stop_reason", stop},
-        {"experiment", spec.name},
-        {"test", test.label()},
-        {"test_kind", test.kind()},
-        {"confining_stress_pa", test.confining_stress()},
-        {"lateral_boundary", test.lateral_boundary()},
-        {"particles", result.particles},
-        {"bonds_initial", result.bonds},
-        {"bonds_broken", result.cracks},
-        {"cracks_tensile", result.tensile},
-        {"cracks_shear", result.shear},
-        {"steps", result.steps},
-        {"consolidation_steps", L.consolidation_steps},
-        {"simulated_time_s", sim.time()},
-        {"time_step_s", sim.time_step()},
-        {"density_scaling", spec.density_scaling},
-        {"wall_seconds", result.wall_seconds},
-        {"particle_steps_per_second", static_cast<double>(result.particles) *
-                                          static_cast<double>(result.steps) / result.wall_seconds},
-        {"peak_reached", an.peak_reached},
-        {"peak_deviatoric_stress_pa", an.peak_deviatoric},
-        {"peak_deviatoric_stress_mpa", an.peak_deviatoric * 1e-6},
-        {"sigma1_at_peak_pa", an.sigma1_at_peak},
-        {"axial_strain_at_peak", an.strain_at_peak},
-        {"youngs_modulus_pa", an.e_t50.valid ? json(an.e_t50.slope) : json(nullptr)},
-        {"youngs_modulus_method",
-         fmt::format("ISRM tangent E_t50: least-squares slope of q = sigma_1 - sigma_3 against "
-                     "{} over pre-peak samples at {:.0f}-{:.0f} % of the peak",
-                     an.moduli_from_gauges
-                         ? "the axial strain of the sample gauge (grain layers at 1/4 and 3/4 "
-                           "of the height, clear of the platen contacts)"
-                         : "the platen approach strain",
-                     100 * an.e_t50_lo, 100 * an.e_t50_hi)},
-        {"youngs_modulus_fit",
-         {{"points", an.e_t50.points},
-          {"r2", an.e_t50.r2},
-          {"strain_column", an.moduli_from_gauges ? "gauge_axial_strain" : "axial_strain"},
-          {"window_fraction_of_peak", {an.e_t50_lo, an.e_t50_hi}}}},
-        {"youngs_modulus_platen_pa",
-         an.e_t50_platen.valid ? json(an.e_t50_platen.slope) : json(nullptr)},
-        {"youngs_modulus_average_pa", an.e_av.valid ? json(an.e_av.slope) : json(nullptr)},
-        {"youngs_modulus_secant50_pa", nan_null(an.e_s50)},
-        {"poisson_ratio", nan_null(an.poisson)},
-        {"poisson_ratio_method",
-         an.moduli_from_gauges ? "-slope of the gauge lateral strain (lateral-face grains of "
-                                 "the middle half) against the gauge axial strain, E_t50 window"
-                               : "-slope of the lateral strain against the platen approach "
-                                 "strain, E_t50 window"},
-        {"crack_initiation_stress_pa", nan_null(an.crack_initiation)},
-        {"crack_initiation_method", "q when the broken bonds reach 5 % of those at the peak"},
-        {"crack_damage_stress_pa", nan_null(an.crack_damage)},
-        {"residual_strength_pa", nan_null(an.residual)},
-        {"brittleness_index", nan_null(an.brittleness)},
-        {"analysis_flags", an.flags},
-        {"quasi_static",
-         {{"ok", quasi_static},
-          {"max_platen_force_imbalance_before_peak", imbalance_pre},
-          {"max_kinetic_to_strain_energy_before_peak", ke_ratio_pre},
-          {"max_kinetic_to_strain_energy_before_first_crack", ke_ratio_intact},
-          {"max_platen_force_imbalance_before_first_crack", imbalance_intact}}},
-        {"confining_stress_error",
-         {{"max_relative_before_peak", confine_err_pre},
-          {"max_relative_overall", confine_err_all}}},
-        {"platen_speed_m_per_s", test.platen_speed()},
-        {"strain_rate_per_s", 2.0 * test.platen_speed() / test.length0()},
-        {"sample_height_m", test.length0()},
-        {"sample_area_m2", test.area0()},
-        {"sample", manifest.value("sample", json::object())},
-        {"energy", ledger_json(sim.ledger())},
-        {"snapshots", ss.snaps.count()},
-        {"warnings", warnings}};
-    if (manifest.contains("resumed")) summary["resumed"] = manifest["resumed"];
-    if (!spec.joint_planes.empty())
-      summary["joints"] = {{"law", spec.joint_law()},
-                           {"planes", spec.joint_planes.size()},
-                           {"elements", sim.joint_count()},
-                           {"bonded_at_end", sim.bonded_joints()}};
-    summary["crack_pattern"] = crack_pattern_json(test, sim);
-    if (const auto* b = dynamic_cast<const BrazilianTest*>(&test)) {
-      summary["tensile_strength_pa"] = an.peak_deviatoric;
-      summary["tensile_strength_mpa"] = an.peak_deviatoric * 1e-6;
-      summary["tensile_strength_method"] =
-          "sigma_t = 2 F / (pi D t) at the largest mean platen force F (ISRM Brazilian test)";
-      summary["peak_force_n"] =
-          0.5 * an.peak_deviatoric * std::numbers::pi * b->diameter() * b->thickness();
-      summary["disc_diameter_m"] = b->diameter();
-      summary["disc_thickness_m"] = b->thickness();
-    }
-    // Failure analysis: events, indicators, stages, fragments, energy budget (analysis.md §2-§9).
-    const json failure = write_failure_analysis(
-        folder, FailureInputs{spec, sim, ss.ae, series, an, L.volume0, L.porosity0, L.length_min,
-                              L.wave_speed_method});
-    for (const auto& [key, value] : failure.items()) summary[key] = value;
-    write_json(folder / "summary.json", summary);
-    manifest["files"] = {"experiment.toml",     "history.csv",
-                         "cracks.csv",          "events.csv",
-                         "indicators.csv",      "b_value_windows.csv",
-                         "d2_windows.csv",      "fragments.csv",
-                         "summary.json",        "snapshots/particles.pvd",
-                         "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
-    if (status == "complete") {
-      // A finished run needs no checkpoint; an interrupted one keeps it for `breccia resume`.
-      fs::remove(folder / kCheckpointFile);
-      manifest.erase("checkpoint");
-    } else {
-      manifest["files"].push_back(kCheckpointFile);
-    }
-    if (spec.plot) {
-      make_plot(folder, log);
-      if (fs::exists(folder / "stress_strain.png"))
-        manifest["files"].push_back("stress_strain.png");
-      if (fs::exists(folder / "report.html")) {
-        manifest["files"].push_back("report.html");
-        manifest["files"].push_back("report/");
-      }
-    }
-    finish(status, stop);
+    const RunResult result = conclude_run(spec, folder, manifest, ss, end, wall, log);
+    finish(result.status, result.stop_reason, result.wall_seconds);
+    return result;
   } catch (const std::exception& e) {
-    result.wall_seconds = wall();
-    finish("failed", e.what());
+    finish("failed", e.what(), wall());
     throw;
   }
-  return result;
 }
 
 }  // namespace
