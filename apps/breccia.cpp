@@ -20,6 +20,8 @@
 #include "breccia/io/experiment.hpp"
 #include "breccia/io/run_folder.hpp"
 #include "breccia/material/library.hpp"
+#include "breccia/run/run.hpp"
+#include "breccia/run/sample_build.hpp"
 #include "breccia/version.hpp"
 
 namespace {

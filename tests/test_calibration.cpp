@@ -14,8 +14,8 @@
 #include "breccia/calibrate/calibrate.hpp"
 #include "breccia/calibrate/laboratory.hpp"
 #include "breccia/core/error.hpp"
-#include "breccia/io/run_folder.hpp"
 #include "breccia/material/library.hpp"
+#include "breccia/run/run.hpp"
 #include "cli_harness.hpp"
 
 namespace fs = std::filesystem;

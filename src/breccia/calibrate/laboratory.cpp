@@ -10,6 +10,8 @@
 #include "breccia/core/interrupt.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
+#include "breccia/run/run.hpp"
+#include "breccia/run/sample_build.hpp"
 
 namespace breccia {
 

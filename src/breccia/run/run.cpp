@@ -1,0 +1,710 @@
+#include "breccia/run/run.hpp"
+
+#include <fmt/chrono.h>
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+
+#include "breccia/analysis/compression.hpp"
+#include "breccia/analysis/crack_pattern.hpp"
+#include "breccia/analysis/stress_strain.hpp"
+#include "breccia/core/archive.hpp"
+#include "breccia/core/error.hpp"
+#include "breccia/core/parallel.hpp"
+#include "breccia/io/failure_analysis.hpp"
+#include "breccia/io/json_view.hpp"
+#include "breccia/io/run_folder.hpp"
+#include "breccia/run/sample_build.hpp"
+#include "breccia/run/session.hpp"
+#include "breccia/version.hpp"
+
+namespace breccia {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+json ledger_json(const EnergyLedger& L) {
+  return json{{"kinetic_j", L.kinetic()},
+              {"bond_strain_j",
+               {{"tension", L.bond.tension},
+                {"compression", L.bond.compression},
+                {"shear", L.bond.shear},
+                {"bending", L.bond.bending},
+                {"twisting", L.bond.twisting}}},
+              {"contact_strain_j", L.contact},
+              {"boundary_work_j", L.boundary_work},
+              {"body_force_work_j", L.body_force_work},
+              {"friction_j", L.friction},
+              {"joint_slip_j", L.joint_slip},
+              {"joint_dilation_work_j", L.joint_dilation},
+              {"local_damping_j", L.local_damping},
+              {"viscous_damping_j", L.viscous_damping},
+              {"deleted_springs_j", L.deleted},
+              {"released_by_breaks_j", L.released.total()},
+              {"residual_j", L.residual},
+              {"residual_relative", L.residual_relative}};
+}
+
+json nan_null(double v) {
+  return std::isfinite(v) ? json(v) : json(nullptr);
+}
+
+// v_S for the event duration (analysis.md §4.1), fixed at the first crack: sqrt(G / rho) with E and
+// nu fitted over the rows recorded so far above 20 % of the current peak (the sample is still
+// intact), and rho the (scaled) grain density times (1 - n0).
+void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
+  const auto& s = L.series;
+  double qmax = 0.0;
+  for (double q : s.deviatoric) qmax = std::max(qmax, q);
+  // The sample gauges where the test has them (they leave out the platen contacts).
+  const bool gauges = analysis::has_gauges(s);
+  std::vector<double> x, y, lat;
+  for (std::size_t k = 0; k < s.deviatoric.size(); ++k)
+    if (s.deviatoric[k] >= 0.2 * qmax && qmax > 0.0) {
+      x.push_back(gauges ? s.gauge_axial_strain[k] : s.axial_strain[k]);
+      y.push_back(s.deviatoric[k]);
+      lat.push_back(gauges ? s.gauge_lateral_strain[k] : s.lateral_strain[k]);
+    }
+  const analysis::LinearFit fe = analysis::fit_line(x, y, 3);
+  const analysis::LinearFit fn = analysis::fit_line(x, lat, 3);
+  const bool e_ok = fe.valid && fe.slope > 0.0;
+  const double E = e_ok ? fe.slope : bond_moduli(spec).young;
+  double nu = fn.valid ? -fn.slope : -1.0;
+  const bool nu_ok = nu > 0.0 && nu < 0.5;
+  if (!nu_ok) nu = 0.25;
+  const double rho = spec.density * spec.density_scaling * (1.0 - L.porosity0);
+  const double vs = analysis::shear_wave_speed(E, nu, rho);
+  L.wave_speed_method = fmt::format(
+      "sqrt(G / rho) fixed at the first crack: E = {:.4g} Pa ({}), nu = {:.3g} ({}), rho = {:.5g} "
+      "kg/m^3 (simulated grain density x (1 - n0))",
+      E, e_ok ? "slope of q over the rows so far" : "bond modulus: too few rows", nu,
+      nu_ok ? "lateral/axial strain slope" : "default 0.25", rho);
+  ae.configure(vs);
+}
+
+// Where the cracks are: shares per quarter along the loading axis (between the platens as they
+// stood when loading began) and, for a Brazilian disc, how close they lie to the loaded diameter.
+json crack_pattern_json(const Protocol& test, const Simulation& sim) {
+  std::vector<double> axial, offset;
+  std::vector<bool> tensile;
+  for (const CrackRecord& c : sim.cracks()) {
+    axial.push_back(c.position[test.axis()]);
+    tensile.push_back(c.mode == CrackMode::Tensile);
+  }
+  const auto q = analysis::quarter_shares(axial, test.origin0(), test.origin0() + test.length0());
+  json j{{"quarter_shares_along_axis", {q[0], q[1], q[2], q[3]}},
+         {"largest_end_quarter_share", std::max(q[0], q[3])},
+         {"quarters",
+          "cracks per quarter of the initial length along the loading axis, from the "
+          "bottom platen; a test that fails through its body has no end quarter "
+          "above 0.40"}};
+  if (const auto* b = dynamic_cast<const BrazilianTest*>(&test)) {
+    for (const CrackRecord& c : sim.cracks()) offset.push_back(c.position.x - b->centre().x);
+    const analysis::SplitPattern sp = analysis::split_pattern(offset, tensile, 0.5 * b->diameter());
+    j["brazilian"] = {
+        {"band_half_width_fraction_of_radius", sp.band},
+        {"early_cracks", sp.early},
+        {"early_tensile_share", sp.early_tensile_share},
+        {"early_in_band_share", sp.early_in_band},
+        {"all_in_band_share", sp.all_in_band},
+        {"early_mean_offset_fraction_of_radius", sp.early_mean_offset},
+        {"note",
+         "cracks within +-band x R of the loaded diameter (x = disc centre); the first 20 % "
+         "by time are the early ones; a uniform scatter would put 31 % in the band"}};
+  }
+  return j;
+}
+
+// NaN or inf in the state: the run cannot recover and everything after would be garbage, so it
+// stops at once, failed, naming the step and the first particle affected. Checked at every history
+// row (one pass over the particles every history_interval steps).
+void check_finite_state(const Simulation& sim, const AxialState& a) {
+  const ParticleStore& p = sim.particles();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Vec3& x = p.pos_rad[i].x;
+    const Vec3& v = p.vel[i];
+    const Vec3& f = p.force[i];
+    if (std::isfinite(x.x + x.y + x.z + v.x + v.y + v.z + f.x + f.y + f.z)) continue;
+    throw std::runtime_error(fmt::format(
+        "non-finite state at step {}: particle {} (tag {}) has position ({}, {}, {}), velocity "
+        "({}, {}, {}), force ({}, {}, {}); the run stops here. Usual causes: a time step above "
+        "the critical one (engine.time_step, engine.safety_factor), grains that overlap deeply "
+        "in the sample, or stiffnesses or loads far outside the physical range",
+        sim.step_count(), i, p.tag[i], x.x, x.y, x.z, v.x, v.y, v.z, f.x, f.y, f.z));
+  }
+  for (const double q : {a.strain, a.stress, a.deviatoric, a.force_bottom, a.force_top,
+                         a.lateral_strain, a.volumetric_strain, a.confining_stress})
+    if (!std::isfinite(q))
+      throw std::runtime_error(fmt::format(
+          "non-finite test state at step {} (strain {}, stress {} Pa, forces {} / {} N): the run "
+          "stops here; check the platen speed, the confining stress and the time step",
+          sim.step_count(), a.strain, a.stress, a.force_bottom, a.force_top));
+}
+
+// Steps between history rows: output.history_interval, or the steps in which the platens, at
+// full speed, strain the sample by output.history_strain_interval.
+std::uint64_t history_step_interval(const ExperimentSpec& spec, const Protocol& test,
+                                    const Simulation& sim) {
+  const double strain_rate = 2.0 * test.platen_speed() / test.length0();
+  if (spec.history_strain_interval <= 0.0 || !(strain_rate > 0.0))
+    return static_cast<std::uint64_t>(spec.history_interval);
+  const double steps = spec.history_strain_interval / (strain_rate * sim.time_step());
+  return static_cast<std::uint64_t>(std::clamp(std::round(steps), 1.0, 1e9));
+}
+
+// How the loading loop ended.
+struct LoopEnd {
+  std::string status = "complete";  // complete | interrupted
+  std::string reason;
+};
+
+// One history row: the tables (flushed, so an interrupted run keeps them), the analysed series,
+// the quality monitors (physics.md §6.1) and the snapshot when its strain is due.
+void record_row(const ExperimentSpec& spec, Session& ss, const AxialState& a) {
+  const Simulation& sim = ss.sim;
+  LoopState& L = ss.loop;
+  ss.history.record(sim, a);
+  ss.cracks.record(sim);
+  ss.history.flush();
+  ss.cracks.flush();
+  analysis::CompressionSeries& series = L.series;
+  series.axial_strain.push_back(a.strain);
+  series.deviatoric.push_back(a.deviatoric);
+  series.lateral_strain.push_back(a.lateral_strain);
+  series.volumetric_strain.push_back(a.volumetric_strain);
+  series.gauge_axial_strain.push_back(a.gauge_strain);
+  series.gauge_lateral_strain.push_back(a.gauge_lateral_strain);
+  series.broken_bonds.push_back(static_cast<double>(sim.cracks().size()));
+  const double fbar = 0.5 * (a.force_bottom + a.force_top);
+  const double stored = sim.ledger().bond.total() + sim.ledger().contact;
+  L.imbalance.push_back(fbar > 0.0 ? std::abs(a.force_top - a.force_bottom) / fbar : 0.0);
+  L.ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
+  const double sigma3 = ss.test->confining_stress();
+  if (sigma3 > 0.0) L.confine_err.push_back(std::abs(a.confining_stress - sigma3) / sigma3);
+  if (spec.snapshot_strain_interval > 0.0 && a.strain >= L.next_snapshot) {
+    ss.snaps.write(sim);
+    // The next multiple of the interval above this strain (one snapshot per row at most).
+    L.next_snapshot = spec.snapshot_strain_interval *
+                      (std::floor(a.strain / spec.snapshot_strain_interval) + 1.0);
+  }
+}
+
+void print_progress_bar(const Session& ss, const AxialState& a, double elapsed) {
+  const double frac = std::clamp(a.strain / ss.test->max_strain(), 1e-9, 1.0);
+  const int width = 30, fill = static_cast<int>(frac * width);
+  std::fprintf(stderr,
+               "\r[%s%s] strain %.4f  q %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
+               std::string(static_cast<std::size_t>(fill), '#').c_str(),
+               std::string(static_cast<std::size_t>(width - fill), '.').c_str(), a.strain,
+               a.deviatoric * 1e-6, ss.sim.cracks().size(), elapsed, elapsed * (1 - frac) / frac);
+  std::fflush(stderr);
+}
+
+// Steps the test until it stops, the run is interrupted (a signal or --stop-at-step: then it
+// saves a checkpoint first) or it fails. `wall` gives the run's wall time so far.
+LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptions& opt,
+                         const std::function<void()>& checkpoint,
+                         const std::function<double()>& wall,
+                         const std::function<void(const std::string&)>& log,
+                         const fs::path& folder) {
+  Simulation& sim = ss.sim;
+  Protocol& test = *ss.test;
+  const std::uint64_t interval = history_step_interval(spec, test, sim);
+  auto last_bar = std::chrono::steady_clock::now(), last_checkpoint = last_bar;
+  for (;;) {
+    const bool stop_step = opt.stop_at_step > 0 && sim.step_count() >= opt.stop_at_step;
+    if ((opt.interrupt && opt.interrupt->load()) || stop_step) {
+      // Between two steps: the checkpoint continues exactly from here.
+      checkpoint();
+      log(fmt::format("checkpoint at step {}: continue with `breccia resume {}`", sim.step_count(),
+                      folder.string()));
+      return {"interrupted",
+              stop_step ? fmt::format("stopped at step {} (--stop-at-step)", sim.step_count())
+                        : "interrupted by a signal"};
+    }
+    if (sim.step_count() % interval == 0) sim.request_energy_sample();
+    test.control(sim);
+    sim.step();
+    // Acoustic emission: cheap unless bonds broke in this step or an event is open.
+    if (sim.cracks().size() > ss.ae.cracks_seen() || ss.ae.has_open_events()) {
+      const AxialState now = test.measure(sim);
+      if (!ss.ae.configured()) configure_ae(spec, ss.loop, ss.ae);
+      ss.ae.after_step(sim, now.strain, now.deviatoric);
+    }
+    if ((sim.step_count() - 1) % interval != 0) continue;
+    const AxialState a = test.measure(sim);
+    check_finite_state(sim, a);
+    record_row(spec, ss, a);
+    if (test.finished(a, sim.cracks().size())) return {"complete", test.stop_reason()};
+    const auto now = std::chrono::steady_clock::now();
+    if (spec.checkpoint_interval > 0.0 &&
+        std::chrono::duration<double>(now - last_checkpoint).count() >= spec.checkpoint_interval) {
+      checkpoint();
+      last_checkpoint = std::chrono::steady_clock::now();
+    }
+    if (opt.show_progress && now - last_bar > std::chrono::milliseconds(250)) {
+      last_bar = now;
+      print_progress_bar(ss, a, wall());
+    }
+  }
+}
+
+// The quality monitors over the pre-peak rows once the load exceeds 10 % of the peak (the
+// ramp-up start is excluded), judged against physics.md §6.1's limits.
+struct QualityVerdict {
+  double imbalance_pre = 0.0, ke_ratio_pre = 0.0, confine_err_pre = 0.0, confine_err_all = 0.0;
+  // Before the first crack, kinetic energy comes from the loading alone; after, breaking bonds
+  // release it too (dynamic crack release that a lower platen speed does not remove).
+  double ke_ratio_intact = 0.0, imbalance_intact = 0.0;
+  bool quasi_static() const { return imbalance_pre <= 0.05 && ke_ratio_pre <= 1e-3; }
+  bool quasi_static_until_cracking() const {
+    return imbalance_intact <= 0.05 && ke_ratio_intact <= 1e-3;
+  }
+};
+
+QualityVerdict judge_quality(const LoopState& L, const analysis::CompressionResult& an) {
+  const analysis::CompressionSeries& series = L.series;
+  QualityVerdict q;
+  for (std::size_t k = 0; k < series.deviatoric.size(); ++k) {
+    if (k < L.confine_err.size()) q.confine_err_all = std::max(q.confine_err_all, L.confine_err[k]);
+    const bool pre = series.axial_strain[k] <= an.strain_at_peak &&
+                     series.deviatoric[k] >= 0.1 * an.peak_deviatoric;
+    if (!pre) continue;
+    q.imbalance_pre = std::max(q.imbalance_pre, L.imbalance[k]);
+    q.ke_ratio_pre = std::max(q.ke_ratio_pre, L.ke_ratio[k]);
+    if (series.broken_bonds[k] == 0.0) {
+      q.ke_ratio_intact = std::max(q.ke_ratio_intact, L.ke_ratio[k]);
+      q.imbalance_intact = std::max(q.imbalance_intact, L.imbalance[k]);
+    }
+    if (k < L.confine_err.size()) q.confine_err_pre = std::max(q.confine_err_pre, L.confine_err[k]);
+  }
+  return q;
+}
+
+std::vector<std::string> quality_warnings(const QualityVerdict& q, const Protocol& test) {
+  std::vector<std::string> w;
+  if (!q.quasi_static())
+    w.push_back(fmt::format(
+        "the test was not quasi-static before the peak: platen force imbalance {:.3g} (limit "
+        "0.05; {:.3g} before the first crack), kinetic/strain energy {:.3g} (limit 1e-3; {:.3g} "
+        "before the first crack); {}",
+        q.imbalance_pre, q.imbalance_intact, q.ke_ratio_pre, q.ke_ratio_intact,
+        q.quasi_static_until_cracking()
+            ? "the loading was quasi-static until bonds broke: the excess comes from bursts of "
+              "breaking bonds near the peak, which a lower platen speed does not remove"
+            : "lower test.platen_speed"));
+  if (test.confining_stress() > 0.0 && q.confine_err_pre > 0.02)
+    w.push_back(fmt::format(
+        "the confining stress left its 2 % band before the peak (largest error {:.3g} %)",
+        100 * q.confine_err_pre));
+  return w;
+}
+
+// The headline numbers of a finished (or interrupted) run, for the caller.
+RunResult run_result(const fs::path& folder, const Session& ss, const LoopEnd& end,
+                     const analysis::CompressionResult& an, double wall_seconds) {
+  const Simulation& sim = ss.sim;
+  RunResult r;
+  r.folder = folder.string();
+  r.status = end.status;
+  r.stop_reason = end.reason;
+  r.particles = sim.particles().size();
+  r.bonds = ss.loop.bonds_initial;
+  r.confining_stress = ss.test->confining_stress();
+  r.wall_seconds = wall_seconds;
+  r.steps = sim.step_count();
+  r.peak_stress = an.peak_deviatoric;
+  r.sigma1_at_peak = an.sigma1_at_peak;
+  r.strain_at_peak = an.strain_at_peak;
+  r.youngs_modulus = an.e_t50.valid ? an.e_t50.slope : std::nan("");
+  r.poisson = an.poisson;
+  r.cracks = sim.cracks().size();
+  for (const auto& c : sim.cracks()) (c.mode == CrackMode::Tensile ? r.tensile : r.shear)++;
+  r.energy_residual_relative = sim.ledger().residual_relative;
+  return r;
+}
+
+// The compression analysis's moduli, strengths and thresholds, with how each was read.
+json compression_fields(const analysis::CompressionResult& an) {
+  const char* strain_read = an.moduli_from_gauges
+                                ? "the axial strain of the sample gauge (grain layers at 1/4 and "
+                                  "3/4 of the height, clear of the platen contacts)"
+                                : "the platen approach strain";
+  return {
+      {"peak_reached", an.peak_reached},
+      {"peak_deviatoric_stress_pa", an.peak_deviatoric},
+      {"peak_deviatoric_stress_mpa", an.peak_deviatoric * 1e-6},
+      {"sigma1_at_peak_pa", an.sigma1_at_peak},
+      {"axial_strain_at_peak", an.strain_at_peak},
+      {"youngs_modulus_pa", an.e_t50.valid ? json(an.e_t50.slope) : json(nullptr)},
+      {"youngs_modulus_method",
+       fmt::format("ISRM tangent E_t50: least-squares slope of q = sigma_1 - sigma_3 against {} "
+                   "over pre-peak samples at {:.0f}-{:.0f} % of the peak",
+                   strain_read, 100 * an.e_t50_lo, 100 * an.e_t50_hi)},
+      {"youngs_modulus_fit",
+       {{"points", an.e_t50.points},
+        {"r2", an.e_t50.r2},
+        {"strain_column", an.moduli_from_gauges ? "gauge_axial_strain" : "axial_strain"},
+        {"window_fraction_of_peak", {an.e_t50_lo, an.e_t50_hi}}}},
+      {"youngs_modulus_platen_pa",
+       an.e_t50_platen.valid ? json(an.e_t50_platen.slope) : json(nullptr)},
+      {"youngs_modulus_average_pa", an.e_av.valid ? json(an.e_av.slope) : json(nullptr)},
+      {"youngs_modulus_secant50_pa", nan_null(an.e_s50)},
+      {"poisson_ratio", nan_null(an.poisson)},
+      {"poisson_ratio_method",
+       an.moduli_from_gauges ? "-slope of the gauge lateral strain (lateral-face grains of the "
+                               "middle half) against the gauge axial strain, E_t50 window"
+                             : "-slope of the lateral strain against the platen approach "
+                               "strain, E_t50 window"},
+      {"crack_initiation_stress_pa", nan_null(an.crack_initiation)},
+      {"crack_initiation_method", "q when the broken bonds reach 5 % of those at the peak"},
+      {"crack_damage_stress_pa", nan_null(an.crack_damage)},
+      {"residual_strength_pa", nan_null(an.residual)},
+      {"brittleness_index", nan_null(an.brittleness)},
+      {"analysis_flags", an.flags}};
+}
+
+json quality_fields(const QualityVerdict& q) {
+  return {{"quasi_static",
+           {{"ok", q.quasi_static()},
+            {"max_platen_force_imbalance_before_peak", q.imbalance_pre},
+            {"max_kinetic_to_strain_energy_before_peak", q.ke_ratio_pre},
+            {"max_kinetic_to_strain_energy_before_first_crack", q.ke_ratio_intact},
+            {"max_platen_force_imbalance_before_first_crack", q.imbalance_intact}}},
+          {"confining_stress_error",
+           {{"max_relative_before_peak", q.confine_err_pre},
+            {"max_relative_overall", q.confine_err_all}}}};
+}
+
+// The Brazilian test reads its peak as the tensile strength.
+void add_brazilian_fields(json& summary, const Protocol& test,
+                          const analysis::CompressionResult& an) {
+  const auto* b = dynamic_cast<const BrazilianTest*>(&test);
+  if (!b) return;
+  summary["tensile_strength_pa"] = an.peak_deviatoric;
+  summary["tensile_strength_mpa"] = an.peak_deviatoric * 1e-6;
+  summary["tensile_strength_method"] =
+      "sigma_t = 2 F / (pi D t) at the largest mean platen force F (ISRM Brazilian test)";
+  summary["peak_force_n"] =
+      0.5 * an.peak_deviatoric * std::numbers::pi * b->diameter() * b->thickness();
+  summary["disc_diameter_m"] = b->diameter();
+  summary["disc_thickness_m"] = b->thickness();
+}
+
+// summary.json: the run, the test, the analysis, the quality verdict and the warnings.
+json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult& r,
+                 const analysis::CompressionResult& an, const QualityVerdict& q,
+                 const std::vector<std::string>& warnings, const json& manifest) {
+  const Simulation& sim = ss.sim;
+  const Protocol& test = *ss.test;
+  json summary{{"status", r.status},
+               {"stop_reason", r.stop_reason},
+               {"experiment", spec.name},
+               {"test", test.label()},
+               {"test_kind", test.kind()},
+               {"confining_stress_pa", test.confining_stress()},
+               {"lateral_boundary", test.lateral_boundary()},
+               {"particles", r.particles},
+               {"bonds_initial", r.bonds},
+               {"bonds_broken", r.cracks},
+               {"cracks_tensile", r.tensile},
+               {"cracks_shear", r.shear},
+               {"steps", r.steps},
+               {"consolidation_steps", ss.loop.consolidation_steps},
+               {"simulated_time_s", sim.time()},
+               {"time_step_s", sim.time_step()},
+               {"density_scaling", spec.density_scaling},
+               {"wall_seconds", r.wall_seconds},
+               {"particle_steps_per_second",
+                static_cast<double>(r.particles) * static_cast<double>(r.steps) / r.wall_seconds}};
+  summary.update(compression_fields(an));
+  summary.update(quality_fields(q));
+  summary.update(json{{"platen_speed_m_per_s", test.platen_speed()},
+                      {"strain_rate_per_s", 2.0 * test.platen_speed() / test.length0()},
+                      {"sample_height_m", test.length0()},
+                      {"sample_area_m2", test.area0()},
+                      {"sample", manifest.value("sample", json::object())},
+                      {"energy", ledger_json(sim.ledger())},
+                      {"snapshots", ss.snaps.count()},
+                      {"warnings", warnings}});
+  if (manifest.contains("resumed")) summary["resumed"] = manifest["resumed"];
+  if (!spec.joint_planes.empty())
+    summary["joints"] = {{"law", spec.joint_law()},
+                         {"planes", spec.joint_planes.size()},
+                         {"elements", sim.joint_count()},
+                         {"bonded_at_end", sim.bonded_joints()}};
+  summary["crack_pattern"] = crack_pattern_json(test, sim);
+  add_brazilian_fields(summary, test, an);
+  return summary;
+}
+
+// The run folder's files in the manifest; a finished run drops its checkpoint, an interrupted
+// one keeps it for `breccia resume`. Plots and the report are made here when asked for.
+void list_run_files(const ExperimentSpec& spec, const fs::path& folder, const LoopEnd& end,
+                    json& manifest, const std::function<void(const std::string&)>& log) {
+  manifest["files"] = {"experiment.toml",     "history.csv",
+                       "cracks.csv",          "events.csv",
+                       "indicators.csv",      "b_value_windows.csv",
+                       "d2_windows.csv",      "fragments.csv",
+                       "summary.json",        "snapshots/particles.pvd",
+                       "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
+  if (end.status == "complete") {
+    fs::remove(folder / kCheckpointFile);
+    manifest.erase("checkpoint");
+  } else {
+    manifest["files"].push_back(kCheckpointFile);
+  }
+  if (!spec.plot) return;
+  make_plot(folder, log);
+  if (fs::exists(folder / "stress_strain.png")) manifest["files"].push_back("stress_strain.png");
+  if (fs::exists(folder / "report.html")) {
+    manifest["files"].push_back("report.html");
+    manifest["files"].push_back("report/");
+  }
+}
+
+// After the loop: the recorders' last rows, the analysis, summary.json and the manifest.
+RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json& manifest,
+                       Session& ss, const LoopEnd& end, const std::function<double()>& wall,
+                       const std::function<void(const std::string&)>& log) {
+  Simulation& sim = ss.sim;
+  ss.ae.finish();
+  ss.cracks.record(sim);
+  ss.cracks.flush();
+  ss.history.flush();
+  ss.snaps.write(sim);
+  const analysis::CompressionResult an = analysis::analyse_compression(ss.loop.series);
+  const RunResult result = run_result(folder, ss, end, an, wall());
+  const QualityVerdict q = judge_quality(ss.loop, an);
+  std::vector<std::string> warnings = ss.loop.warnings;  // those of the set-up, logged already
+  for (const std::string& w : quality_warnings(q, *ss.test)) {
+    log("warning: " + w);
+    warnings.push_back(w);
+  }
+  json summary = run_summary(spec, ss, result, an, q, warnings, manifest);
+  // Failure analysis: events, indicators, stages, fragments, energy budget (analysis.md §2-§9).
+  const json failure = write_failure_analysis(
+      folder, FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0,
+                            ss.loop.porosity0, ss.loop.length_min, ss.loop.wave_speed_method});
+  for (const auto& [key, value] : failure.items()) summary[key] = value;
+  write_json(folder / "summary.json", summary);
+  list_run_files(spec, folder, end, manifest, log);
+  return result;
+}
+
+// Loads the loop, runs it to its end (or the next interruption), and writes the summary and the
+// final manifest. `t_start` is when this session began.
+RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& manifest, Session& ss,
+                  const RunOptions& opt, std::chrono::steady_clock::time_point t_start) {
+  auto log = [&](const std::string& m) {
+    if (opt.log) opt.log(m);
+  };
+  auto wall = [&] {
+    return ss.loop.wall_seconds +
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  };
+  auto finish = [&](const std::string& status, const std::string& reason, double seconds) {
+    manifest["status"] = status;
+    manifest["stop_reason"] = reason;
+    manifest["wall_seconds"] = seconds;
+    write_json(folder / "manifest.json", manifest);
+  };
+  auto checkpoint = [&] {
+    const double before = ss.loop.wall_seconds;
+    ss.loop.wall_seconds = wall();
+    write_checkpoint(folder, spec, ss);
+    ss.loop.wall_seconds = before;
+    manifest["checkpoint"] = {{"file", kCheckpointFile},
+                              {"step", ss.sim.step_count()},
+                              {"time_s", ss.sim.time()},
+                              {"resume_command", "breccia resume " + folder.string()}};
+    write_json(folder / "manifest.json", manifest);
+  };
+  try {
+    const LoopEnd end = run_loading_loop(spec, ss, opt, checkpoint, wall, log, folder);
+    if (opt.show_progress) std::fprintf(stderr, "\n");
+    const RunResult result = conclude_run(spec, folder, manifest, ss, end, wall, log);
+    finish(result.status, result.stop_reason, result.wall_seconds);
+    return result;
+  } catch (const std::exception& e) {
+    finish("failed", e.what(), wall());
+    throw;
+  }
+}
+
+}  // namespace
+
+RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
+  auto log = [&](const std::string& m) {
+    if (opt.log) opt.log(m);
+  };
+  if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
+  const auto t_start = std::chrono::steady_clock::now();
+  // Build first: a bad sample (geometry file, bond list) fails before any file is written.
+  Built b = build(spec, log);
+  const fs::path folder = make_folder(spec);
+  json manifest{
+      {"program", "breccia"},
+      {"version", kVersion},
+      {"commit", kCommit},
+      {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
+      {"command", opt.command_line},
+      {"experiment_source", spec.source},
+      {"seed", spec.engine.seed},
+      {"threads", max_threads()},
+      {"machine", machine_description()},
+      {"status", "running"},
+      {"density_scaling", spec.density_scaling},
+      {"grain_density_kg_m3", spec.density},
+      {"simulated_density_kg_m3", spec.density * spec.density_scaling},
+      {"bar_wave_speed_m_s", b.bar_wave_speed},
+      {"sample", b.sample_report},
+      {"resolved_experiment", to_toml(spec)}};
+  { std::ofstream(folder / "experiment.toml") << to_toml(spec); }
+  write_json(folder / "manifest.json", manifest);
+
+  Simulation& sim = b.sim;
+  Protocol& test = *b.protocol;
+  LoopState loop;
+  AeSettings ae_settings;
+  loop.warnings = sim.warnings();
+  loop.consolidation_steps = b.consolidation_steps;
+  loop.bonds_initial = sim.intact_bonds();
+  loop.series.confining_stress = test.confining_stress();
+  loop.next_snapshot = spec.snapshot_strain_interval;
+  if (test.confining_stress() > 0.0 && !test.consolidated())
+    loop.warnings.push_back(fmt::format(
+        "consolidation to {} MPa did not settle within {} steps; loading started anyway",
+        test.confining_stress() * 1e-6, b.consolidation_steps));
+  for (const std::string& w : loop.warnings) log("warning: " + w);
+  manifest["time_step_s"] = sim.time_step();
+  manifest["critical_time_step_s"] = sim.critical_time_step();
+  manifest["particles"] = sim.particles().size();
+  manifest["bonds"] = sim.intact_bonds();
+  manifest["consolidation_steps"] = b.consolidation_steps;
+  manifest["strain_rate_per_s"] = 2.0 * test.platen_speed() / test.length0();
+  write_json(folder / "manifest.json", manifest);
+  log(fmt::format("sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s){}",
+                  sim.particles().size(), sim.intact_bonds(), sim.time_step(),
+                  sim.critical_time_step(),
+                  test.confining_stress() > 0.0
+                      ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
+                                    test.confining_stress() * 1e-6, b.consolidation_steps)
+                      : ""));
+  // Reference state for porosity and D2, and the acoustic-emission monitor.
+  {
+    const ParticleStore& p = sim.particles();
+    double solid = 0.0, r_max = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      solid += p.mass[i] / p.density[i];
+      r_max = std::max(r_max, p.pos_rad[i].r);
+    }
+    loop.volume0 = test.length0() * test.area0();
+    loop.porosity0 = 1.0 - solid / loop.volume0;
+    loop.length_min = spec.dimension == 2
+                          ? std::min(test.length0(), test.width0())
+                          : std::min({test.length0(), test.width0(), test.depth0()});
+    ae_settings.source_radius =
+        spec.ae_source_radius > 0.0 ? spec.ae_source_radius : 3.0 * (2.0 * r_max);
+  }
+  ae_settings.shear_wave_speed = spec.ae_shear_wave_speed;
+  ae_settings.moment_tensors = spec.ae_moment_tensors;
+  ae_settings.moment_interval = static_cast<std::uint64_t>(spec.ae_moment_interval);
+  ae_settings.linkage =
+      spec.ae_clustering == "grain" ? analysis::Linkage::Grain : analysis::Linkage::SourceRadius;
+  std::unique_ptr<Session> ss;
+  try {
+    ss.reset(new Session{
+        std::move(b.sim), std::move(b.protocol), HistoryRecorder((folder / "history.csv").string()),
+        CrackRecorder((folder / "cracks.csv").string()),
+        SnapshotWriter((folder / "snapshots").string()), std::move(loop), AeMonitor(ae_settings)});
+    if (spec.ae_shear_wave_speed > 0.0) {
+      ss->ae.configure(spec.ae_shear_wave_speed);
+      ss->loop.wave_speed_method = "given in the experiment file (ae.shear_wave_speed)";
+    }
+    ss->snaps.write(ss->sim);
+  } catch (const std::exception& e) {
+    manifest["status"] = "failed";
+    manifest["stop_reason"] = e.what();
+    write_json(folder / "manifest.json", manifest);
+    throw;
+  }
+  return execute(spec, folder, manifest, *ss, opt, t_start);
+}
+
+RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
+                     const RunOptions& opt) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const fs::path folder(folder_name);
+  const fs::path mpath = folder / "manifest.json", cpath = folder / kCheckpointFile;
+  if (!fs::exists(mpath))
+    throw InputError(folder_name, "manifest.json", "(missing)", "not a Breccia run folder");
+  json manifest = read_json_object(mpath.string());
+  const std::string status = JsonView(manifest, mpath.string()).text("status", "unknown");
+  if (status == "complete")
+    throw InputError(mpath.string(), "status", status, "the run is complete: nothing to resume");
+  if (!fs::exists(cpath))
+    throw InputError(cpath.string(), "", "(missing)",
+                     "the run (status '" + status +
+                         "') has no checkpoint: it stopped before writing one "
+                         "(see output.checkpoint_interval_s)");
+  std::istringstream in(read_checkpoint_bytes(cpath), std::ios::binary);
+  ArchiveReader a(in, cpath.string());
+  a.string();  // magic, format and version: checked with the hash
+  a.get<std::uint32_t>();
+  a.string();
+  const std::string commit = a.string();
+  // The resolved experiment travels in the checkpoint; only run-time options may change.
+  std::vector<std::string> overrides;
+  if (ro.threads >= 0) overrides.push_back("engine.threads=" + std::to_string(ro.threads));
+  const ExperimentSpec spec = parse_experiment(a.string(), cpath.string(), overrides);
+  if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
+
+  LoopState loop;
+  loop.load(a);
+  Simulation sim = Simulation::restore(a);
+  std::unique_ptr<Protocol> test;
+  if (!with_lab_test(spec.test_kind, [&]<class T>() { test = T::restore(a); }))
+    throw InputError(cpath.string(), "test.kind", spec.test_kind, "not a registered test");
+  test->check_restored(sim, cpath.string());
+  HistoryRecorder history((folder / "history.csv").string(), a);
+  CrackRecorder cracks((folder / "cracks.csv").string(), a);
+  SnapshotWriter snaps((folder / "snapshots").string(), a, sim);
+  AeMonitor ae;
+  ae.load(a);
+  a.label("end of checkpoint");
+  if (loop.imbalance.size() != loop.series.axial_strain.size())
+    throw InputError(cpath.string(), "loop", "", "inconsistent series: the checkpoint is corrupt");
+
+  if (opt.log)
+    opt.log(fmt::format("resuming {} at step {} (simulated time {:.6g} s)", folder_name,
+                        sim.step_count(), sim.time()));
+  json entry{{"at_step", sim.step_count()},
+             {"at_time_s", sim.time()},
+             {"previous_status", status},
+             {"checkpoint_written_by", std::string(kVersion) + " (" + commit + ")"},
+             {"when", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
+             {"command", opt.command_line},
+             {"threads", max_threads()},
+             {"machine", machine_description()}};
+  if (!manifest.contains("resumed")) manifest["resumed"] = json::array();
+  manifest["resumed"].push_back(entry);
+  manifest["status"] = "running";
+  manifest.erase("stop_reason");
+  write_json(mpath, manifest);
+  Session ss{std::move(sim),   std::move(test), std::move(history), std::move(cracks),
+             std::move(snaps), std::move(loop), std::move(ae)};
+  return execute(spec, folder, manifest, ss, opt, t_start);
+}
+
+}  // namespace breccia

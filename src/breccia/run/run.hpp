@@ -1,0 +1,65 @@
+#pragma once
+// Runs an experiment spec into a self-describing run folder: manifest.json (version, seed, threads,
+// machine, resolved spec, status), history.csv, cracks.csv, summary.json and the failure
+// analysis. The manifest is written first with status "running" and rewritten at the end, so a
+// run killed on the way is visibly incomplete; an interrupted run (Ctrl-C, SIGTERM) keeps its
+// tables, says "interrupted" and leaves a checkpoint (checkpoint.bin) that `resume_run`
+// continues exactly. A sweep runs one experiment at several confining stresses.
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "breccia/io/experiment.hpp"
+
+namespace breccia {
+
+struct RunOptions {
+  std::string command_line;
+  const std::atomic<bool>* interrupt = nullptr;  // set from a signal handler to stop cleanly
+  bool show_progress = false;                    // progress bar on stderr
+  std::function<void(const std::string&)> log;   // human-readable messages
+  // Stop cleanly, with a checkpoint, once the engine has taken this many steps in all (0 = no
+  // limit): for splitting a long test into jobs, and for the restart tests.
+  std::uint64_t stop_at_step = 0;
+  // Sweeps: the runs at once as child processes of `executable` (the breccia command), each
+  // with its share of the cores (0: as many as cores allow; 1: one after another, in this
+  // process). Without an executable a sweep runs in this process.
+  int jobs = 0;
+  std::string executable;
+};
+
+struct ResumeOptions {
+  int threads = -1;  // OpenMP threads for the rest of the run (-1: as recorded)
+};
+
+struct RunResult {
+  std::string folder;
+  std::string status;  // complete | interrupted | failed
+  std::string stop_reason;
+  double peak_stress = 0.0, strain_at_peak = 0.0, youngs_modulus = 0.0;
+  double confining_stress = 0.0, sigma1_at_peak = 0.0, poisson = 0.0;
+  std::size_t particles = 0, bonds = 0, cracks = 0, tensile = 0, shear = 0;
+  std::uint64_t steps = 0;
+  double wall_seconds = 0.0;
+  double energy_residual_relative = 0.0;
+};
+
+RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& options);
+// Continues an interrupted run from its checkpoint.bin, in the same folder: the tables are cut
+// back to the checkpoint and continued, and the result is the one the uninterrupted run gives.
+RunResult resume_run(const std::string& folder, const ResumeOptions& resume,
+                     const RunOptions& options);
+
+// Runs the experiment once per confining stress on copies of one sample; writes a sweep folder
+// with the run folders, sweep.json and the Mohr-Coulomb and Hoek-Brown fits. Returns its path.
+struct SweepResult {
+  std::string folder;
+  std::vector<RunResult> runs;
+  std::string status;
+};
+SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining_stresses,
+                      const RunOptions& options);
+
+}  // namespace breccia

@@ -1,0 +1,377 @@
+#include "breccia/run/sample_build.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "breccia/core/checksum.hpp"
+#include "breccia/core/error.hpp"
+#include "breccia/core/format.hpp"
+#include "breccia/io/geometry_checks.hpp"
+#include "breccia/io/geometry_file.hpp"
+#include "breccia/io/json_view.hpp"
+#include "breccia/io/run_folder.hpp"
+#include "breccia/io/sample_import.hpp"
+#include "breccia/sample/lattice.hpp"
+#include "breccia/version.hpp"
+
+namespace breccia {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+std::string resolve(const ExperimentSpec& s, const std::string& file) {
+  fs::path p = file;
+  if (p.is_relative() && s.source != "built-in default") p = fs::path(s.source).parent_path() / p;
+  return p.string();
+}
+
+json packing_json(const PackingReport& r) {
+  const SampleStructure& ss = r.structure;
+  json profile = json::array();
+  for (const ProfileSlice& sl : ss.profile)
+    profile.push_back({{"from_m", sl.lo},
+                       {"to_m", sl.hi},
+                       {"grains", sl.grains},
+                       {"bonds_per_grain", sl.bonds_per_grain},
+                       {"solid_fraction", sl.solid_fraction}});
+  const HomogeneityCheck& h = ss.homogeneity;
+  json stages = json::array();
+  for (const PackingStage& st : r.stages)
+    stages.push_back(
+        {{"stage", st.name}, {"steps", st.steps}, {"seconds", st.seconds}, {"note", st.note}});
+  const double n = static_cast<double>(std::max<std::size_t>(ss.particles, 1));
+  return json{
+      {"method", r.method},
+      {"particles", ss.particles},
+      {"bonds", ss.bonds},
+      {"porosity", ss.porosity},
+      {"contact_coordination", ss.contact_coordination},
+      {"bond_coordination", ss.bond_coordination},
+      {"bonds_per_interior_particle", ss.bonds_per_interior_particle},
+      {"floaters",
+       {{"definition",
+         fmt::format("grains with fewer than {} contacts: bonded neighbours plus vessel walls "
+                     "within the bond gap tolerance (Potyondy & Cundall 2004)",
+                     ss.floater_contacts)},
+        {"count", ss.floaters},
+        {"fraction", static_cast<double>(ss.floaters) / n},
+        {"grains_with_fewer_bonds", ss.few_bonds},
+        {"grains_with_fewer_bonds_fraction", static_cast<double>(ss.few_bonds) / n},
+        {"unbonded_grains", ss.unbonded},
+        {"grown", r.floaters_grown},
+        {"largest_growth", r.largest_floater_growth}}},
+      {"locked_in_stress",
+       {{"contact_law", r.contact_law},
+        {"mean_pa", r.locked_in_mean_stress},
+        {"diagonal_pa", {r.locked_in_xx, r.locked_in_yy, r.locked_in_zz}}}},
+      {"profile_along_axis", profile},
+      {"homogeneity",
+       {{"passes", h.passes()},
+        {"bars",
+         "interior eighths within 3 % of their mean; end eighths within 3 % of each other "
+         "and 8 % of the interior mean (bonds per grain and solid fraction)"},
+        {"interior_bonds_spread", h.interior_bonds_spread},
+        {"interior_solid_spread", h.interior_solid_spread},
+        {"end_bonds_difference", h.end_bonds_difference},
+        {"end_solid_difference", h.end_solid_difference},
+        {"end_bonds_deficit", h.end_bonds_deficit},
+        {"end_solid_deficit", h.end_solid_deficit}}},
+      {"preconsolidation_stress_reached_pa", r.preconsolidation_stress_reached},
+      {"radius_mean_m", r.radius_mean},
+      {"radius_sd_m", r.radius_sd},
+      {"radius_min_m", r.radius_min},
+      {"radius_max_m", r.radius_max},
+      {"packing_steps", r.steps},
+      {"converged", r.converged},
+      {"size_m", {r.width, r.depth, r.height}},
+      {"stages", stages},
+      {"warnings", r.warnings},
+      {"packing_seconds", r.wall_seconds}};
+}
+
+// A short stable hash of the settings that define a generated sample (the cache key).
+std::string sample_key(const ExperimentSpec& s) {
+  const std::string text = to_toml(s);
+  std::string sample_part;
+  bool in = false;
+  for (std::size_t pos = 0; pos < text.size();) {
+    const std::size_t e = text.find('\n', pos);
+    const std::string line = text.substr(pos, e - pos);
+    pos = e == std::string::npos ? text.size() : e + 1;
+    if (!line.empty() && line[0] == '[') in = line == "[sample]";
+    if (in || line.rfind("seed", 0) == 0 || line.rfind("dimension", 0) == 0) sample_part += line;
+  }
+  // The packing revision: a change of the algorithm must not reuse samples packed before it.
+  // The packing cycles with the test's contact law: its parameters define the sample too.
+  const std::size_t c0 = text.find("\n[contact]"), c1 = text.find("\n[bond]");
+  if (c0 != std::string::npos && c1 != std::string::npos) sample_part += text.substr(c0, c1 - c0);
+  sample_part += "|packing-7";
+  return fmt::format("{:016x}", fnv1a64(sample_part));
+}
+
+}  // namespace
+
+ContactModel contact_model(const ExperimentSpec& s) {
+  // Every contact law has a friction coefficient: walls use the contact law with wall_friction.
+  return visit_params<ContactLaws>(s.contact, [&]<class Law>(const typename Law::Params& p) {
+    typename Law::Params wall = p;
+    wall.friction = s.wall_friction;
+    return make_contact_model<Law>(p, wall);
+  });
+}
+
+PackingSettings packing_settings(const ExperimentSpec& s) {
+  PackingSettings p;
+  p.shape = s.shape == "cylinder"    ? SampleShape::Cylinder
+            : s.shape == "rectangle" ? SampleShape::Rectangle
+            : s.shape == "disk"      ? SampleShape::Disk
+                                     : SampleShape::Prism;
+  p.width = s.width;
+  p.depth = s.depth;
+  p.height = s.height;
+  p.diameter = s.diameter;
+  p.thickness = s.thickness;
+  p.planar_body = s.grain_body();
+  p.radii = radius_distribution(s);
+  p.density = s.density;
+  p.method = s.packing == "insertion"          ? PackingMethod::Insertion
+             : s.packing == "preconsolidation" ? PackingMethod::Preconsolidation
+                                               : PackingMethod::Expansion;
+  p.porosity = s.porosity;
+  p.servo_to_stress = s.packing_target == "stress";
+  p.isotropic_stress = s.isotropic_stress;
+  p.preconsolidation_stress = s.preconsolidation_stress;
+  p.contact = contact_model(s);
+  p.bond_gap_tolerance = s.bond_gap_tolerance;
+  p.floater_contacts = static_cast<int>(s.floater_contacts);
+  p.floater_max_growth = s.floater_max_growth;
+  p.insertion_failures = static_cast<std::uint64_t>(s.insertion_failures);
+  p.seed = s.engine.seed;
+  p.max_particles = static_cast<std::size_t>(s.max_particles);
+  return p;
+}
+
+GeneratedSample generate_sample(const ExperimentSpec& s, const std::string& path,
+                                const std::function<void(const std::string&)>& log) {
+  PackedSample packed = pack_sample(packing_settings(s), log);
+  GeneratedSample out{std::move(packed.geometry), packing_json(packed.report)};
+  out.report["generator"] = fmt::format("breccia {}", kVersion);
+  out.report["settings"] = to_toml(s);
+  if (!path.empty()) {
+    const fs::path p(path);
+    if (p.has_parent_path()) fs::create_directories(p.parent_path());
+    write_geometry(p.string() + ".tmp", out.geometry);
+    fs::rename(p.string() + ".tmp", p);
+    write_json(p.string() + ".json", out.report);
+  }
+  return out;
+}
+
+GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info,
+                         const std::function<void(const std::string&)>& log) {
+  const Dimension want = s.dimension == 2 ? Dimension::Two : Dimension::Three;
+  info = sample_info(s);
+  const auto max_n = static_cast<std::uint64_t>(s.max_particles);
+  GeometryData g;
+  if (s.sample_source == "generate") {
+    const fs::path cache = fs::path(s.output_directory) / "samples" /
+                           fmt::format("{}-{}.geom", s.shape, sample_key(s));
+    if (s.cache && fs::exists(cache) && fs::exists(cache.string() + ".json")) {
+      log("sample: reusing " + cache.string());
+      g = read_geometry(cache.string(), max_n);
+      report = read_json_object(cache.string() + ".json");
+      report["cached_file"] = cache.string();
+    } else {
+      log("sample: generating (cached afterwards in " + cache.string() + ")");
+      GeneratedSample gs = generate_sample(s, s.cache ? cache.string() : std::string(), log);
+      g = std::move(gs.geometry);
+      report = gs.report;
+      if (s.cache) report["cached_file"] = cache.string();
+    }
+  } else if (s.sample_source == "file") {
+    const std::string p = resolve(s, s.geometry_file);
+    g = read_geometry(p, max_n);
+    if (fs::exists(p + ".json")) {
+      report = read_json_object(p + ".json");
+      // A sample written by `breccia generate` says its shape in its settings.
+      if (report.contains("settings") && report["settings"].is_string())
+        for (const char* shape : {"prism", "cylinder", "rectangle", "disk"})
+          if (report["settings"].get<std::string>().find(fmt::format("shape = \"{}\"", shape)) !=
+              std::string::npos)
+            info.shape = shape;
+    }
+    report["file"] = p;
+  } else if (s.sample_source == "table") {
+    g = read_xyzr_table(resolve(s, s.geometry_file), want, s.density, s.thickness, max_n);
+    report["file"] = resolve(s, s.geometry_file);
+  } else if (s.sample_source == "gengeo") {
+    g = read_gengeo(resolve(s, s.geometry_file), s.density, s.thickness, max_n);
+    report["file"] = resolve(s, s.geometry_file);
+  } else {
+    const ParticleStore ps =
+        s.dimension == 2 ? hex_block(static_cast<int>(s.cells[0]), static_cast<int>(s.cells[1]),
+                                     s.radius, s.density, s.thickness)
+                         : fcc_block(static_cast<int>(s.cells[0]), static_cast<int>(s.cells[1]),
+                                     static_cast<int>(s.cells[2]), s.radius, s.density);
+    g.dimension = ps.dimension();
+    g.thickness = ps.thickness();
+    for (std::size_t i = 0; i < ps.size(); ++i)
+      g.particles.push_back({.tag = ps.tag[i],
+                             .position = ps.pos_rad[i].x,
+                             .radius = ps.pos_rad[i].r,
+                             .density = ps.density[i]});
+    report["lattice"] = s.dimension == 2 ? "hexagonal" : "fcc";
+    check_geometry(g, s.source + " (sample.source = \"lattice\")", max_n);
+  }
+  if (g.dimension != want)
+    throw InputError(s.source, "engine.dimension", std::to_string(s.dimension),
+                     std::string("the sample is ") + (g.dimension == Dimension::Two ? "2D" : "3D"));
+  return g;
+}
+
+namespace {
+
+// Limits on what a run may ask for, checked before the test starts and before the run folder
+// exists: beyond them a run cannot finish in any reasonable time (or memory), and the cause is
+// almost always a typo or a unit error in a key the message names.
+constexpr double kMaxRunSteps = 1e9;        // about a month for a small sample on 2 cores
+constexpr double kMaxParticleSteps = 1e13;  // about a month on 2 cores (bench/RESULTS.md)
+constexpr double kMaxStrainBins = 1e6;      // indicator series and their windows
+constexpr double kMaxSnapshotsPerRun = 1e5;
+// Platen travel per step relative to the smallest radius: the contact search (skin 0.4 x mean
+// radius) and the explicit integration both assume far smaller moves per step.
+constexpr double kMaxPlatenTravelPerStep = 0.05;
+
+// The steps the test needs at most: its ramp plus the platen travel to max_strain at the platen
+// speed (each platen moves, so the sample shortens at twice that speed).
+void check_run_budget(const ExperimentSpec& s, const Simulation& sim, double length, double v_bar) {
+  const double dt = sim.time_step();
+  if (!(std::isfinite(dt) && dt > 0.0))
+    throw InputError(s.source, "engine.time_step", num(dt),
+                     "the time step must be finite and > 0; check the grain radii, densities and "
+                     "stiffnesses");
+  double ramp = 0.0, speed = 0.0, max_strain = 0.0;
+  visit_lab_test(s.test, [&]<class T>(const typename T::Params& p) {
+    ramp = p.ramp_time > 0.0 ? p.ramp_time : 10.0 * length / v_bar;
+    speed = p.platen_speed;
+    max_strain = p.max_strain;
+  });
+  const double steps = (ramp + max_strain * length / (2.0 * speed)) / dt;
+  const double n = static_cast<double>(sim.particles().size());
+  const std::string what = fmt::format(
+      "ramp {} s + max_strain {} x sample length {} m / (2 x platen_speed {} m/s), at a time step "
+      "of {} s",
+      num(ramp), num(max_strain), num(length), num(speed), num(dt));
+  if (!(steps <= kMaxRunSteps) || !(steps * n <= kMaxParticleSteps))
+    throw InputError(s.source, "test.platen_speed / test.max_strain / test.ramp_time",
+                     fmt::format("{:.3g} steps of {} particles", steps, sim.particles().size()),
+                     fmt::format("a test may take at most {:.0e} steps and {:.0e} particle-steps; "
+                                 "this one needs {}: raise the platen speed, lower the strain or "
+                                 "the ramp, or check engine.time_step and the grain radii",
+                                 kMaxRunSteps, kMaxParticleSteps, what));
+  double r_min = std::numeric_limits<double>::infinity();
+  for (const PosRad& q : sim.particles().pos_rad) r_min = std::min(r_min, q.r);
+  if (!(speed * dt <= kMaxPlatenTravelPerStep * r_min))
+    throw InputError(s.source, "test.platen_speed", num(speed) + " m/s",
+                     fmt::format("a platen may move at most {} of the smallest grain radius ({} "
+                                 "m) per time step ({} s), i.e. at most {} m/s: faster, contacts "
+                                 "are crossed within a step and the test is no longer quasi-static "
+                                 "(use a few cm/s or less)",
+                                 kMaxPlatenTravelPerStep, num(r_min), num(dt),
+                                 num(kMaxPlatenTravelPerStep * r_min / dt)));
+  if (max_strain / s.ae_bin_width > kMaxStrainBins)
+    throw InputError(
+        s.source, "ae.bin_width", num(s.ae_bin_width),
+        fmt::format("at most {:.0e} bins up to test.max_strain = {}: use a bin of at "
+                    "least {}",
+                    kMaxStrainBins, num(max_strain), num(max_strain / kMaxStrainBins)));
+  if (s.snapshot_strain_interval > 0.0 &&
+      max_strain / s.snapshot_strain_interval > kMaxSnapshotsPerRun)
+    throw InputError(
+        s.source, "output.snapshot_strain_interval", num(s.snapshot_strain_interval),
+        fmt::format("at most {:.0e} snapshots up to test.max_strain = {}; use 0 for "
+                    "none or an interval of at least {}",
+                    kMaxSnapshotsPerRun, num(max_strain), num(max_strain / kMaxSnapshotsPerRun)));
+}
+
+// The experiment's joint planes, placed about the centre of the sample's bounding box, with the
+// joint law's parameters.
+void add_joints(const ExperimentSpec& s, Simulation& sim) {
+  if (s.joint_planes.empty()) return;
+  visit_params<JointLaws>(
+      s.joint, [&]<class Law>(const typename Law::Params& p) { sim.set_joint_params<Law>(p); });
+  Vec3 lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
+  for (const PosRad& q : sim.particles().pos_rad)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], q.x[k] - q.r);
+      hi[k] = std::max(hi[k], q.x[k] + q.r);
+    }
+  Vec3 centre = (lo + hi) * 0.5;
+  if (s.dimension == 2) centre.z = 0.0;
+  for (const JointPlaneSpec& j : s.joint_planes) {
+    JointPlane plane;
+    plane.point = centre + Vec3{j.centre[0], j.centre[1], j.centre[2]};
+    plane.normal = joint_normal(j, static_cast<int>(s.dimension));
+    plane.radius = j.radius > 0.0 ? j.radius : kInf;
+    plane.spacing = j.spacing;
+    sim.add_joint_plane(plane);
+  }
+}
+
+}  // namespace
+
+Built build(const ExperimentSpec& s, const std::function<void(const std::string&)>& log) {
+  json report;
+  SampleInfo info;
+  GeometryData g = load_sample(s, report, info, log);
+  // Density scaling (physics.md §1.5): masses and inertias grow, so does the stable time step.
+  for (ParticleSpec& q : g.particles) q.density *= s.density_scaling;
+  ParticleStore ps = g.make_store(s.grain_body());
+  EngineConfig cfg = s.engine;
+  cfg.gravity = s.dimension == 2 ? Vec3{0, -s.gravity, 0} : Vec3{0, 0, -s.gravity};
+  Simulation sim(std::move(ps), cfg, contact_model(s));
+  visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params& p) {
+    sim.set_bond_params<Law>(p);
+    if (!g.bonds.empty())
+      for (auto [a, b] : g.bonds) sim.add_bond<Law>(a, b);
+    else
+      sim.bond_touching_pairs<Law>(s.bond_gap_tolerance);
+  });
+  add_joints(s, sim);
+  std::unique_ptr<Protocol> protocol;
+  visit_lab_test(s.test, [&]<class T>(const typename T::Params& p) {
+    T::check(p, info, s.source);
+    protocol = T::create(sim, p, info);
+  });
+  sim.initialise();
+  // Bar-wave speed for the ramp (§2.3, §6.1): E estimated by the bond modulus, bulk density from
+  // the (scaled) particle mass in the sample's bounding box.
+  double mass = 0.0;
+  for (double m : sim.particles().mass) mass += m;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  const int axis = s.dimension == 2 ? 1 : 2;
+  double footprint_lo[2] = {lo, lo}, footprint_hi[2] = {hi, hi};
+  for (const PosRad& q : sim.particles().pos_rad) {
+    lo = std::min(lo, q.x[axis] - q.r);
+    hi = std::max(hi, q.x[axis] + q.r);
+    for (int k = 0; k < 2; ++k) {
+      footprint_lo[k] = std::min(footprint_lo[k], q.x[k] - q.r);
+      footprint_hi[k] = std::max(footprint_hi[k], q.x[k] + q.r);
+    }
+  }
+  const double volume = (hi - lo) * (footprint_hi[0] - footprint_lo[0]) *
+                        (s.dimension == 2 ? s.thickness : footprint_hi[1] - footprint_lo[1]);
+  const double v_bar = std::sqrt(bond_moduli(s).young / (mass / volume));
+  check_run_budget(s, sim, hi - lo, v_bar);
+  const std::uint64_t consolidation = protocol->start(sim, v_bar);
+  return Built{std::move(sim), std::move(protocol), v_bar, report, consolidation};
+}
+
+}  // namespace breccia

@@ -1,0 +1,92 @@
+#include "breccia/run/session.hpp"
+
+#include <fmt/format.h>
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "breccia/core/checksum.hpp"
+#include "breccia/core/error.hpp"
+#include "breccia/version.hpp"
+
+namespace breccia {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+constexpr const char* kCheckpointMagic = "breccia-checkpoint";
+// 2: commit and trailing hash; 3: strain gauges; 4, 5: brittle-beam and quaternion bond sets;
+// 6: smooth joints; 7: the 2D side-wall servo's integral terms; 8: RICEBAL bond set
+constexpr std::uint32_t kCheckpointFormat = 9;
+
+// Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
+// last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
+// it is trusted.
+void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Session& s) {
+  const fs::path path = folder / kCheckpointFile, tmp = folder / "checkpoint.bin.tmp";
+  std::ostringstream body(std::ios::binary);
+  {
+    ArchiveWriter a(body);
+    a.string(kCheckpointMagic);
+    a.value(kCheckpointFormat);
+    a.string(kVersion);
+    a.string(kCommit);
+    a.string(to_toml(spec));
+    s.loop.save(a);
+    s.sim.save_state(a);
+    s.test->save_state(a);
+    s.history.save_state(a);
+    s.cracks.save_state(a);
+    s.snaps.save_state(a);
+    s.ae.save(a);
+    a.label("end of checkpoint");
+  }
+  const std::string bytes = std::move(body).str();
+  const std::uint64_t hash = fnv1a64(bytes);
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint");
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.write(reinterpret_cast<const char*>(&hash), sizeof hash);
+    out.flush();
+    if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint (disk full?)");
+  }
+  fs::rename(tmp, path);
+}
+
+std::string read_checkpoint_bytes(const fs::path& cpath) {
+  std::ifstream in(cpath, std::ios::binary);
+  if (!in) throw InputError(cpath.string(), "", "", "cannot read the checkpoint");
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  {
+    std::istringstream head(bytes, std::ios::binary);
+    ArchiveReader a(head, cpath.string());
+    if (a.string() != kCheckpointMagic)
+      throw InputError(cpath.string(), "header", "", "not a Breccia checkpoint");
+    const auto format = a.get<std::uint32_t>();
+    const std::string version = a.string();
+    if (format != kCheckpointFormat || version != kVersion)
+      throw InputError(cpath.string(), "version",
+                       version + " (format " + std::to_string(format) + ")",
+                       std::string("this is breccia ") + kVersion + " (format " +
+                           std::to_string(kCheckpointFormat) +
+                           "): resume with the version that wrote the checkpoint");
+  }
+  std::uint64_t stored = 0;
+  if (bytes.size() < sizeof stored)
+    throw InputError(cpath.string(), "length", std::to_string(bytes.size()) + " bytes",
+                     "the checkpoint is truncated");
+  std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
+  bytes.resize(bytes.size() - sizeof stored);
+  if (fnv1a64(bytes) != stored)
+    throw InputError(cpath.string(), "checksum", fmt::format("{:016x}", stored),
+                     fmt::format("the file's bytes hash to {:016x}: the checkpoint is damaged "
+                                 "or truncated and cannot be resumed",
+                                 fnv1a64(bytes)));
+  return bytes;
+}
+
+}  // namespace breccia

@@ -1,0 +1,94 @@
+#pragma once
+// A run in progress as a checkpoint holds it: the engine, the lab test, the recorders, the
+// acoustic-emission monitor and the loading loop's own state; and checkpoint.bin, which saves
+// and restores it exactly.
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "breccia/analysis/compression.hpp"
+#include "breccia/core/archive.hpp"
+#include "breccia/core/error.hpp"
+#include "breccia/engine/simulation.hpp"
+#include "breccia/io/experiment.hpp"
+#include "breccia/observe/ae_monitor.hpp"
+#include "breccia/observe/recorders.hpp"
+#include "breccia/observe/snapshots.hpp"
+#include "breccia/protocol/protocol.hpp"
+
+namespace breccia {
+
+inline constexpr const char* kCheckpointFile = "checkpoint.bin";
+
+// What the loading loop carries from one row to the next besides the engine, the protocol and
+// the recorders: the analysed series, the quality monitors and the run's bookkeeping.
+struct LoopState {
+  analysis::CompressionSeries series;
+  std::vector<double> imbalance, ke_ratio, confine_err;
+  double next_snapshot = 0.0;
+  double wall_seconds = 0.0;  // spent in earlier sessions of this run (updated when saved)
+  std::uint64_t consolidation_steps = 0;
+  std::uint64_t bonds_initial = 0;
+  std::vector<std::string> warnings;  // those of the set-up
+  // Reference state of the loading stage for the failure analysis.
+  double volume0 = 0.0, porosity0 = 0.0, length_min = 0.0;
+  std::string wave_speed_method;
+
+  template <class Archive>
+  void transfer(Archive& a) {
+    a.label("loop");
+    a.vector(series.axial_strain);
+    a.vector(series.deviatoric);
+    a.vector(series.lateral_strain);
+    a.vector(series.volumetric_strain);
+    a.vector(series.gauge_axial_strain);
+    a.vector(series.gauge_lateral_strain);
+    a.vector(series.broken_bonds);
+    a.value(series.confining_stress);
+    a.vector(imbalance);
+    a.vector(ke_ratio);
+    a.vector(confine_err);
+    a.value(next_snapshot);
+    a.value(wall_seconds);
+    a.value(consolidation_steps);
+    a.value(bonds_initial);
+    a.sized(warnings, 8);
+    for (std::string& w : warnings) a.string(w);
+    a.value(volume0);
+    a.value(porosity0);
+    a.value(length_min);
+    a.string(wave_speed_method);
+  }
+  void save(ArchiveWriter& a) const { const_cast<LoopState*>(this)->transfer(a); }
+  void load(ArchiveReader& a) {
+    transfer(a);
+    const std::size_t rows = series.axial_strain.size();
+    for (std::size_t m :
+         {series.deviatoric.size(), series.lateral_strain.size(), series.volumetric_strain.size(),
+          series.gauge_axial_strain.size(), series.gauge_lateral_strain.size(),
+          series.broken_bonds.size(), imbalance.size(), ke_ratio.size()})
+      if (m != rows)
+        throw InputError(a.where(), "series", std::to_string(m),
+                         "series lengths differ: the checkpoint is corrupt");
+  }
+};
+
+// One run in progress: everything a checkpoint holds.
+struct Session {
+  Simulation sim;
+  std::unique_ptr<Protocol> test;
+  HistoryRecorder history;
+  CrackRecorder cracks;
+  SnapshotWriter snaps;
+  LoopState loop;
+  AeMonitor ae;
+};
+
+// Writes checkpoint.bin atomically (temporary file, then rename): a crash while writing leaves the
+// previous checkpoint intact.
+void write_checkpoint(const std::filesystem::path& folder, const ExperimentSpec& spec, Session& s);
+// Reads checkpoint.bin whole and checks its header and hash; returns the bytes before the hash.
+std::string read_checkpoint_bytes(const std::filesystem::path& checkpoint);
+
+}  // namespace breccia

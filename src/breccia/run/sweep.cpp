@@ -1,0 +1,264 @@
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "breccia/analysis/compression.hpp"
+#include "breccia/analysis/stress_strain.hpp"
+#include "breccia/core/error.hpp"
+#include "breccia/core/parallel.hpp"
+#include "breccia/io/json_view.hpp"
+#include "breccia/io/run_folder.hpp"
+#include "breccia/run/run.hpp"
+#include "breccia/run/sample_build.hpp"
+#include "breccia/version.hpp"
+
+namespace breccia {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+json nan_null(double v) {
+  return std::isfinite(v) ? json(v) : json(nullptr);
+}
+
+json sweep_entry(double sigma3, const RunResult& r) {
+  return {{"confining_stress_pa", sigma3},
+          {"folder", fs::path(r.folder).filename().string()},
+          {"status", r.status},
+          {"peak_deviatoric_stress_pa", r.peak_stress},
+          {"sigma1_at_peak_pa", r.sigma1_at_peak},
+          {"youngs_modulus_pa", nan_null(r.youngs_modulus)},
+          {"poisson_ratio", nan_null(r.poisson)},
+          {"cracks", r.cracks},
+          {"wall_seconds", r.wall_seconds}};
+}
+
+// The headline results of a run folder written by a child process (its summary, or its manifest
+// when the run stopped before one was written).
+RunResult result_of_folder(const fs::path& folder) {
+  RunResult r;
+  r.folder = folder.string();
+  r.status = "failed";
+  const fs::path summary = folder / "summary.json", manifest = folder / "manifest.json";
+  if (fs::exists(summary)) {
+    const json j = read_json_object(summary.string());
+    const JsonView v(j, summary.string());
+    r.status = v.text("status", "failed");
+    r.stop_reason = v.text("stop_reason", "");
+    r.peak_stress = v.maybe_number("peak_deviatoric_stress_pa").value_or(0.0);
+    r.sigma1_at_peak = v.maybe_number("sigma1_at_peak_pa").value_or(0.0);
+    r.strain_at_peak = v.maybe_number("axial_strain_at_peak").value_or(0.0);
+    r.youngs_modulus =
+        v.maybe_number("youngs_modulus_pa").value_or(std::numeric_limits<double>::quiet_NaN());
+    r.poisson = v.maybe_number("poisson_ratio").value_or(std::numeric_limits<double>::quiet_NaN());
+    r.confining_stress = v.maybe_number("confining_stress_pa").value_or(0.0);
+    r.particles = static_cast<std::size_t>(v.maybe_number("particles").value_or(0.0));
+    r.cracks = static_cast<std::size_t>(v.maybe_number("bonds_broken").value_or(0.0));
+    r.tensile = static_cast<std::size_t>(v.maybe_number("cracks_tensile").value_or(0.0));
+    r.shear = static_cast<std::size_t>(v.maybe_number("cracks_shear").value_or(0.0));
+    r.wall_seconds = v.maybe_number("wall_seconds").value_or(0.0);
+  } else if (fs::exists(manifest)) {
+    const json j = read_json_object(manifest.string());
+    const JsonView v(j, manifest.string());
+    r.status = v.text("status", "failed");
+    r.stop_reason = v.text("stop_reason", "the run wrote no summary");
+  }
+  return r;
+}
+
+// Starts `exe run file` with stdout to `out` and stderr to `err`; the child's pid.
+pid_t spawn_run(const std::string& exe, const fs::path& file, const fs::path& out,
+                const fs::path& err) {
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<std::string> args{exe, "run", file.string()};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, exe.c_str(), &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0)
+    throw std::runtime_error(fmt::format("sweep: cannot start {}: {}", exe, std::strerror(rc)));
+  return pid;
+}
+
+// The folder a child's `breccia run` printed as its last line of output.
+fs::path printed_folder(const fs::path& out) {
+  std::ifstream in(out);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+// The sweep's runs as child processes, `jobs` at a time, each with `threads` OpenMP threads. A
+// generated sample is packed first, once, into the cache the children read.
+std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int jobs, int threads,
+                                          const fs::path& folder, const RunOptions& opt) {
+  const ExperimentSpec& first = specs.front();
+  if (first.sample_source == "generate" && first.cache) {
+    json report;
+    SampleInfo info;
+    load_sample(first, report, info, opt.log);
+  }
+  const fs::path dir = folder / "experiments";
+  fs::create_directories(dir);
+  std::vector<RunResult> results(specs.size());
+  std::vector<std::pair<pid_t, std::size_t>> running;
+  std::size_t next = 0;
+  auto reap_one = [&] {
+    int status = 0;
+    const pid_t pid = waitpid(-1, &status, 0);
+    if (pid <= 0) return;
+    for (std::size_t k = 0; k < running.size(); ++k) {
+      if (running[k].first != pid) continue;
+      const std::size_t i = running[k].second;
+      const fs::path stem = dir / specs[i].name;
+      const fs::path run = printed_folder(stem.string() + ".out");
+      results[i] = run.empty() || !fs::exists(run) ? RunResult{} : result_of_folder(run);
+      if (run.empty() || !fs::exists(run)) {
+        results[i].status = "failed";
+        results[i].stop_reason = "no run folder: see " + stem.string() + ".log";
+      }
+      if (opt.log)
+        opt.log(fmt::format("sweep: {} {} ({})", specs[i].name, results[i].status,
+                            results[i].status == "complete"
+                                ? fmt::format("peak q {:.2f} MPa", results[i].peak_stress * 1e-6)
+                                : results[i].stop_reason));
+      running.erase(running.begin() + static_cast<std::ptrdiff_t>(k));
+      return;
+    }
+  };
+  while (next < specs.size() || !running.empty()) {
+    const bool stopping = opt.interrupt && opt.interrupt->load();
+    if (!stopping && next < specs.size() && running.size() < static_cast<std::size_t>(jobs)) {
+      ExperimentSpec& one = specs[next];
+      one.threads = threads;
+      one.progress = false;
+      const fs::path stem = dir / one.name;
+      { std::ofstream(stem.string() + ".toml") << to_toml(one); }
+      if (opt.log)
+        opt.log(fmt::format("sweep: started {} ({} thread{})", one.name, threads,
+                            threads == 1 ? "" : "s"));
+      running.emplace_back(spawn_run(opt.executable, stem.string() + ".toml",
+                                     stem.string() + ".out", stem.string() + ".log"),
+                           next);
+      ++next;
+      continue;
+    }
+    if (running.empty()) break;  // interrupted before every run started
+    reap_one();
+  }
+  for (std::size_t i = next; i < specs.size(); ++i) {
+    results[i].status = "interrupted";
+    results[i].stop_reason = "not started: the sweep was interrupted";
+  }
+  return results;
+}
+
+}  // namespace
+
+SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining,
+                      const RunOptions& opt) {
+  if (confining.empty())
+    throw InputError("sweep", "--confining", "(none)", "give at least one confining stress");
+  for (double c : confining)
+    if (!(c >= 0.0))
+      throw InputError("sweep", "--confining", num(c), "each confining stress must be >= 0 Pa");
+  ExperimentSpec base = spec;
+  {
+    ExperimentSpec probe = spec;  // a test that cannot be swept fails before any folder exists
+    set_confining_stress(probe, confining.front(), "sweep");
+  }
+  const fs::path folder = make_folder(spec);
+  fs::rename(folder, folder.string() + "-sweep");
+  SweepResult out;
+  out.folder = folder.string() + "-sweep";
+  base.output_directory = out.folder;
+  std::vector<ExperimentSpec> specs;
+  for (double c : confining) {
+    ExperimentSpec one = base;
+    set_confining_stress(one, c, "sweep");
+    one.name = fmt::format("{}-confining-{}MPa", spec.name, c * 1e-6);
+    specs.push_back(one);
+  }
+  // Parallel processes when cores allow: each run gets its share of the cores (or the threads
+  // the experiment asks for).
+  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int per_run = spec.threads > 0 ? static_cast<int>(spec.threads) : 1;
+  const int jobs = opt.jobs > 0
+                       ? opt.jobs
+                       : std::min(static_cast<int>(specs.size()), std::max(1, cores / per_run));
+  json runs = json::array();
+  std::vector<double> s3, s1;
+  out.status = "complete";
+  if (jobs > 1 && !opt.executable.empty()) {
+    const int threads = spec.threads > 0 ? per_run : std::max(1, cores / jobs);
+    if (opt.log)
+      opt.log(fmt::format("sweep: {} runs, {} at a time ({} thread{} each)", specs.size(), jobs,
+                          threads, threads == 1 ? "" : "s"));
+    out.runs = sweep_in_processes(specs, jobs, threads, out.folder, opt);
+  } else {
+    // Copies of one sample: a generated sample is packed once and cached in the sweep folder.
+    for (const ExperimentSpec& one : specs) {
+      if (opt.log)
+        opt.log(fmt::format("sweep: confining stress {} MPa", confining_stress(one) * 1e-6));
+      out.runs.push_back(run_experiment(one, opt));
+      if (out.runs.back().status != "complete") break;
+    }
+  }
+  for (std::size_t i = 0; i < out.runs.size(); ++i) {
+    const RunResult& r = out.runs[i];
+    runs.push_back(sweep_entry(confining[i], r));
+    if (r.status != "complete") {
+      if (out.status == "complete") out.status = r.status;
+      continue;
+    }
+    s3.push_back(confining[i]);
+    s1.push_back(r.sigma1_at_peak);
+  }
+  const auto mc = analysis::fit_mohr_coulomb(s3, s1);
+  const auto hb = analysis::fit_hoek_brown(s3, s1);
+  json sweep{{"status", out.status},
+             {"experiment", spec.name},
+             {"runs", runs},
+             {"mohr_coulomb",
+              {{"valid", mc.valid},
+               {"method", "least squares of sigma_1 on sigma_3 (principal-stress form)"},
+               {"k", mc.k},
+               {"friction_angle_deg", mc.friction_angle_deg},
+               {"cohesion_pa", mc.cohesion},
+               {"ucs_intercept_pa", mc.ucs},
+               {"implied_tensile_strength_pa", mc.tensile},
+               {"r2", nan_null(mc.r2)},
+               {"flag", mc.flag}}},
+             {"hoek_brown",
+              {{"valid", hb.valid},
+               {"sigma_ci_pa", hb.sigma_ci},
+               {"m_i", hb.m_i},
+               {"sigma_ci_linearised_pa", hb.sigma_ci_linear},
+               {"m_i_linearised", hb.m_i_linear},
+               {"rms_residual_pa", hb.rms},
+               {"flag", hb.flag}}}};
+  write_json(fs::path(out.folder) / "sweep.json", sweep);
+  if (spec.plot && !write_report(out.folder) && opt.log)
+    opt.log("warning: no report.html (see " + out.folder + "/report.log)");
+  return out;
+}
+
+}  // namespace breccia
