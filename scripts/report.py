@@ -196,6 +196,102 @@ def fmt(v, f="{:.2f}"):
     return "n/a" if v is None or (isinstance(v, float) and math.isnan(v)) else f.format(v)
 
 
+def fmt_range(values, f="{:.2f}"):
+    """'lo to hi' of a [lo, hi] pair, 'n/a' when either end is missing."""
+    if not values or any(v is None or (isinstance(v, float) and math.isnan(v)) for v in values):
+        return "n/a"
+    return f"{fmt(values[0], f)} to {fmt(values[1], f)}"
+
+
+def resolved_experiment(folder):
+    """The run's resolved experiment (manifest.json) as a dict; empty if unreadable."""
+    try:
+        import tomllib
+        manifest = json.load(open(os.path.join(folder, "manifest.json")))
+        return manifest, tomllib.loads(manifest.get("resolved_experiment", ""))
+    except (OSError, ValueError, ImportError):
+        return {}, {}
+
+
+def sample_text(spec, summary):
+    s, eng = spec.get("sample", {}), spec.get("engine", {})
+    planar = eng.get("dimension") == 2
+    if s.get("shape") in ("cylinder",):
+        size = f"{fmt(s.get('diameter', 0) * 1e3, '{:g}')} mm diameter x " \
+               f"{fmt(s.get('height', 0) * 1e3, '{:g}')} mm"
+    elif s.get("shape") == "disk":
+        size = f"{fmt(s.get('diameter', 0) * 1e3, '{:g}')} mm diameter"
+    else:
+        dims = [s.get("width", 0), s.get("height", 0)] if planar else \
+            [s.get("width", 0), s.get("depth", 0), s.get("height", 0)]
+        size = " x ".join(fmt(d * 1e3, "{:g}") for d in dims) + " mm"
+    source = s.get("source", "?")
+    how = {"generate": f"packed by {s.get('packing', '?')}", "lattice": "regular lattice",
+           "file": "read from a geometry file"}.get(source, source)
+    radii = (f"; radii {fmt(s.get('radius_min', 0) * 1e6, '{:g}')}-"
+             f"{fmt(s.get('radius_max', 0) * 1e6, '{:g}')} um") if source == "generate" else ""
+    return (f"{'2D' if planar else '3D'} {s.get('shape', '?')}, {size} ({how}{radii}); "
+            f"{summary.get('particles')} grains, {summary.get('bonds_initial')} bonds")
+
+
+def summary_rows(folder, summary):
+    """The report's table: what was tested, on what, how, and the headline results, in words
+    and units (never a Python repr)."""
+    manifest, spec = resolved_experiment(folder)
+    ae = summary.get("acoustic_emission", {})
+    eb = summary.get("energy_budget", {})
+    qs = summary.get("quasi_static", {})
+    rows = [("test", f"{summary.get('test')} at sigma_3 = "
+                     f"{fmt(summary.get('confining_stress_pa', 0) * 1e-6, '{:g}')} MPa "
+                     f"({summary.get('status')}: {summary.get('stop_reason')})")]
+    if spec:
+        mat, con, bond = spec.get("material", {}), spec.get("contact", {}), spec.get("bond", {})
+        rows.append(("rock", f"material preset {mat.get('preset', '?')}; "
+                             f"{con.get('law', '?')} contacts, {bond.get('law', '?')} bonds"))
+        rows.append(("sample", sample_text(spec, summary)))
+    rows.append(("loading", f"platens at {fmt(summary.get('platen_speed_m_per_s'), '{:g}')} m/s "
+                            f"(strain rate {fmt(summary.get('strain_rate_per_s'), '{:.3g}')} /s), "
+                            f"density scaling {fmt(summary.get('density_scaling'), '{:g}')}, "
+                            f"time step {fmt(summary.get('time_step_s'), '{:.3g}')} s, "
+                            f"{summary.get('steps')} steps"))
+    if "tensile_strength_mpa" in summary:
+        rows.append(("tensile strength",
+                     f"sigma_t = 2F/(pi D t) = {fmt(summary.get('tensile_strength_mpa'))} MPa "
+                     f"(peak force {fmt(summary.get('peak_force_n'), '{:.1f}')} N, D = "
+                     f"{fmt(summary.get('disc_diameter_m', 0) * 1e3)} mm, t = "
+                     f"{fmt(summary.get('disc_thickness_m', 0) * 1e3)} mm)"))
+    else:
+        rows.append(("peak deviatoric stress",
+                     f"{fmt(summary.get('peak_deviatoric_stress_mpa'))} MPa at axial strain "
+                     f"{fmt(100 * (summary.get('axial_strain_at_peak') or float('nan')), '{:.3f}')} %"))
+    rows += [
+        ("Young's modulus E_t50 / Poisson's ratio",
+         f"{fmt((summary.get('youngs_modulus_pa') or float('nan')) * 1e-9)} GPa / "
+         f"{fmt(summary.get('poisson_ratio'), '{:.3f}')}"),
+        ("microcracks", f"{summary.get('bonds_broken')} ({summary.get('cracks_tensile')} tensile, "
+                        f"{summary.get('cracks_shear')} shear)"),
+        ("acoustic emission", f"{ae.get('events')} events (largest {ae.get('largest_event_cracks')} "
+                              f"cracks); b-value {fmt(ae.get('b_value', {}).get('b'))} over the "
+                              f"test, {fmt_range(ae.get('b_value_window_range'))} in its windows"),
+        ("correlation dimension D2 (crack midpoints)",
+         f"{fmt(ae.get('d2', {}).get('d2'))} over the test, "
+         f"{fmt_range(ae.get('d2_window_range'))} in its windows"),
+        ("energy balance", f"{eb.get('classification', 'n/a')} (largest relative residual "
+                           f"{fmt(eb.get('residual_relative_max_after_1pct_work'), '{:.2e}')})"),
+        ("quasi-static before the peak",
+         ("yes" if qs.get("ok") else "no") +
+         f": platen force imbalance {fmt(qs.get('max_platen_force_imbalance_before_peak'), '{:.3g}')}"
+         f" (limit 0.05), kinetic / strain energy "
+         f"{fmt(qs.get('max_kinetic_to_strain_energy_before_peak'), '{:.3g}')} (limit 0.001)")]
+    if manifest:
+        rows.append(("run", f"breccia {manifest.get('version')} ({manifest.get('commit')}), "
+                            f"seed {manifest.get('seed')}, "
+                            f"{manifest.get('threads')} thread{'' if manifest.get('threads') == 1 else 's'}, "
+                            f"{fmt(summary.get('wall_seconds'), '{:.0f}')} s on "
+                            f"{manifest.get('machine')}"))
+    return rows
+
+
 def gutenberg_richter(summary, events, outdir, figures):
     mw = np.sort(col(events, "mw")[np.isfinite(col(events, "mw"))]) if events else np.array([])
     if len(mw) == 0:
@@ -385,32 +481,7 @@ def run_report(folder):
     energy_budget(summary, hist, outdir, figures)
     indicators(summary, read_csv(os.path.join(folder, "indicators.csv")), outdir, figures)
     fragment_sizes(summary, read_csv(os.path.join(folder, "fragments.csv")), outdir, figures)
-    ae = summary.get("acoustic_emission", {})
-    eb = summary.get("energy_budget", {})
-    rows = [("test", f"{summary.get('test')} at sigma3 = "
-                     f"{summary.get('confining_stress_pa', 0) * 1e-6:g} MPa "
-                     f"({summary.get('status')}: {summary.get('stop_reason')})"),
-            ("particles / bonds", f"{summary.get('particles')} / {summary.get('bonds_initial')}"),
-            ("peak q", f"{fmt(summary.get('peak_deviatoric_stress_mpa'))} MPa at axial strain "
-                       f"{fmt(summary.get('axial_strain_at_peak'), '{:.5f}')}")
-            if "tensile_strength_mpa" not in summary else
-            ("tensile strength", f"sigma_t = 2F/(pi D t) = "
-                                 f"{fmt(summary.get('tensile_strength_mpa'))} MPa (peak force "
-                                 f"{fmt(summary.get('peak_force_n'), '{:.1f}')} N, D = "
-                                 f"{fmt(summary.get('disc_diameter_m', 0) * 1e3)} mm, t = "
-                                 f"{fmt(summary.get('disc_thickness_m', 0) * 1e3)} mm)"),
-            ("E_t50 / Poisson", f"{fmt((summary.get('youngs_modulus_pa') or float('nan')) * 1e-9)}"
-                                f" GPa / {fmt(summary.get('poisson_ratio'), '{:.3f}')}"),
-            ("cracks", f"{summary.get('bonds_broken')} ({summary.get('cracks_tensile')} tensile, "
-                       f"{summary.get('cracks_shear')} shear)"),
-            ("AE events", f"{ae.get('events')} (largest {ae.get('largest_event_cracks')} "
-                          f"cracks); b = {fmt(ae.get('b_value', {}).get('b'))}; window b range "
-                          f"{[fmt(x) for x in ae.get('b_value_window_range', [])]}"),
-            ("D2 (crack midpoints)", f"{fmt(ae.get('d2', {}).get('d2'))}; window range "
-                                     f"{[fmt(x) for x in ae.get('d2_window_range', [])]}"),
-            ("energy balance", f"{eb.get('classification')} (largest relative residual "
-                               f"{fmt(eb.get('residual_relative_max_after_1pct_work'), '{:.2e}')})"),
-            ("quasi-static", str(summary.get("quasi_static", {}).get("ok")))]
+    rows = summary_rows(folder, summary)
     cp = summary.get("crack_pattern", {})
     if cp.get("quarter_shares_along_axis"):
         rows.append(("cracks per quarter along the load",

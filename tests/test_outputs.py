@@ -86,6 +86,13 @@ def test_report_renders_every_figure():
             assert img.shape[0] > 300 and img.shape[1] > 400, name
             assert img[..., :3].std() > 0.05, f"{name} looks blank"
             assert f"alt='{name}'" in page, name
+        # The summary table reads as text with units: no Python list or bool reprs, and it
+        # names the sample, the loading and the run that made it.
+        table = page[page.index("<table>"):page.index("</table>")]
+        for repr_text in ("[&#x27;", "['", "False", "True", "None"):
+            assert repr_text not in table, repr_text
+        for row in ("<th>sample</th>", "<th>loading</th>", "<th>run</th>", " MPa", " GPa"):
+            assert row in table, row
         # The catalogue files the figures come from.
         summary = json.load(open(os.path.join(folder, "summary.json")))
         ae = summary["acoustic_emission"]
