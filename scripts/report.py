@@ -16,6 +16,7 @@ import json
 import math
 import os
 import sys
+import textwrap
 
 import matplotlib
 
@@ -184,12 +185,17 @@ def b_and_d2(summary, bwin, dwin, ind, outdir, figures):
     ae = summary.get("acoustic_emission", {})
     b_all = ae.get("b_value", {})
     d_all = ae.get("d2", {})
-    a1.set_title(
-        f"b-value (whole test {fmt(b_all.get('b'))} +- {fmt(b_all.get('sigma'))}, "
-        f"{b_all.get('flag') or 'ok'}) and D2 of crack midpoints (whole test "
-        f"{fmt(d_all.get('d2'))}); windows without enough events give no value", fontsize=8)
+    a1.set_title(wrapped(
+        f"b-value: whole test {fmt(b_all.get('b'))} +- {fmt(b_all.get('sigma'))} "
+        f"({b_all.get('flag') or 'ok'}); windows without enough events give no value"), fontsize=8)
+    a2.set_title(f"D2 of the crack midpoints: whole test {fmt(d_all.get('d2'))}", fontsize=8)
     fig.tight_layout()
     save(fig, outdir, "b_value_d2.png", figures)
+
+
+def wrapped(title, width=90):
+    """A figure title broken into lines that fit the figure's width."""
+    return textwrap.fill(title, width)
 
 
 def fmt(v, f="{:.2f}"):
@@ -372,8 +378,9 @@ def energy_budget(summary, hist, outdir, figures):
     ax.set_xlabel("axial strain (%)")
     ax.set_ylabel("energy (mJ)")
     ax.legend(fontsize=7, loc="upper left")
-    ax.set_title(f"Energy budget (balance: {eb.get('classification', 'n/a')}, largest relative "
-                 f"residual {fmt(eb.get('residual_relative_max_after_1pct_work'), '{:.2e}')})",
+    ax.set_title(wrapped(f"Energy budget (balance: {eb.get('classification', 'n/a')}, largest "
+                         f"relative residual "
+                         f"{fmt(eb.get('residual_relative_max_after_1pct_work'), '{:.2e}')})"),
                  fontsize=9)
     fig.tight_layout()
     save(fig, outdir, "energy_budget.png", figures)
@@ -411,10 +418,10 @@ def fragment_sizes(summary, frags, outdir, figures):
     ax.set_xlabel("fragment mass (g)")
     ax.set_ylabel("number of fragments N(>= m)")
     ax.legend(fontsize=7)
-    ax.set_title(f"Fragments after the test: {f.get('count', len(m))} "
-                 f"({f.get('single_particle_debris', 'n/a')} single grains), largest "
-                 f"{fmt(100 * f.get('largest_fraction_of_total', float('nan')), '{:.1f}')} % of "
-                 "the mass", fontsize=9)
+    ax.set_title(wrapped(f"Fragments after the test: {f.get('count', len(m))} "
+                         f"({f.get('single_particle_debris', 'n/a')} single grains), largest "
+                         f"{fmt(100 * f.get('largest_fraction_of_total', float('nan')), '{:.1f}')}"
+                         " % of the mass"), fontsize=9)
     fig.tight_layout()
     save(fig, outdir, "fragment_sizes.png", figures)
 
