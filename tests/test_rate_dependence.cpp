@@ -1,0 +1,61 @@
+// The strain-rate fit of analysis.md §11 on its worked examples and on planted data.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "breccia/analysis/rate_dependence.hpp"
+
+using namespace breccia::analysis;
+
+TEST(RateDependence, WorkedExampleOfTheTwoParameterLaw) {
+  // analysis.md §11: rates 0.1, 1, 10 /s and UCS 100.501, 105.127, 164.872 MPa (100 e^(0.05 r)
+  // to 3 decimals): ln UCS on the rate gives b = 0.0500 s and a = 100.0 MPa.
+  const ExponentialRateFit f = fit_rate_dependence({0.1, 1, 10}, {100.501, 105.127, 164.872});
+  ASSERT_TRUE(f.valid) << f.flag;
+  EXPECT_NEAR(f.b_log, 0.0500, 5e-5);
+  EXPECT_NEAR(f.a_log, 100.0, 0.01);
+  // The untransformed fit lands on the same law; the data's rounding (1e-3 MPa) bounds the rest.
+  EXPECT_NEAR(f.a, 100.0, 0.01);
+  EXPECT_NEAR(f.b, 0.0500, 5e-5);
+  EXPECT_LT(f.rms, 1e-3);
+  ASSERT_EQ(f.dynamic_increase.size(), 3u);
+  EXPECT_NEAR(f.dynamic_increase[2], 1.64872, 2e-4);
+  EXPECT_FALSE(f.three_valid) << "three points do not fix three parameters and a scatter";
+}
+
+TEST(RateDependence, WorkedExampleOfTheThreeParameterLaw) {
+  // analysis.md §11: c = 80, a = 20, b = 0.1 at rates 0, 2, 5, 10 /s give 100.000, 104.428,
+  // 112.974, 134.366 MPa. Four points fix the three parameters (to the data's rounding).
+  const ExponentialRateFit f =
+      fit_rate_dependence({0, 2, 5, 10}, {100.000, 104.428, 112.974, 134.366});
+  ASSERT_TRUE(f.three_valid);
+  EXPECT_NEAR(f.c3, 80.0, 0.05);
+  EXPECT_NEAR(f.a3, 20.0, 0.05);
+  EXPECT_NEAR(f.b3, 0.1, 1e-4);
+  EXPECT_NEAR(f.c3 + f.a3, 100.0, 0.01) << "the quasi-static limit";
+  EXPECT_LT(f.rms3, 2e-3);
+  // The two-parameter law cannot follow the plateau: its residual is larger.
+  EXPECT_GT(f.rms, 10 * f.rms3);
+}
+
+TEST(RateDependence, ScatterGivesStandardErrorsThatCoverThePlantedLaw) {
+  // UCS = 50 e^(0.03 r) MPa with a +-1 % alternating scatter at six rates: the fit's standard
+  // errors are finite and the planted values lie within three of them.
+  const std::vector<double> r{0.05, 0.1, 0.5, 1, 5, 10};
+  std::vector<double> ucs;
+  for (std::size_t j = 0; j < r.size(); ++j)
+    ucs.push_back(50.0 * std::exp(0.03 * r[j]) * (j % 2 ? 1.01 : 0.99));
+  const ExponentialRateFit f = fit_rate_dependence(r, ucs);
+  ASSERT_TRUE(f.valid);
+  ASSERT_TRUE(std::isfinite(f.a_se) && std::isfinite(f.b_se));
+  EXPECT_GT(f.a_se, 0.0);
+  EXPECT_LT(std::abs(f.a - 50.0), 3 * f.a_se);
+  EXPECT_LT(std::abs(f.b - 0.03), 3 * f.b_se);
+}
+
+TEST(RateDependence, TooFewPositiveStrengthsGiveNoFit) {
+  const ExponentialRateFit f = fit_rate_dependence({0.1, 1, 10}, {100.0, -1.0, 120.0});
+  EXPECT_FALSE(f.valid);
+  EXPECT_EQ(f.flag, "too_few_rates");
+  EXPECT_EQ(f.points, 2u);
+}
