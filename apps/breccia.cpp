@@ -193,17 +193,24 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
   struct Options {
     std::string file, output;
     std::vector<std::string> overrides;
-    std::vector<double> confining_mpa;
+    std::vector<double> confining_mpa, strain_rates;
     int jobs = 0;
   };
   auto o = std::make_shared<Options>();
   auto* c = app.add_subcommand(
-      "sweep", "run the experiment at several confining stresses; fit Mohr-Coulomb, Hoek-Brown");
+      "sweep",
+      "run the experiment at several confining stresses (fit Mohr-Coulomb, Hoek-Brown) or "
+      "strain rates (fit UCS against the rate)");
   c->add_option("experiment", o->file, "experiment file (TOML); omit for the default");
   c->add_option("--set", o->overrides, "override a key: section.key=value")->take_all();
-  c->add_option("--confining-mpa", o->confining_mpa, "confining stresses in MPa, e.g. 0 5 10")
-      ->required()
-      ->expected(1, 100);
+  auto* confining =
+      c->add_option("--confining-mpa", o->confining_mpa, "confining stresses in MPa, e.g. 0 5 10")
+          ->expected(1, 100);
+  auto* rates = c->add_option("--strain-rates", o->strain_rates,
+                              "strain rates in 1/s, e.g. 0.05 0.1 0.5 1 5 10 (needs "
+                              "engine.density_scaling = 1)")
+                    ->expected(1, 100);
+  confining->excludes(rates);
   c->add_option("--output", o->output, "folder that receives the sweep folder");
   c->add_option("--jobs", o->jobs,
                 "runs at once, as separate processes sharing the cores (0: as many as the cores "
@@ -222,9 +229,14 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
             opt.jobs = o->jobs;
             std::error_code ec;
             opt.executable = std::filesystem::read_symlink("/proc/self/exe", ec).string();
+            if (o->confining_mpa.empty() && o->strain_rates.empty())
+              throw breccia::InputError("sweep", "--confining-mpa / --strain-rates", "(none)",
+                                        "give the confining stresses or the strain rates");
             std::vector<double> pa;
             for (double m : o->confining_mpa) pa.push_back(m * 1e6);
-            const breccia::SweepResult r = breccia::run_sweep(spec, pa, opt);
+            const breccia::SweepResult r =
+                o->strain_rates.empty() ? breccia::run_sweep(spec, pa, opt)
+                                        : breccia::run_rate_sweep(spec, o->strain_rates, opt);
             std::cerr << breccia::summarise_folder(r.folder);
             std::cout << r.folder << std::endl;
             return r.status == "complete" ? 0 : 130;

@@ -464,6 +464,9 @@ CAPTIONS = {
     "fragment_sizes.png": "Fragment size distribution",
     "mohr_coulomb.png": "Mohr-Coulomb and Hoek-Brown envelopes",
     "trends.png": "Trends with confinement",
+    "rate_dependence.png": "UCS against strain rate",
+    "rate_curves.png": "Stress-strain curves and damage ratio by strain rate",
+    "failure_plane.png": "Failure plane against strain rate",
 }
 
 
@@ -632,8 +635,110 @@ def trend_figures(trends, outdir, figures):
     save(fig, outdir, "trends.png", figures)
 
 
+def stress_oscillation(hist):
+    """Largest |q - q_smooth| before the peak over the peak, q_smooth a centred moving average
+    over 5 history rows: how far the stress rings around its trend (inertia at high rates)."""
+    q = col(hist, "deviatoric_stress_pa")
+    if len(q) < 7 or not np.isfinite(q).any():
+        return float("nan")
+    ip = int(np.nanargmax(q))
+    if ip < 6:
+        return float("nan")
+    smooth = np.convolve(q, np.ones(5) / 5, mode="same")
+    band = slice(2, ip - 2)  # rows with a full window, up to the peak
+    return float(np.nanmax(np.abs(q[band] - smooth[band])) / q[ip])
+
+
+def rate_sweep_report(folder, sweep):
+    """A strain-rate sweep: UCS against the rate with its fit (analysis.md §11), the stress-strain
+    curves, the damage ratio over strain, and the failure plane against the rate."""
+    runs = [r for r in sweep["runs"] if r.get("status") == "complete"]
+    outdir = os.path.join(folder, "report")
+    os.makedirs(outdir, exist_ok=True)
+    figures = []
+    rate = np.array([r["strain_rate_per_s"] for r in runs])
+    ucs = np.array([r["peak_deviatoric_stress_pa"] for r in runs]) * 1e-6
+    fit = sweep.get("rate_dependence", {})
+    fig, ax = plt.subplots(figsize=(6, 4.6))
+    ax.plot(rate, ucs, "ko", label="tests")
+    if fit.get("valid") and len(rate):
+        x = np.geomspace(rate.min(), rate.max(), 100)
+        ax.plot(x, fit["a_pa"] * 1e-6 * np.exp(fit["b_s"] * x), "r-",
+                label=f"UCS = a exp(b rate): a = {fit['a_pa'] * 1e-6:.1f} MPa, "
+                      f"b = {fit['b_s']:.4g} s")
+        three = fit.get("three_parameter", {})
+        if three.get("valid"):
+            ax.plot(x, (three["c_pa"] + three["a_pa"] * np.exp(three["b_s"] * x)) * 1e-6, "b--",
+                    label=f"c + a exp(b rate): quasi-static {three['quasi_static_pa'] * 1e-6:.1f} MPa")
+    ax.set_xscale("log")
+    ax.set_xlabel("strain rate (1/s)")
+    ax.set_ylabel("UCS (MPa)")
+    ax.legend(fontsize=7)
+    ax.set_title(wrapped("UCS against strain rate" + ("" if fit.get("valid") else
+                                                       f" (no fit: {fit.get('flag')})")), fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "rate_dependence.png", figures)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.2))
+    table = []
+    for r in runs:
+        hist = read_csv(os.path.join(folder, r["folder"], "history.csv"))
+        eps = col(hist, "axial_strain", 100)
+        broken, intact = col(hist, "broken_bonds"), col(hist, "intact_bonds")
+        label = f"{r['strain_rate_per_s']:.3g} /s"
+        a1.plot(eps, col(hist, "deviatoric_stress_pa", 1e-6), lw=1, label=label)
+        a2.plot(eps, 100 * broken / np.maximum(broken + intact, 1), lw=1, label=label)
+        fp = r.get("failure_plane", {})
+        table.append([r["strain_rate_per_s"], r["peak_deviatoric_stress_pa"] * 1e-6,
+                      r["peak_deviatoric_stress_pa"] / fit["a_pa"] if fit.get("valid") else
+                      float("nan"), r.get("damage_ratio_percent", float("nan")),
+                      fp.get("angle_from_normal_plane_deg") or float("nan"),
+                      fp.get("planarity") or float("nan"), stress_oscillation(hist)])
+    a1.set_xlabel("axial strain (%)")
+    a1.set_ylabel("deviatoric stress (MPa)")
+    a1.set_title("Stress-strain curves", fontsize=9)
+    a2.set_xlabel("axial strain (%)")
+    a2.set_ylabel("damage ratio D (% of the bonds broken)")
+    a2.set_title("Damage ratio over strain", fontsize=9)
+    for a in (a1, a2):
+        a.legend(fontsize=7)
+    fig.tight_layout()
+    save(fig, outdir, "rate_curves.png", figures)
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    t = np.array(table) if table else np.zeros((0, 7))
+    if len(t):
+        ax.plot(t[:, 0], t[:, 4], "ko-")
+    ax.set_xscale("log")
+    ax.set_xlabel("strain rate (1/s)")
+    ax.set_ylabel("failure plane to the plane normal to the load (deg)")
+    ax.set_title(wrapped("Failure plane of the crack midpoints (principal components; 90 = axial "
+                         "splitting)"), fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "failure_plane.png", figures)
+    with open(os.path.join(folder, "rates.csv.tmp"), "w") as f:
+        f.write("strain_rate_per_s,ucs_mpa,dynamic_increase_factor,damage_ratio_percent,"
+                "failure_plane_deg,planarity,stress_oscillation_relative\n")
+        for row in table:
+            f.write(",".join(fmt(v, "{:.6g}") for v in row) + "\n")
+    os.replace(os.path.join(folder, "rates.csv.tmp"), os.path.join(folder, "rates.csv"))
+    rows = [("experiment", sweep.get("experiment")), ("tests", len(runs)),
+            ("sample length along the load", f"{fmt(sweep.get('sample_length_m', 0) * 1e3)} mm"),
+            ("rate law UCS = a exp(b rate)",
+             f"a = {fmt((fit.get('a_pa') or float('nan')) * 1e-6)} +- "
+             f"{fmt((fit.get('a_standard_error_pa') or float('nan')) * 1e-6)} MPa, b = "
+             f"{fmt(fit.get('b_s'), '{:.4g}')} +- {fmt(fit.get('b_standard_error_s'), '{:.2g}')} s"
+             if fit.get("valid") else f"no fit ({fit.get('flag')})"),
+            ("stress oscillation", "largest |q - its 5-row moving average| before the peak, "
+                                   "over the peak (rates.csv)"),
+            ("rate table", "rates.csv in the sweep folder (one row per test)")]
+    write_html(folder, f"Breccia strain-rate sweep: {sweep.get('experiment', '')}", rows, figures,
+               CAPTIONS)
+    return figures
+
+
 def sweep_report(folder):
     sweep = json.load(open(os.path.join(folder, "sweep.json")))
+    if sweep.get("variable") == "strain_rate":
+        return rate_sweep_report(folder, sweep)
     runs = [r for r in sweep["runs"] if r.get("status") == "complete"]
     outdir = os.path.join(folder, "report")
     os.makedirs(outdir, exist_ok=True)
@@ -663,9 +768,14 @@ def sweep_report(folder):
     write_trends_csv(folder, trends)
     trend_figures(trends, outdir, figures)
     rows = [("experiment", sweep.get("experiment")), ("tests", len(runs)),
-            ("Mohr-Coulomb", json.dumps({k: mc.get(k) for k in
-                                         ("cohesion_pa", "friction_angle_deg", "r2")})),
-            ("Hoek-Brown", json.dumps({k: hb.get(k) for k in ("sigma_ci_pa", "m_i", "rms_residual_pa")})),
+            ("Mohr-Coulomb", f"C = {fmt((mc.get('cohesion_pa') or float('nan')) * 1e-6)} MPa, "
+                             f"phi = {fmt(mc.get('friction_angle_deg'), '{:.1f}')} deg, "
+                             f"R^2 = {fmt(mc.get('r2'), '{:.3f}')}" if mc.get("valid") else
+             f"no fit ({mc.get('flag')})"),
+            ("Hoek-Brown", f"sigma_ci = {fmt((hb.get('sigma_ci_pa') or float('nan')) * 1e-6)} MPa, "
+                           f"m_i = {fmt(hb.get('m_i'))}, rms residual "
+                           f"{fmt((hb.get('rms_residual_pa') or float('nan')) * 1e-6)} MPa"
+             if hb.get("valid") else f"no fit ({hb.get('flag')})"),
             ("trend table", "trends.csv in the sweep folder (one row per test)")]
     write_html(folder, f"Breccia sweep report: {sweep.get('experiment', '')}", rows, figures,
                CAPTIONS)

@@ -317,6 +317,51 @@ TEST(Sweep, ParallelProcessesGiveWhatOneRunAfterAnotherGives) {
   fs::remove_all(dir);
 }
 
+TEST(Sweep, StrainRatesSetThePlatenSpeedFromTheSampleLength) {
+  // The tiny UCS at 20 and 200 /s without density scaling: each run's measured strain rate
+  // (2 v / h0, h0 between the platens at the start of loading) is the one asked for, to the
+  // gap between the grains' extent and the platens; two rates give no rate fit, and say so.
+  const fs::path dir = fs::temp_directory_path() / "breccia_rate_sweep";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path file = dir / "tiny.toml";
+  std::ofstream(file) << "name = \"tiny\"\n" + tiny_experiment("ucs");
+  // Density scaling would scale the inertia the study measures: refused before any folder.
+  const Result refused = run(fmt::format("sweep --jobs 1 --strain-rates 20 200 --output {} {}",
+                                         (dir / "out").string(), file.string()));
+  EXPECT_NE(refused.code, 0);
+  EXPECT_NE(refused.out.find("engine.density_scaling"), std::string::npos) << refused.out;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  const Result r = run(fmt::format(
+      "sweep --jobs 1 --strain-rates 20 200 --output {} {} --set engine.density_scaling=1 "
+      "--set output.plot=true",
+      (dir / "out").string(), file.string()));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto sweep = nlohmann::json::parse(read(fs::path(last_line(r.out)) / "sweep.json"));
+  EXPECT_EQ(sweep["variable"], "strain_rate");
+  ASSERT_EQ(sweep["runs"].size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto& run_i = sweep["runs"][i];
+    ASSERT_EQ(run_i["status"], "complete");
+    const double target = run_i["strain_rate_target_per_s"];
+    EXPECT_NEAR(run_i["strain_rate_per_s"].get<double>(), target, 0.02 * target);
+    EXPECT_TRUE(run_i["failure_plane"].contains("method"));
+  }
+  EXPECT_NEAR(sweep["runs"][1]["platen_speed_m_per_s"].get<double>() /
+                  sweep["runs"][0]["platen_speed_m_per_s"].get<double>(),
+              10.0, 1e-9);
+  EXPECT_FALSE(sweep["rate_dependence"]["valid"]);
+  EXPECT_EQ(sweep["rate_dependence"]["flag"], "too_few_rates");
+  // Its report: UCS against the rate, the curves and damage ratios, the failure plane, and the
+  // table of the rates.
+  const fs::path folder = last_line(r.out);
+  for (const char* f : {"report/rate_dependence.png", "report/rate_curves.png",
+                        "report/failure_plane.png", "rates.csv", "report.html"})
+    EXPECT_TRUE(fs::exists(folder / f)) << f;
+  EXPECT_NE(r.out.find("damage ratio"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
 TEST(Biaxial, RicebalLaboratoryRunsEndToEnd) {
   // Seed 002's test on a tiny sample: planar spheres with Hertz-Mindlin contacts, preconsolidated
   // to 10 MPa between particle rows, RICEBAL bonds, membranes at 2 MPa, history rows every 0.001

@@ -1,8 +1,12 @@
-// The strain-rate fit of analysis.md §11 on its worked examples and on planted data.
+// The analyses of the strain-rate study (issue 14): the rate law of analysis.md §11 on its worked
+// examples and planted data, and the failure plane fitted to crack midpoints.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
+#include <vector>
 
+#include "breccia/analysis/crack_pattern.hpp"
 #include "breccia/analysis/rate_dependence.hpp"
 
 using namespace breccia::analysis;
@@ -58,4 +62,59 @@ TEST(RateDependence, TooFewPositiveStrengthsGiveNoFit) {
   EXPECT_FALSE(f.valid);
   EXPECT_EQ(f.flag, "too_few_rates");
   EXPECT_EQ(f.points, 2u);
+}
+
+namespace {
+
+// Crack midpoints scattered over a plane through the origin whose normal makes `theta_deg` with
+// the z axis (the load), with a small deterministic jitter off the plane.
+std::vector<breccia::Vec3> cracks_on_plane(double theta_deg, double jitter) {
+  const double t = theta_deg * std::numbers::pi / 180.0;
+  const breccia::Vec3 n{std::sin(t), 0.0, std::cos(t)};                     // unit normal
+  const breccia::Vec3 u{std::cos(t), 0.0, -std::sin(t)}, v{0.0, 1.0, 0.0};  // in the plane
+  std::vector<breccia::Vec3> p;
+  for (int i = 0; i < 15; ++i)
+    for (int j = 0; j < 10; ++j) {
+      const double off = jitter * (((i * 7 + j * 3) % 5) - 2.0) / 2.0;
+      p.push_back(u * (1e-3 * (i - 7)) + v * (1e-3 * (j - 4.5)) + n * off);
+    }
+  return p;
+}
+
+}  // namespace
+
+TEST(FailurePlane, AnInclinedCrackPlaneGivesItsAngleToThePlaneNormalToTheLoad) {
+  // A Coulomb shear plane at 60 degrees (45 + phi / 2 with phi = 30): its normal is 60 degrees
+  // from the load. The jitter (+-5 um across a 14 x 9 mm plane) leaves the angle within 0.1
+  // degree and the planarity near 1.
+  const FailurePlane f = failure_plane(cracks_on_plane(60.0, 5e-6), 2, false);
+  ASSERT_TRUE(f.valid);
+  EXPECT_NEAR(f.angle_from_normal_plane_deg, 60.0, 0.1);
+  EXPECT_GT(f.planarity, 0.99);
+  // Axial splitting (a vertical plane) and a horizontal crack plane.
+  EXPECT_NEAR(failure_plane(cracks_on_plane(90.0, 5e-6), 2, false).angle_from_normal_plane_deg,
+              90.0, 0.1);
+  EXPECT_NEAR(failure_plane(cracks_on_plane(0.0, 5e-6), 2, false).angle_from_normal_plane_deg, 0.0,
+              0.1);
+}
+
+TEST(FailurePlane, TwoDimensionalCracksOnALineAndAnIsotropicCloud) {
+  // 2D: the load along y; midpoints on a line at 55 degrees from the x axis.
+  const double t = 55.0 * std::numbers::pi / 180.0;
+  std::vector<breccia::Vec3> line, cloud;
+  for (int k = 0; k < 60; ++k) {
+    const double s = 1e-4 * (k - 30), off = 2e-6 * ((k % 3) - 1.0);
+    line.push_back({s * std::cos(t) - off * std::sin(t), s * std::sin(t) + off * std::cos(t), 0});
+  }
+  const FailurePlane f = failure_plane(line, 1, true);
+  ASSERT_TRUE(f.valid);
+  EXPECT_NEAR(f.angle_from_normal_plane_deg, 55.0, 0.2);
+  EXPECT_GT(f.planarity, 0.99);
+  // A square grid of cracks has no preferred plane: planarity near 0.
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 10; ++j) cloud.push_back({1e-4 * i, 1e-4 * j, 0});
+  EXPECT_LT(failure_plane(cloud, 1, true).planarity, 0.01);
+  EXPECT_FALSE(
+      failure_plane(std::vector<breccia::Vec3>(line.begin(), line.begin() + 10), 1, true).valid)
+      << "too few cracks";
 }

@@ -1,7 +1,9 @@
 #include "breccia/analysis/crack_pattern.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace breccia::analysis {
 
@@ -41,6 +43,34 @@ SplitPattern split_pattern(const std::vector<double>& offsets, const std::vector
   p.early_tensile_share = early_tensile / e;
   p.early_mean_offset = early_offset / e;
   return p;
+}
+
+FailurePlane failure_plane(const std::vector<Vec3>& positions, int axis, bool planar,
+                           std::size_t min_cracks) {
+  FailurePlane f;
+  f.cracks = positions.size();
+  if (positions.size() < std::max<std::size_t>(min_cracks, 3)) return f;
+  const int dim = planar ? 2 : 3;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Vec3& p : positions) mean += Eigen::Vector3d(p.x, p.y, p.z);
+  mean /= static_cast<double>(positions.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : positions) {
+    const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - mean;
+    cov += d * d.transpose();
+  }
+  // In 2D the cracks lie in the x-y plane: the spread is that of its 2 x 2 block.
+  const Eigen::MatrixXd c = cov.topLeftCorner(dim, dim);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(c);  // eigenvalues in increasing order
+  if (eig.info() != Eigen::Success || !(eig.eigenvalues()[1] > 0.0)) return f;
+  const Eigen::VectorXd n = eig.eigenvectors().col(0);
+  f.normal = {n[0], n[1], dim == 3 ? n[2] : 0.0};
+  f.planarity = 1.0 - eig.eigenvalues()[0] / eig.eigenvalues()[1];
+  // The plane's angle to the plane normal to the load equals its normal's angle to the load.
+  const double along = std::min(1.0, std::abs(n[axis]));
+  f.angle_from_normal_plane_deg = std::acos(along) * 180.0 / std::numbers::pi;
+  f.valid = true;
+  return f;
 }
 
 }  // namespace breccia::analysis

@@ -8,6 +8,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "breccia/core/vec3.hpp"
+
 namespace breccia::analysis {
 
 // Share of the cracks in each quarter of [lo, hi] along the axis (positions outside go to the
@@ -29,5 +31,20 @@ struct SplitPattern {
 // of them in a band of half-width b R (31 % for b = 0.25); a central split puts most there.
 SplitPattern split_pattern(const std::vector<double>& offsets, const std::vector<bool>& tensile,
                            double disc_radius, double early_fraction = 0.2, double band = 0.25);
+
+// The plane (3D) or line (2D) that best fits the crack midpoints, by principal components: its
+// normal is the direction of least spread. `angle_from_normal_plane_deg` is its angle to the plane
+// normal to the load (0: a crack plane across the sample; 90: axial splitting; a Coulomb shear
+// plane at 45 + phi / 2); `planarity` is 1 - (least spread / next spread), 0 for an isotropic
+// cloud and 1 for cracks on one plane. Invalid with fewer than `min_cracks` cracks.
+struct FailurePlane {
+  bool valid = false;
+  std::size_t cracks = 0;
+  double angle_from_normal_plane_deg = 0.0;
+  double planarity = 0.0;
+  Vec3 normal;
+};
+FailurePlane failure_plane(const std::vector<Vec3>& positions, int axis, bool planar,
+                           std::size_t min_cracks = 20);
 
 }  // namespace breccia::analysis

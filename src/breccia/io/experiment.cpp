@@ -1023,6 +1023,23 @@ void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string
   }
 }
 
+void set_platen_speed(ExperimentSpec& spec, double speed, const std::string& where) {
+  bool compression = false;
+  std::visit(
+      [&](auto& p) {
+        using P = std::decay_t<decltype(p)>;
+        compression = std::is_same_v<P, UcsTest::Params> ||
+                      std::is_same_v<P, TriaxialTest::Params> ||
+                      std::is_same_v<P, BiaxialTest::Params>;
+        if (compression) p.platen_speed = speed;
+      },
+      spec.test);
+  if (!compression)
+    throw InputError(where, "test.kind", "\"" + spec.test_kind + "\"",
+                     "a strain-rate sweep needs a compression test (\"ucs\", \"triaxial\" or "
+                     "\"biaxial\")");
+}
+
 SampleInfo sample_info(const ExperimentSpec& s) {
   SampleInfo info;
   info.dimension = static_cast<int>(s.dimension);

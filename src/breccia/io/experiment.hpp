@@ -121,6 +121,9 @@ double confining_stress(const ExperimentSpec& spec);
 // The compression test of the same loading at confining stress `sigma3`: "ucs" at 0, "triaxial"
 // (3D) or "biaxial" (2D) above (sweeps). Throws InputError for tests that are not compression.
 void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string& where);
+// Sets the platens' speed of the experiment's compression test (strain-rate sweeps). Throws
+// InputError for tests that are not compression.
+void set_platen_speed(ExperimentSpec& spec, double speed, const std::string& where);
 // The [sample] radius distribution of a generated sample.
 RadiusDistribution radius_distribution(const ExperimentSpec& spec);
 // The chosen bond law's moduli (bar-wave speed, crack energies).

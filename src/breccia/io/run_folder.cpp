@@ -98,6 +98,22 @@ std::string summarise_sweep(const fs::path& file) {
   const json doc = read_json_object(file.string());
   const JsonView j(doc, file.string());
   std::string s = fmt::format("sweep {} ({})\n", j.text("experiment", ""), j.text("status", ""));
+  if (j.text("variable", "confining_stress") == "strain_rate") {
+    s += "  rate (1/s)   peak q (MPa)   E_t50 (GPa)   cracks   damage ratio (%)\n";
+    for (const JsonView& r : j.elements("runs"))
+      s += fmt::format(
+          "  {:>10.4g}   {:>12.2f}   {:>11}   {:>6}   {:>16.2f}\n",
+          r.maybe_number("strain_rate_per_s").value_or(r.number("strain_rate_target_per_s")),
+          r.maybe_number("peak_deviatoric_stress_pa").value_or(0.0) * 1e-6,
+          gpa(r, "youngs_modulus_pa"), r.maybe_number("cracks").value_or(0.0),
+          r.maybe_number("damage_ratio_percent").value_or(0.0));
+    if (const auto f = j.find("rate_dependence"))
+      s += f->flag("valid", false)
+               ? fmt::format("UCS = a exp(b rate): a {}, b {} s (rms {})\n", mpa(*f, "a_pa"),
+                             plain(*f, "b_s", "{:.4g}"), mpa(*f, "rms_residual_pa"))
+               : "rate law: no fit (" + f->text("flag", "") + ")\n";
+    return s;
+  }
   s += "  sigma3 (MPa)   peak q (MPa)   sigma1 (MPa)   E_t50 (GPa)   cracks\n";
   for (const JsonView& r : j.elements("runs"))
     s += fmt::format("  {:>12.2f}   {:>12.2f}   {:>12.2f}   {:>11}   {:>6}\n",

@@ -97,9 +97,11 @@ void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
 json crack_pattern_json(const Protocol& test, const Simulation& sim) {
   std::vector<double> axial, offset;
   std::vector<bool> tensile;
+  std::vector<Vec3> midpoints;
   for (const CrackRecord& c : sim.cracks()) {
     axial.push_back(c.position[test.axis()]);
     tensile.push_back(c.mode == CrackMode::Tensile);
+    midpoints.push_back(c.position);
   }
   const auto q = analysis::quarter_shares(axial, test.origin0(), test.origin0() + test.length0());
   json j{{"quarter_shares_along_axis", {q[0], q[1], q[2], q[3]}},
@@ -108,6 +110,18 @@ json crack_pattern_json(const Protocol& test, const Simulation& sim) {
           "cracks per quarter of the initial length along the loading axis, from the "
           "bottom platen; a test that fails through its body has no end quarter "
           "above 0.40"}};
+  const analysis::FailurePlane fp =
+      analysis::failure_plane(midpoints, test.axis(), sim.particles().planar());
+  j["failure_plane"] = {
+      {"valid", fp.valid},
+      {"cracks", fp.cracks},
+      {"angle_from_normal_plane_deg", fp.valid ? json(fp.angle_from_normal_plane_deg) : json()},
+      {"planarity", fp.valid ? json(fp.planarity) : json()},
+      {"method",
+       "principal components of all crack midpoints: the plane (2D: line) of largest spread, "
+       "its angle to the plane normal to the load (90 = axial splitting; Coulomb: 45 + phi/2); "
+       "planarity 1 - least/next spread (0 isotropic, 1 one plane); a conjugate or cone-shaped "
+       "failure gives a low planarity and an angle between its branches"}};
   if (const auto* b = dynamic_cast<const BrazilianTest*>(&test)) {
     for (const CrackRecord& c : sim.cracks()) offset.push_back(c.position.x - b->centre().x);
     const analysis::SplitPattern sp = analysis::split_pattern(offset, tensile, 0.5 * b->diameter());

@@ -62,4 +62,11 @@ struct SweepResult {
 SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining_stresses,
                       const RunOptions& options);
 
+// Runs the experiment's compression test once per strain rate (1/s) on copies of one sample, the
+// platens' speed set from the sample's length (rate = 2 v / L); writes a sweep folder with the
+// runs, their failure planes and damage ratios, and the fit of UCS(rate) (analysis.md §11).
+// Refuses density scaling: a rate study measures the inertia it would scale.
+SweepResult run_rate_sweep(const ExperimentSpec& spec, const std::vector<double>& strain_rates,
+                           const RunOptions& options);
+
 }  // namespace breccia

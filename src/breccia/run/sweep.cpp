@@ -9,10 +9,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "breccia/analysis/compression.hpp"
+#include "breccia/analysis/rate_dependence.hpp"
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/parallel.hpp"
@@ -173,6 +176,121 @@ std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int
 
 }  // namespace
 
+namespace {
+
+// A new sweep folder, <output.directory>/<stamp>-<name>-sweep.
+fs::path make_sweep_folder(const ExperimentSpec& spec) {
+  const fs::path folder = make_folder(spec);
+  fs::rename(folder, folder.string() + "-sweep");
+  return folder.string() + "-sweep";
+}
+
+// Runs the sweep's experiments: as parallel processes when cores allow (each with its share of
+// the cores, or the threads the experiment asks for), else one after another in this process,
+// stopping at the first that does not complete. `describe` names a run in the log.
+std::vector<RunResult> run_all(const ExperimentSpec& spec, const std::vector<ExperimentSpec>& specs,
+                               const fs::path& folder, const RunOptions& opt,
+                               const std::function<std::string(const ExperimentSpec&)>& describe) {
+  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int per_run = spec.threads > 0 ? static_cast<int>(spec.threads) : 1;
+  const int jobs = opt.jobs > 0
+                       ? opt.jobs
+                       : std::min(static_cast<int>(specs.size()), std::max(1, cores / per_run));
+  if (jobs > 1 && !opt.executable.empty()) {
+    const int threads = spec.threads > 0 ? per_run : std::max(1, cores / jobs);
+    if (opt.log)
+      opt.log(fmt::format("sweep: {} runs, {} at a time ({} thread{} each)", specs.size(), jobs,
+                          threads, threads == 1 ? "" : "s"));
+    return sweep_in_processes(specs, jobs, threads, folder, opt);
+  }
+  // Copies of one sample: a generated sample is packed once and cached in the sweep folder.
+  std::vector<RunResult> runs;
+  for (const ExperimentSpec& one : specs) {
+    if (opt.log) opt.log("sweep: " + describe(one));
+    runs.push_back(run_experiment(one, opt));
+    if (runs.back().status != "complete") break;
+  }
+  return runs;
+}
+
+// The sweep's status: that of its first run that did not complete.
+std::string sweep_status(const std::vector<RunResult>& runs, std::size_t planned) {
+  for (const RunResult& r : runs)
+    if (r.status != "complete") return r.status;
+  return runs.size() == planned ? "complete" : "interrupted";
+}
+
+void finish_sweep(const ExperimentSpec& spec, const SweepResult& out, const json& sweep,
+                  const RunOptions& opt) {
+  write_json(fs::path(out.folder) / "sweep.json", sweep);
+  if (spec.plot && !write_report(out.folder) && opt.log)
+    opt.log("warning: no report.html (see " + out.folder + "/report.log)");
+}
+
+json mohr_coulomb_json(const analysis::MohrCoulombFit& mc) {
+  return {{"valid", mc.valid},
+          {"method", "least squares of sigma_1 on sigma_3 (principal-stress form)"},
+          {"k", mc.k},
+          {"friction_angle_deg", mc.friction_angle_deg},
+          {"cohesion_pa", mc.cohesion},
+          {"ucs_intercept_pa", mc.ucs},
+          {"implied_tensile_strength_pa", mc.tensile},
+          {"r2", nan_null(mc.r2)},
+          {"flag", mc.flag}};
+}
+
+json hoek_brown_json(const analysis::HoekBrownFit& hb) {
+  return {{"valid", hb.valid},
+          {"sigma_ci_pa", hb.sigma_ci},
+          {"m_i", hb.m_i},
+          {"sigma_ci_linearised_pa", hb.sigma_ci_linear},
+          {"m_i_linearised", hb.m_i_linear},
+          {"rms_residual_pa", hb.rms},
+          {"flag", hb.flag}};
+}
+
+json rate_fit_json(const analysis::ExponentialRateFit& f) {
+  return {{"valid", f.valid},
+          {"flag", f.flag},
+          {"points", f.points},
+          {"method",
+           "UCS = a exp(b rate): least squares of ln UCS on the rate (start), then "
+           "Levenberg-Marquardt on the untransformed residuals (analysis.md §11); a is the "
+           "quasi-static strength"},
+          {"a_pa", nan_null(f.valid ? f.a : std::nan(""))},
+          {"b_s", nan_null(f.valid ? f.b : std::nan(""))},
+          {"a_standard_error_pa", nan_null(f.valid ? f.a_se : std::nan(""))},
+          {"b_standard_error_s", nan_null(f.valid ? f.b_se : std::nan(""))},
+          {"rms_residual_pa", nan_null(f.valid ? f.rms : std::nan(""))},
+          {"log_linear", {{"a_pa", nan_null(f.a_log)}, {"b_s", nan_null(f.b_log)}}},
+          {"dynamic_increase_factor", f.dynamic_increase},
+          {"three_parameter",
+           {{"valid", f.three_valid},
+            {"form", "UCS = c + a exp(b rate), from c = 0.9 min UCS (4 rates or more)"},
+            {"c_pa", nan_null(f.three_valid ? f.c3 : std::nan(""))},
+            {"a_pa", nan_null(f.three_valid ? f.a3 : std::nan(""))},
+            {"b_s", nan_null(f.three_valid ? f.b3 : std::nan(""))},
+            {"quasi_static_pa", nan_null(f.three_valid ? f.c3 + f.a3 : std::nan(""))},
+            {"rms_residual_pa", nan_null(f.three_valid ? f.rms3 : std::nan(""))}}}};
+}
+
+// The sample's length along the load (z in 3D, y in 2D), from the sample itself: the platen
+// speed of a strain rate needs it before the test is built.
+double sample_length(const ExperimentSpec& spec, const RunOptions& opt) {
+  json report;
+  SampleInfo info;
+  const GeometryData g = load_sample(spec, report, info, opt.log);
+  const int axis = spec.dimension == 2 ? 1 : 2;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto& p : g.particles) {
+    lo = std::min(lo, p.position[axis] - p.radius);
+    hi = std::max(hi, p.position[axis] + p.radius);
+  }
+  return hi - lo;
+}
+
+}  // namespace
+
 SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining,
                       const RunOptions& opt) {
   if (confining.empty())
@@ -180,15 +298,13 @@ SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& con
   for (double c : confining)
     if (!(c >= 0.0))
       throw InputError("sweep", "--confining", num(c), "each confining stress must be >= 0 Pa");
-  ExperimentSpec base = spec;
   {
     ExperimentSpec probe = spec;  // a test that cannot be swept fails before any folder exists
     set_confining_stress(probe, confining.front(), "sweep");
   }
-  const fs::path folder = make_folder(spec);
-  fs::rename(folder, folder.string() + "-sweep");
   SweepResult out;
-  out.folder = folder.string() + "-sweep";
+  out.folder = make_sweep_folder(spec).string();
+  ExperimentSpec base = spec;
   base.output_directory = out.folder;
   std::vector<ExperimentSpec> specs;
   for (double c : confining) {
@@ -197,67 +313,91 @@ SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& con
     one.name = fmt::format("{}-confining-{}MPa", spec.name, c * 1e-6);
     specs.push_back(one);
   }
-  // Parallel processes when cores allow: each run gets its share of the cores (or the threads
-  // the experiment asks for).
-  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  const int per_run = spec.threads > 0 ? static_cast<int>(spec.threads) : 1;
-  const int jobs = opt.jobs > 0
-                       ? opt.jobs
-                       : std::min(static_cast<int>(specs.size()), std::max(1, cores / per_run));
+  out.runs = run_all(spec, specs, out.folder, opt, [](const ExperimentSpec& one) {
+    return fmt::format("confining stress {} MPa", confining_stress(one) * 1e-6);
+  });
+  out.status = sweep_status(out.runs, specs.size());
   json runs = json::array();
   std::vector<double> s3, s1;
-  out.status = "complete";
-  if (jobs > 1 && !opt.executable.empty()) {
-    const int threads = spec.threads > 0 ? per_run : std::max(1, cores / jobs);
-    if (opt.log)
-      opt.log(fmt::format("sweep: {} runs, {} at a time ({} thread{} each)", specs.size(), jobs,
-                          threads, threads == 1 ? "" : "s"));
-    out.runs = sweep_in_processes(specs, jobs, threads, out.folder, opt);
-  } else {
-    // Copies of one sample: a generated sample is packed once and cached in the sweep folder.
-    for (const ExperimentSpec& one : specs) {
-      if (opt.log)
-        opt.log(fmt::format("sweep: confining stress {} MPa", confining_stress(one) * 1e-6));
-      out.runs.push_back(run_experiment(one, opt));
-      if (out.runs.back().status != "complete") break;
-    }
-  }
   for (std::size_t i = 0; i < out.runs.size(); ++i) {
     const RunResult& r = out.runs[i];
     runs.push_back(sweep_entry(confining[i], r));
-    if (r.status != "complete") {
-      if (out.status == "complete") out.status = r.status;
-      continue;
-    }
+    if (r.status != "complete") continue;
     s3.push_back(confining[i]);
     s1.push_back(r.sigma1_at_peak);
   }
-  const auto mc = analysis::fit_mohr_coulomb(s3, s1);
-  const auto hb = analysis::fit_hoek_brown(s3, s1);
   json sweep{{"status", out.status},
              {"experiment", spec.name},
+             {"variable", "confining_stress"},
              {"runs", runs},
-             {"mohr_coulomb",
-              {{"valid", mc.valid},
-               {"method", "least squares of sigma_1 on sigma_3 (principal-stress form)"},
-               {"k", mc.k},
-               {"friction_angle_deg", mc.friction_angle_deg},
-               {"cohesion_pa", mc.cohesion},
-               {"ucs_intercept_pa", mc.ucs},
-               {"implied_tensile_strength_pa", mc.tensile},
-               {"r2", nan_null(mc.r2)},
-               {"flag", mc.flag}}},
-             {"hoek_brown",
-              {{"valid", hb.valid},
-               {"sigma_ci_pa", hb.sigma_ci},
-               {"m_i", hb.m_i},
-               {"sigma_ci_linearised_pa", hb.sigma_ci_linear},
-               {"m_i_linearised", hb.m_i_linear},
-               {"rms_residual_pa", hb.rms},
-               {"flag", hb.flag}}}};
-  write_json(fs::path(out.folder) / "sweep.json", sweep);
-  if (spec.plot && !write_report(out.folder) && opt.log)
-    opt.log("warning: no report.html (see " + out.folder + "/report.log)");
+             {"mohr_coulomb", mohr_coulomb_json(analysis::fit_mohr_coulomb(s3, s1))},
+             {"hoek_brown", hoek_brown_json(analysis::fit_hoek_brown(s3, s1))}};
+  finish_sweep(spec, out, sweep, opt);
+  return out;
+}
+
+SweepResult run_rate_sweep(const ExperimentSpec& spec, const std::vector<double>& rates,
+                           const RunOptions& opt) {
+  if (rates.empty())
+    throw InputError("sweep", "--strain-rates", "(none)", "give at least one strain rate");
+  for (double r : rates)
+    if (!(r > 0.0) || !std::isfinite(r))
+      throw InputError("sweep", "--strain-rates", num(r), "each strain rate must be > 0 1/s");
+  if (spec.density_scaling != 1.0)
+    throw InputError(spec.source, "engine.density_scaling", num(spec.density_scaling),
+                     "a strain-rate study measures the sample's inertia, which density scaling "
+                     "multiplies: set engine.density_scaling = 1");
+  {
+    ExperimentSpec probe = spec;
+    set_platen_speed(probe, 1.0, "sweep");
+  }
+  SweepResult out;
+  out.folder = make_sweep_folder(spec).string();
+  ExperimentSpec base = spec;
+  base.output_directory = out.folder;
+  // The platens close at 2 v: v = rate L / 2 for the sample's length L.
+  const double length = sample_length(base, opt);
+  std::vector<ExperimentSpec> specs;
+  for (double rate : rates) {
+    ExperimentSpec one = base;
+    set_platen_speed(one, 0.5 * rate * length, "sweep");
+    one.name = fmt::format("{}-rate-{}-per-s", spec.name, rate);
+    specs.push_back(one);
+  }
+  out.runs = run_all(spec, specs, out.folder, opt, [length](const ExperimentSpec& one) {
+    double v = 0.0;
+    std::visit([&](const auto& p) { v = p.platen_speed; }, one.test);
+    return fmt::format("strain rate {:.3g} /s (platens at {:.4g} m/s)", 2.0 * v / length, v);
+  });
+  out.status = sweep_status(out.runs, specs.size());
+  json runs = json::array();
+  std::vector<double> measured, ucs;
+  for (std::size_t i = 0; i < out.runs.size(); ++i) {
+    const RunResult& r = out.runs[i];
+    json e = sweep_entry(confining_stress(spec), r);
+    e["strain_rate_target_per_s"] = rates[i];
+    e["platen_speed_m_per_s"] = 0.5 * rates[i] * length;
+    e["damage_ratio_percent"] =
+        r.bonds > 0 ? 100.0 * static_cast<double>(r.cracks) / static_cast<double>(r.bonds) : 0.0;
+    if (r.status == "complete") {
+      const json summary = read_json_object((fs::path(r.folder) / "summary.json").string());
+      const double rate = summary.value("strain_rate_per_s", rates[i]);
+      e["strain_rate_per_s"] = rate;
+      e["failure_plane"] =
+          summary.value("crack_pattern", json::object()).value("failure_plane", json::object());
+      e["quasi_static"] = summary.value("quasi_static", json::object()).value("ok", false);
+      measured.push_back(rate);
+      ucs.push_back(r.peak_stress);
+    }
+    runs.push_back(e);
+  }
+  json sweep{{"status", out.status},
+             {"experiment", spec.name},
+             {"variable", "strain_rate"},
+             {"sample_length_m", length},
+             {"runs", runs},
+             {"rate_dependence", rate_fit_json(analysis::fit_rate_dependence(measured, ucs))}};
+  finish_sweep(spec, out, sweep, opt);
   return out;
 }
 
