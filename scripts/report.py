@@ -649,6 +649,10 @@ def stress_oscillation(hist):
     return float(np.nanmax(np.abs(q[band] - smooth[band])) / q[ip])
 
 
+def number_or_nan(v):
+    return float("nan") if v is None else float(v)
+
+
 def rate_sweep_report(folder, sweep):
     """A strain-rate sweep: UCS against the rate with its fit (analysis.md §11), the stress-strain
     curves, the damage ratio over strain, and the failure plane against the rate."""
@@ -691,8 +695,8 @@ def rate_sweep_report(folder, sweep):
         table.append([r["strain_rate_per_s"], r["peak_deviatoric_stress_pa"] * 1e-6,
                       r["peak_deviatoric_stress_pa"] / fit["a_pa"] if fit.get("valid") else
                       float("nan"), r.get("damage_ratio_percent", float("nan")),
-                      fp.get("angle_from_normal_plane_deg") or float("nan"),
-                      fp.get("planarity") or float("nan"), stress_oscillation(hist)])
+                      number_or_nan(fp.get("angle_from_normal_plane_deg")),
+                      number_or_nan(fp.get("planarity")), stress_oscillation(hist)])
     a1.set_xlabel("axial strain (%)")
     a1.set_ylabel("deviatoric stress (MPa)")
     a1.set_title("Stress-strain curves", fontsize=9)

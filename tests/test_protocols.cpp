@@ -333,7 +333,7 @@ TEST(Sweep, StrainRatesSetThePlatenSpeedFromTheSampleLength) {
   EXPECT_NE(refused.out.find("engine.density_scaling"), std::string::npos) << refused.out;
   EXPECT_FALSE(fs::exists(dir / "out"));
   const Result r = run(fmt::format(
-      "sweep --jobs 1 --strain-rates 20 200 --output {} {} --set engine.density_scaling=1 "
+      "sweep --jobs 2 --strain-rates 20 200 --output {} {} --set engine.density_scaling=1 "
       "--set output.plot=true",
       (dir / "out").string(), file.string()));
   ASSERT_EQ(r.code, 0) << r.out;
@@ -346,6 +346,10 @@ TEST(Sweep, StrainRatesSetThePlatenSpeedFromTheSampleLength) {
     const double target = run_i["strain_rate_target_per_s"];
     EXPECT_NEAR(run_i["strain_rate_per_s"].get<double>(), target, 0.02 * target);
     EXPECT_TRUE(run_i["failure_plane"].contains("method"));
+    // Read back from the child's summary: the damage ratio is that of its bonds.
+    ASSERT_GT(run_i["bonds_initial"].get<double>(), 0.0);
+    EXPECT_DOUBLE_EQ(run_i["damage_ratio_percent"].get<double>(),
+                     100.0 * run_i["cracks"].get<double>() / run_i["bonds_initial"].get<double>());
   }
   EXPECT_NEAR(sweep["runs"][1]["platen_speed_m_per_s"].get<double>() /
                   sweep["runs"][0]["platen_speed_m_per_s"].get<double>(),

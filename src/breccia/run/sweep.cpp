@@ -45,6 +45,7 @@ json sweep_entry(double sigma3, const RunResult& r) {
           {"youngs_modulus_pa", nan_null(r.youngs_modulus)},
           {"poisson_ratio", nan_null(r.poisson)},
           {"cracks", r.cracks},
+          {"bonds_initial", r.bonds},
           {"wall_seconds", r.wall_seconds}};
 }
 
@@ -68,6 +69,8 @@ RunResult result_of_folder(const fs::path& folder) {
     r.poisson = v.maybe_number("poisson_ratio").value_or(std::numeric_limits<double>::quiet_NaN());
     r.confining_stress = v.maybe_number("confining_stress_pa").value_or(0.0);
     r.particles = static_cast<std::size_t>(v.maybe_number("particles").value_or(0.0));
+    r.bonds = static_cast<std::size_t>(v.maybe_number("bonds_initial").value_or(0.0));
+    r.steps = static_cast<std::uint64_t>(v.maybe_number("steps").value_or(0.0));
     r.cracks = static_cast<std::size_t>(v.maybe_number("bonds_broken").value_or(0.0));
     r.tensile = static_cast<std::size_t>(v.maybe_number("cracks_tensile").value_or(0.0));
     r.shear = static_cast<std::size_t>(v.maybe_number("cracks_shear").value_or(0.0));
