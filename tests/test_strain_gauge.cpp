@@ -87,6 +87,35 @@ void expect_hand_moduli(bool planar) {
   EXPECT_NEAR(r.poisson, 0.0, 1e-9);
 }
 
+// A 3 x 3 x 6 block of touching grains of radius kBlockRadius, bonded where they touch. `shaken`
+// gives them a deterministic jumble of velocities; `strength` > 0 sets the bonds' tensile
+// strength and cohesion (weak bonds then break as the block shakes), 0 keeps the defaults.
+constexpr double kBlockRadius = 0.5e-3;
+Simulation bonded_block(bool shaken, double strength) {
+  ParticleStore ps(Dimension::Three, 1.0);
+  const double R = kBlockRadius;
+  std::uint64_t tag = 1;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 6; ++k) {
+        const Vec3 v{0.5 * ((i + j + k) % 3 - 1.0), 0.3 * ((i * k) % 2 - 0.5), 0.0};
+        ps.add({.tag = tag++,
+                .position = {2 * R * i, 2 * R * j, 2 * R * k},
+                .radius = R,
+                .density = 2650,
+                .velocity = shaken ? v : Vec3{}});
+      }
+  EngineConfig cfg;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>({}, {}));
+  if (strength > 0.0) {
+    ParallelBond::Params bp;
+    bp.tensile_strength = bp.cohesion = strength;
+    sim.set_bond_params<ParallelBond>(bp);
+  }
+  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  return sim;
+}
+
 }  // namespace
 
 TEST(StrainGauge, ColumnOfGrainsReadsTheBondedPairsIn3D) {
@@ -102,23 +131,7 @@ TEST(PlatenCompression, BondsBrokenBeforeLoadingDoNotArmThePostPeakStop) {
   // Those cracks must not arm the post-peak rule, or the first dip of the ramp-up ends the
   // test (examples/preconsolidated-2d.toml stopped at a "peak" of 0.12 MPa). Here weak bonds
   // broken by random motion before start() stand in for them.
-  ParticleStore ps(Dimension::Three, 1.0);
-  const double R = 0.5e-3;
-  std::uint64_t tag = 1;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 6; ++k)
-        ps.add({.tag = tag++,
-                .position = {2 * R * i, 2 * R * j, 2 * R * k},
-                .radius = R,
-                .density = 2650,
-                .velocity = {0.5 * ((i + j + k) % 3 - 1.0), 0.3 * ((i * k) % 2 - 0.5), 0.0}});
-  EngineConfig cfg;
-  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>({}, {}));
-  ParallelBond::Params bp;
-  bp.tensile_strength = bp.cohesion = 1e3;
-  sim.set_bond_params<ParallelBond>(bp);
-  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  Simulation sim = bonded_block(true, 1e3);
   PlatenCompressionSettings st;
   st.stop_fraction = 0.6;
   PlatenCompression test(sim, st, LateralBoundary::Prism, "ucs");
@@ -141,19 +154,8 @@ TEST(PlatenCompression, ADipWhileThePlatensRampUpDoesNotStopTheTest) {
   // and its deviatoric stress may dip below a tiny early maximum while a bond breaks. That is
   // no post-peak drop (a membrane-confined granite stopped at a "peak" of 0.01 MPa this way).
   // The cosine ramp of length T at speed v closes the platens by v T in all: strain v T / h0.
-  ParticleStore ps(Dimension::Three, 1.0);
-  const double R = 0.5e-3;
-  std::uint64_t tag = 1;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 6; ++k)
-        ps.add({.tag = tag++,
-                .position = {2 * R * i, 2 * R * j, 2 * R * k},
-                .radius = R,
-                .density = 2650});
-  EngineConfig cfg;
-  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>({}, {}));
-  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  Simulation sim = bonded_block(false, 0.0);
+  const double R = kBlockRadius;
   PlatenCompressionSettings st;
   st.stop_fraction = 0.6;
   st.platen_speed = 0.02;

@@ -991,15 +991,31 @@ double confining_stress(const ExperimentSpec& spec) {
       spec.test);
 }
 
+namespace {
+
+template <class P>
+constexpr bool kCompressionParams =
+    std::is_same_v<P, UcsTest::Params> || std::is_same_v<P, TriaxialTest::Params> ||
+    std::is_same_v<P, BiaxialTest::Params>;
+
+// Sweeps vary a compression test: any other test kind is refused, naming the sweep.
+void require_compression(const ExperimentSpec& spec, const std::string& where, const char* sweep) {
+  const bool compression = std::visit(
+      [](const auto& p) { return kCompressionParams<std::decay_t<decltype(p)>>; }, spec.test);
+  if (!compression)
+    throw InputError(where, "test.kind", "\"" + spec.test_kind + "\"",
+                     std::string("a ") + sweep +
+                         " sweep needs a compression test (\"ucs\", \"triaxial\" or "
+                         "\"biaxial\")");
+}
+
+}  // namespace
+
 void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string& where) {
+  require_compression(spec, where, "confining-stress");
   double speed = 0, ramp = 0, strain = 0, stop = 0, relax = 0.5;
-  bool compression = false;
   std::visit(
       [&](const auto& p) {
-        using P = std::decay_t<decltype(p)>;
-        compression = std::is_same_v<P, UcsTest::Params> ||
-                      std::is_same_v<P, TriaxialTest::Params> ||
-                      std::is_same_v<P, BiaxialTest::Params>;
         speed = p.platen_speed;
         ramp = p.ramp_time;
         strain = p.max_strain;
@@ -1007,10 +1023,6 @@ void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string
         if constexpr (requires { p.servo_relaxation; }) relax = p.servo_relaxation;
       },
       spec.test);
-  if (!compression)
-    throw InputError(where, "test.kind", "\"" + spec.test_kind + "\"",
-                     "a confining-stress sweep needs a compression test (\"ucs\", \"triaxial\" "
-                     "or \"biaxial\")");
   if (!(sigma3 > 0.0)) {
     spec.test_kind = "ucs";
     spec.test = UcsTest::Params{speed, ramp, strain, stop};
@@ -1024,20 +1036,8 @@ void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string
 }
 
 void set_platen_speed(ExperimentSpec& spec, double speed, const std::string& where) {
-  bool compression = false;
-  std::visit(
-      [&](auto& p) {
-        using P = std::decay_t<decltype(p)>;
-        compression = std::is_same_v<P, UcsTest::Params> ||
-                      std::is_same_v<P, TriaxialTest::Params> ||
-                      std::is_same_v<P, BiaxialTest::Params>;
-        if (compression) p.platen_speed = speed;
-      },
-      spec.test);
-  if (!compression)
-    throw InputError(where, "test.kind", "\"" + spec.test_kind + "\"",
-                     "a strain-rate sweep needs a compression test (\"ucs\", \"triaxial\" or "
-                     "\"biaxial\")");
+  require_compression(spec, where, "strain-rate");
+  std::visit([&](auto& p) { p.platen_speed = speed; }, spec.test);
 }
 
 SampleInfo sample_info(const ExperimentSpec& s) {
