@@ -653,6 +653,38 @@ def number_or_nan(v):
     return float("nan") if v is None else float(v)
 
 
+def rate_curves(folder, runs, fit, outdir, figures):
+    """The stress-strain curves and damage ratios of a rate sweep's runs (rate_curves.png); one
+    row per run for rates.csv: rate, UCS, dynamic increase, damage, failure plane, planarity,
+    stress oscillation."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.2))
+    table = []
+    for r in runs:
+        hist = read_csv(os.path.join(folder, r["folder"], "history.csv"))
+        eps = col(hist, "axial_strain", 100)
+        broken, intact = col(hist, "broken_bonds"), col(hist, "intact_bonds")
+        label = f"{r['strain_rate_per_s']:.3g} /s"
+        a1.plot(eps, col(hist, "deviatoric_stress_pa", 1e-6), lw=1, label=label)
+        a2.plot(eps, 100 * broken / np.maximum(broken + intact, 1), lw=1, label=label)
+        fp = r.get("failure_plane", {})
+        table.append([r["strain_rate_per_s"], r["peak_deviatoric_stress_pa"] * 1e-6,
+                      r["peak_deviatoric_stress_pa"] / fit["a_pa"] if fit.get("valid") else
+                      float("nan"), r.get("damage_ratio_percent", float("nan")),
+                      number_or_nan(fp.get("angle_from_normal_plane_deg")),
+                      number_or_nan(fp.get("planarity")), stress_oscillation(hist)])
+    a1.set_xlabel("axial strain (%)")
+    a1.set_ylabel("deviatoric stress (MPa)")
+    a1.set_title("Stress-strain curves", fontsize=9)
+    a2.set_xlabel("axial strain (%)")
+    a2.set_ylabel("damage ratio D (% of the bonds broken)")
+    a2.set_title("Damage ratio over strain", fontsize=9)
+    for a in (a1, a2):
+        a.legend(fontsize=7)
+    fig.tight_layout()
+    save(fig, outdir, "rate_curves.png", figures)
+    return table
+
+
 def rate_sweep_report(folder, sweep):
     """A strain-rate sweep: UCS against the rate with its fit (analysis.md §11), the stress-strain
     curves, the damage ratio over strain, and the failure plane against the rate."""
@@ -682,31 +714,7 @@ def rate_sweep_report(folder, sweep):
                                                        f" (no fit: {fit.get('flag')})")), fontsize=9)
     fig.tight_layout()
     save(fig, outdir, "rate_dependence.png", figures)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.2))
-    table = []
-    for r in runs:
-        hist = read_csv(os.path.join(folder, r["folder"], "history.csv"))
-        eps = col(hist, "axial_strain", 100)
-        broken, intact = col(hist, "broken_bonds"), col(hist, "intact_bonds")
-        label = f"{r['strain_rate_per_s']:.3g} /s"
-        a1.plot(eps, col(hist, "deviatoric_stress_pa", 1e-6), lw=1, label=label)
-        a2.plot(eps, 100 * broken / np.maximum(broken + intact, 1), lw=1, label=label)
-        fp = r.get("failure_plane", {})
-        table.append([r["strain_rate_per_s"], r["peak_deviatoric_stress_pa"] * 1e-6,
-                      r["peak_deviatoric_stress_pa"] / fit["a_pa"] if fit.get("valid") else
-                      float("nan"), r.get("damage_ratio_percent", float("nan")),
-                      number_or_nan(fp.get("angle_from_normal_plane_deg")),
-                      number_or_nan(fp.get("planarity")), stress_oscillation(hist)])
-    a1.set_xlabel("axial strain (%)")
-    a1.set_ylabel("deviatoric stress (MPa)")
-    a1.set_title("Stress-strain curves", fontsize=9)
-    a2.set_xlabel("axial strain (%)")
-    a2.set_ylabel("damage ratio D (% of the bonds broken)")
-    a2.set_title("Damage ratio over strain", fontsize=9)
-    for a in (a1, a2):
-        a.legend(fontsize=7)
-    fig.tight_layout()
-    save(fig, outdir, "rate_curves.png", figures)
+    table = rate_curves(folder, runs, fit, outdir, figures)
     fig, ax = plt.subplots(figsize=(6, 4.2))
     t = np.array(table) if table else np.zeros((0, 7))
     if len(t):
