@@ -558,6 +558,30 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
 
 }  // namespace
 
+namespace {
+
+// manifest.json as a run starts: what made it, on what, from which experiment, "running".
+json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptions& opt) {
+  return {{"program", "breccia"},
+          {"version", kVersion},
+          {"commit", kCommit},
+          {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
+          {"command", opt.command_line},
+          {"experiment_source", spec.source},
+          {"seed", spec.engine.seed},
+          {"threads", max_threads()},
+          {"machine", machine_description()},
+          {"status", "running"},
+          {"density_scaling", spec.density_scaling},
+          {"grain_density_kg_m3", spec.density},
+          {"simulated_density_kg_m3", spec.density * spec.density_scaling},
+          {"bar_wave_speed_m_s", b.bar_wave_speed},
+          {"sample", b.sample_report},
+          {"resolved_experiment", to_toml(spec)}};
+}
+
+}  // namespace
+
 RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   auto log = [&](const std::string& m) {
     if (opt.log) opt.log(m);
@@ -567,23 +591,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   // Build first: a bad sample (geometry file, bond list) fails before any file is written.
   Built b = build(spec, log);
   const fs::path folder = make_folder(spec);
-  json manifest{
-      {"program", "breccia"},
-      {"version", kVersion},
-      {"commit", kCommit},
-      {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
-      {"command", opt.command_line},
-      {"experiment_source", spec.source},
-      {"seed", spec.engine.seed},
-      {"threads", max_threads()},
-      {"machine", machine_description()},
-      {"status", "running"},
-      {"density_scaling", spec.density_scaling},
-      {"grain_density_kg_m3", spec.density},
-      {"simulated_density_kg_m3", spec.density * spec.density_scaling},
-      {"bar_wave_speed_m_s", b.bar_wave_speed},
-      {"sample", b.sample_report},
-      {"resolved_experiment", to_toml(spec)}};
+  json manifest = initial_manifest(spec, b, opt);
   { std::ofstream(folder / "experiment.toml") << to_toml(spec); }
   write_json(folder / "manifest.json", manifest);
 
