@@ -585,7 +585,7 @@ void Calibrator::write_outputs(const CalibrationResult& r) const {
               {"wall_seconds", r.wall_seconds},
               {"machine", machine_description()}};
   write_text(folder_ / "record.json", record.dump(2) + "\n");
-  if (!run_python_script("plot_calibration.py", folder_.string(), "plot.log") && o_.log)
+  if (!run_python_module("calibration_plots", folder_.string(), "plot.log") && o_.log)
     o_.log("[calibrate] convergence.png not drawn (see plot.log)");
 }
 

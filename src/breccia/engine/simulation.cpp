@@ -127,8 +127,6 @@ Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactMode
 }
 
 std::size_t Simulation::add_wall(Wall w) {
-  if (initialised_)
-    throw InputError("simulation", "wall", w.name, "walls must be added before initialise()");
   if (w.shape == WallShape::Cylinder && !(w.radius > 0.0))
     throw InputError("wall '" + w.name + "'", "radius", num(w.radius), "must be > 0 m");
   if (p_.planar() && w.shape == WallShape::Cylinder && (w.axis.x != 0.0 || w.axis.y != 0.0))
@@ -141,7 +139,22 @@ std::size_t Simulation::add_wall(Wall w) {
   walls_.push_back(std::move(w));
   std::visit([&]<class Law>(std::vector<WallContacts<Law>>& v) { v.emplace_back(); },
              wall_contacts_);
+  if (initialised_) {
+    // Between stages (scripts): the new wall starts moving at the next step, and its contact
+    // candidates are found by rebuilding the lists now (pair histories carry over).
+    Wall& added = walls_.back();
+    added.update_motion(time_ - 0.5 * dt_);
+    added.force_prev = {};
+    added.radial_force_prev = 0.0;
+    std::visit([&](auto& c) { rebuild(c); }, contact_);
+  }
   return walls_.size() - 1;
+}
+
+void Simulation::set_local_damping(double alpha) {
+  if (!(alpha >= 0.0 && alpha < 1.0))
+    throw InputError("simulation", "local_damping", num(alpha), "allowed: 0 <= value < 1");
+  cfg_.local_damping = alpha;
 }
 
 void Simulation::add_joint_plane(JointPlane plane) {

@@ -148,6 +148,7 @@ class Simulation {
   // Bonds every pair whose gap is at most gap_tolerance (physics.md §7.6). Returns the count.
   template <class Law>
   std::size_t bond_touching_pairs(double gap_tolerance);
+  // Adds a wall; before initialise() or between two steps (its contacts are then found at once).
   std::size_t add_wall(Wall w);
   // Adds a joint plane (physics.md §5): at initialise() the bonds it cuts are replaced by joints
   // of the joint law (bonded joints when its parameters say so), and every neighbour pair it cuts
@@ -180,6 +181,9 @@ class Simulation {
   void set_contact_friction(double mu) {
     std::visit([&](auto& c) { c.params.friction = mu; }, contact_);
   }
+  // Changes the local damping coefficient between two steps (scripted stages); throws
+  // InputError outside 0 <= alpha < 1.
+  void set_local_damping(double alpha);
 
   // --- views ---
   const ParticleStore& particles() const noexcept { return p_; }

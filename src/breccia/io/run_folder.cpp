@@ -202,31 +202,31 @@ std::string summarise_run(const fs::path& file) {
 }  // namespace
 
 namespace {
-// The plotting scripts ship beside the sources and are installed nowhere: run them from the
-// source tree with Debian's interpreter; their output goes to `log_name` in the folder, which is
-// removed when they succeed.
-bool run_script(const char* script_name, const std::string& folder, const char* log_name) {
-  const fs::path script = fs::path(BRECCIA_SOURCE_DIR) / "scripts" / script_name;
+// The report and plots are modules of the Python package (python/breccia), which the build
+// copies beside its engine module: run them with Debian's interpreter; their output goes to
+// `log_name` in the folder, which is removed when they succeed.
+bool run_module(const char* module, const std::string& folder, const char* log_name) {
   const fs::path logf = fs::path(folder) / log_name;
   const std::string cmd =
-      fmt::format("/usr/bin/python3 '{}' '{}' > '{}' 2>&1", script.string(), folder, logf.string());
+      fmt::format("PYTHONPATH='{}' /usr/bin/python3 -m breccia.{} '{}' > '{}' 2>&1",
+                  BRECCIA_PYTHON_DIR, module, folder, logf.string());
   if (std::system(cmd.c_str()) != 0) return false;
   fs::remove(logf);
   return true;
 }
 }  // namespace
 
-bool run_python_script(const std::string& script, const std::string& folder,
+bool run_python_module(const std::string& module, const std::string& folder,
                        const std::string& log_name) {
-  return run_script(script.c_str(), folder, log_name.c_str());
+  return run_module(module.c_str(), folder, log_name.c_str());
 }
 
 bool plot_run(const std::string& folder) {
-  return run_script("plot_run.py", folder, "plot.log");
+  return run_module("plots", folder, "plot.log");
 }
 
 bool write_report(const std::string& folder) {
-  return run_script("report.py", folder, "report.log");
+  return run_module("report", folder, "report.log");
 }
 
 std::string summarise_folder(const std::string& folder) {

@@ -21,15 +21,15 @@ void make_plot(const std::filesystem::path& folder,
 
 // Human-readable headline results of a run folder (summary.json) or sweep folder (sweep.json).
 std::string summarise_folder(const std::string& folder);
-// Draws stress_strain.png in a run folder (scripts/plot_run.py); false with a message if not.
+// Draws stress_strain.png in a run folder (breccia.plots); false with a message if not.
 bool plot_run(const std::string& folder);
-// Writes report.html and report/*.png of a run or sweep folder (scripts/report.py); false with the
-// script's messages in report.log if not.
+// Writes report.html and report/*.png of a run or sweep folder (breccia.report); false with the
+// module's messages in report.log if not.
 bool write_report(const std::string& folder);
 
-// Runs scripts/<script> <folder> with Debian's Python; its output goes to <folder>/<log_name>,
-// removed when it succeeds. False if it failed.
-bool run_python_script(const std::string& script, const std::string& folder,
+// Runs `python3 -m breccia.<module> <folder>` with Debian's Python; its output goes to
+// <folder>/<log_name>, removed when it succeeds. False if it failed.
+bool run_python_module(const std::string& module, const std::string& folder,
                        const std::string& log_name);
 
 // A description of this machine for manifests and benchmark records.

@@ -224,6 +224,15 @@ void print_progress_bar(const Session& ss, const AxialState& a, double elapsed) 
   std::fflush(stderr);
 }
 
+RunProgress progress_of(const Session& ss, const AxialState& a, double elapsed) {
+  return {.fraction = std::clamp(a.strain / ss.test->max_strain(), 0.0, 1.0),
+          .axial_strain = a.strain,
+          .deviatoric_stress = a.deviatoric,
+          .cracks = ss.sim.cracks().size(),
+          .steps = ss.sim.step_count(),
+          .elapsed_seconds = elapsed};
+}
+
 // Steps the test until it stops, the run is interrupted (a signal or --stop-at-step: then it
 // saves a checkpoint first) or it fails. `wall` gives the run's wall time so far.
 LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptions& opt,
@@ -259,16 +268,20 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
     const AxialState a = test.measure(sim);
     check_finite_state(sim, a);
     record_row(spec, ss, a);
-    if (test.finished(a, sim.cracks().size())) return {"complete", test.stop_reason()};
+    if (test.finished(a, sim.cracks().size())) {
+      if (opt.progress) opt.progress(progress_of(ss, a, wall()));  // the last word: where it ended
+      return {"complete", test.stop_reason()};
+    }
     const auto now = std::chrono::steady_clock::now();
     if (spec.checkpoint_interval > 0.0 &&
         std::chrono::duration<double>(now - last_checkpoint).count() >= spec.checkpoint_interval) {
       checkpoint();
       last_checkpoint = std::chrono::steady_clock::now();
     }
-    if (opt.show_progress && now - last_bar > std::chrono::milliseconds(250)) {
+    if ((opt.show_progress || opt.progress) && now - last_bar > std::chrono::milliseconds(250)) {
       last_bar = now;
-      print_progress_bar(ss, a, wall());
+      if (opt.show_progress) print_progress_bar(ss, a, wall());
+      if (opt.progress) opt.progress(progress_of(ss, a, wall()));
     }
   }
 }

@@ -15,11 +15,24 @@
 
 namespace breccia {
 
+// Where a run stands, for a progress callback (the Python package's, for one).
+struct RunProgress {
+  double fraction = 0.0;  // axial strain over the test's strain limit (0-1)
+  double axial_strain = 0.0;
+  double deviatoric_stress = 0.0;  // Pa
+  std::size_t cracks = 0;
+  std::uint64_t steps = 0;
+  double elapsed_seconds = 0.0;  // wall time of this run, earlier sessions included
+};
+
 struct RunOptions {
   std::string command_line;
   const std::atomic<bool>* interrupt = nullptr;  // set from a signal handler to stop cleanly
   bool show_progress = false;                    // progress bar on stderr
-  std::function<void(const std::string&)> log;   // human-readable messages
+  // Called at the progress bar's pace (every 250 ms of wall time), bar or not, and once when
+  // the test ends; it may set `interrupt` to stop the run cleanly.
+  std::function<void(const RunProgress&)> progress;
+  std::function<void(const std::string&)> log;  // human-readable messages
   // Stop cleanly, with a checkpoint, once the engine has taken this many steps in all (0 = no
   // limit): for splitting a long test into jobs, and for the restart tests.
   std::uint64_t stop_at_step = 0;

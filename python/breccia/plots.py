@@ -1,7 +1,6 @@
-#!/usr/bin/python3
 """Stress-strain plot with crack counts for a Breccia run folder: stress_strain.png.
 
-Usage: plot_run.py RUN_FOLDER
+Usage: python3 -m breccia.plots RUN_FOLDER (or breccia.plots.main(folder))
 Reads history.csv and summary.json (if present). Needs Debian's python3-matplotlib.
 """
 import csv
@@ -11,8 +10,7 @@ import sys
 
 import matplotlib
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
 
 def main(folder):
@@ -58,6 +56,7 @@ def main(folder):
 
 
 if __name__ == "__main__":
+    matplotlib.use("Agg")  # files only; a notebook importing the module keeps its backend
     if len(sys.argv) != 2:
         sys.exit(__doc__)
     main(sys.argv[1])

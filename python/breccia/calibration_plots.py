@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """Draws convergence.png of a calibration folder: per target, the value each trial achieved
 (coloured by stage) against the lab target and its tolerance band."""
 import csv
@@ -8,8 +7,7 @@ import sys
 
 import matplotlib
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
 SCALE = {"youngs_modulus": (1e9, "GPa"), "uniaxial_strength": (1e6, "MPa"),
          "tensile_strength": (1e6, "MPa"), "cohesion": (1e6, "MPa"),
@@ -59,4 +57,5 @@ def main(folder):
 
 
 if __name__ == "__main__":
+    matplotlib.use("Agg")  # files only; a notebook importing the module keeps its backend
     sys.exit(main(sys.argv[1]))

@@ -1,0 +1,182 @@
+"""Runs, resumes, sweeps and step-level simulations through the compiled engine (breccia._core):
+the same run layer the `breccia` command calls, so a run from Python writes the same run folder,
+table for table, as the same run from the command line."""
+import os
+import sys
+
+import pandas as pd
+
+from . import _core
+from .experiment import Experiment
+from .folders import RunFolder, SweepFolder
+
+InputError = _core.InputError
+version = _core.version
+commit = _core.commit
+
+
+def materials():
+    """The material presets as a DataFrame: name and description (with provenance)."""
+    return pd.DataFrame(_core.material_presets(), columns=["name", "description"])
+
+
+def _experiment(experiment, output, threads):
+    if experiment is None:
+        experiment = Experiment()
+    elif isinstance(experiment, dict):
+        experiment = Experiment.from_dict(experiment)
+    elif not isinstance(experiment, Experiment):
+        experiment = Experiment(experiment)  # a path
+    changes = {}
+    if output is not None:
+        changes["output.directory"] = os.fspath(output)
+    if threads is not None:
+        changes["engine.threads"] = int(threads)
+    return experiment.with_(changes) if changes else experiment
+
+
+def _printer(log):
+    if log is True:
+        return lambda message: print(message, file=sys.stderr, flush=True)
+    return log or None
+
+
+def _progress(progress, experiment_progress=True):
+    """(terminal bar, callback) for a `progress` argument: None = the bar when stderr is a
+    terminal; True / False = the bar or nothing; a callable = called with a dict instead."""
+    if callable(progress):
+        return False, progress
+    if progress is None:
+        return experiment_progress and sys.stderr.isatty(), None
+    return bool(progress), None
+
+
+def _command(what):
+    return f"python: breccia.{what} (breccia {version})"
+
+
+def _checked(result, what):
+    if result["interrupted_by_signal"]:
+        e = KeyboardInterrupt()
+        e.add_note(f"breccia.{what}: interrupted; what was recorded is kept in "
+                   f"{result['folder']}" + (f", continue with breccia.resume('{result['folder']}')"
+                                            if what != "sweep" else ""))
+        raise e
+    return result
+
+
+def run(experiment=None, *, output=None, threads=None, progress=None, log=None, stop_at_step=0):
+    """Runs an experiment (an Experiment, a TOML path, a dict of sections, or None for the
+    default) into a new run folder under `output` (default: the experiment's
+    output.directory) and returns it as a RunFolder.
+
+    progress: None (a bar when stderr is a terminal), True, False, or a callable given a dict
+    (fraction, axial_strain, deviatoric_stress_pa, cracks, steps, elapsed_s) every 250 ms.
+    log: True prints the run's messages to stderr; a callable receives them.
+    Ctrl-C stops the run between two steps with a checkpoint and raises KeyboardInterrupt.
+    """
+    exp = _experiment(experiment, output, threads)
+    bar, callback = _progress(progress, exp["output.progress"])
+    result = _core.run(exp._spec, bar, callback, _printer(log), int(stop_at_step), _command("run"))
+    _checked(result, "run")
+    return RunFolder(result["folder"])
+
+
+def resume(folder, *, threads=None, progress=None, log=None, stop_at_step=0):
+    """Continues an interrupted run from its checkpoint, in its folder (the result is the one
+    the uninterrupted run gives). Returns the RunFolder."""
+    bar, callback = _progress(progress)
+    result = _core.resume(os.fspath(folder), -1 if threads is None else int(threads), bar,
+                          callback, _printer(log), int(stop_at_step), _command("resume"))
+    _checked(result, "resume")
+    return RunFolder(result["folder"])
+
+
+def sweep(experiment=None, *, confining_mpa=None, strain_rates=None, output=None, jobs=1,
+          threads=None, progress=None, log=None):
+    """Runs the experiment's compression test once per confining stress (MPa) or per strain
+    rate (1/s), on copies of one sample, with the fits and trends; returns the SweepFolder.
+    jobs: runs at once as child processes of the breccia command (0: as many as the cores
+    allow; 1: one after another in this process)."""
+    if (confining_mpa is None) == (strain_rates is None):
+        raise InputError("sweep: give confining_mpa or strain_rates (one of them)")
+    exp = _experiment(experiment, output, threads)
+    bar, _ = _progress(progress, exp["output.progress"])
+    confining = [1e6 * float(s) for s in confining_mpa] if confining_mpa is not None else []
+    rates = [float(r) for r in strain_rates] if strain_rates is not None else []
+    result = _core.sweep(exp._spec, confining, rates, int(jobs), bar, _printer(log),
+                         _command("sweep"))
+    _checked(result, "sweep")
+    return SweepFolder(result["folder"])
+
+
+class Simulation:
+    """Step-level access: the experiment's sample built and bonded, its test's boundaries in
+    place and consolidated, ready to load, stepped by hand.
+
+        sim = breccia.Simulation(breccia.Experiment("ucs.toml"))
+        sim.step(5000)                  # the test's servo walls are steered at every step
+        sim.measure()                   # the test's row: strains, stresses, platen forces
+        x = sim.positions               # (n, 3) read-only numpy view of the engine's memory
+        sim.add_wall("lid", point=(0, 0, 0.02), normal=(0, 0, -1), velocity=(0, 0, -0.01))
+        sim.set_local_damping(0.1); sim.set_contact_friction(0.3)
+
+    Array views (positions, radii, velocities, angular_velocities, forces, displacements,
+    masses) share the engine's memory: they see every later step and stay valid while the
+    simulation lives. Copy one (np.array(view)) to keep a snapshot.
+    """
+
+    def __init__(self, experiment=None, *, log=None):
+        exp = _experiment(experiment, None, None)
+        self.experiment = exp
+        self._sim = _core.Simulation(exp._spec, _printer(log))
+
+    def step(self, steps=1):
+        """Takes `steps` steps (Ctrl-C stops between two steps with KeyboardInterrupt)."""
+        if steps < 0:
+            raise InputError(f"Simulation.step: 'steps' = {steps}: allowed: >= 0")
+        self._sim.step(int(steps))
+        return self
+
+    def measure(self):
+        return self._sim.measure()
+
+    @property
+    def cracks(self):
+        """The broken bonds so far: step, time, ids, position, mode, released energy."""
+        c = self._sim.crack_columns
+        xyz = c.pop("position_m")
+        df = pd.DataFrame(c)
+        for k, axis in enumerate("xyz"):
+            df.insert(4 + k, f"{axis}_m", xyz[:, k])
+        return df
+
+    @property
+    def walls(self):
+        return pd.DataFrame(self._sim.walls)
+
+    def add_wall(self, name, point, normal, velocity=(0.0, 0.0, 0.0), ramp_s=0.0):
+        """A rigid plane through `point` (m) facing the particles along `normal`, moving at
+        `velocity` (m/s) reached over `ramp_s` seconds; takes effect at the next step."""
+        return self._sim.add_wall(name, tuple(point), tuple(normal), tuple(velocity),
+                                  float(ramp_s))
+
+    def set_wall_velocity(self, name, velocity):
+        self._sim.set_wall_velocity(name, tuple(velocity))
+
+    def set_contact_friction(self, mu):
+        self._sim.set_contact_friction(float(mu))
+
+    def set_local_damping(self, alpha):
+        self._sim.set_local_damping(float(alpha))
+
+    def __getattr__(self, name):
+        # time, step_count, time_step, dimension, particle_count, intact_bonds, contacts,
+        # energy, test, consolidation_steps and the array views.
+        if name == "_sim":
+            raise AttributeError(name)
+        return getattr(self._sim, name)
+
+    def __repr__(self):
+        return (f"Simulation({self.experiment.name!r}: {self.particle_count} particles, "
+                f"{self.intact_bonds} bonds, step {self.step_count}, t = {self.time:.6g} s)")

@@ -1,0 +1,252 @@
+// Step-level access for scripts: an experiment's sample and test built and consolidated, stepped
+// by hand, its particle arrays read as numpy views of the engine's own memory (zero copy,
+// read-only: the particle arrays never grow after the build, so a view stays valid while the
+// simulation lives), walls added and parameters changed between stages.
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <array>
+#include <memory>
+
+#include "breccia/core/parallel.hpp"
+#include "breccia/run/sample_build.hpp"
+#include "module.hpp"
+
+namespace py = pybind11;
+
+namespace breccia::python {
+namespace {
+
+struct Scripted {
+  ExperimentSpec spec;
+  std::unique_ptr<Built> built;
+
+  Simulation& sim() { return built->sim; }
+  const Simulation& sim() const { return built->sim; }
+};
+
+std::unique_ptr<Scripted> make(const ExperimentSpec& spec, std::optional<py::function> log) {
+  auto s = std::make_unique<Scripted>();
+  s->spec = spec;
+  if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
+  std::function<void(const std::string&)> logger = [&](const std::string& m) {
+    if (!log) return;
+    py::gil_scoped_acquire gil;
+    (*log)(m);
+  };
+  py::gil_scoped_release release;
+  s->built = std::make_unique<Built>(build(spec, logger));
+  return s;
+}
+
+// Steps the test (its servo walls steered before each step) in chunks, checking for Ctrl-C
+// between chunks: the state is always between two steps when control returns to Python.
+void step(Scripted& s, std::uint64_t n) {
+  constexpr std::uint64_t chunk = 1000;
+  for (std::uint64_t done = 0; done < n;) {
+    const std::uint64_t todo = std::min(chunk, n - done);
+    {
+      py::gil_scoped_release release;
+      for (std::uint64_t k = 0; k < todo; ++k) {
+        s.built->protocol->control(s.sim());
+        s.sim().step();
+      }
+    }
+    done += todo;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  }
+}
+
+// A read-only numpy view of `count` rows of `columns` doubles at `first`, rows `stride` bytes
+// apart, kept alive by `owner`.
+py::array view(const double* first, std::size_t count, std::size_t columns, std::size_t stride,
+               py::handle owner) {
+  std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(count)};
+  std::vector<py::ssize_t> strides{static_cast<py::ssize_t>(stride)};
+  if (columns > 1) {
+    shape.push_back(static_cast<py::ssize_t>(columns));
+    strides.push_back(sizeof(double));
+  }
+  py::array a(py::dtype::of<double>(), shape, strides, first, owner);
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+py::array vectors(const std::vector<Vec3>& v, py::handle owner) {
+  return view(&v.front().x, v.size(), 3, sizeof(Vec3), owner);
+}
+
+py::dict measure(const Scripted& s) {
+  const AxialState a = s.built->protocol->measure(s.sim());
+  return py::dict(py::arg("axial_strain") = a.strain, py::arg("axial_stress_pa") = a.stress,
+                  py::arg("deviatoric_stress_pa") = a.deviatoric,
+                  py::arg("confining_stress_pa") = a.confining_stress,
+                  py::arg("lateral_strain") = a.lateral_strain,
+                  py::arg("volumetric_strain") = a.volumetric_strain,
+                  py::arg("platen_force_bottom_n") = a.force_bottom,
+                  py::arg("platen_force_top_n") = a.force_top);
+}
+
+py::dict energy(const Simulation& sim) {
+  const EnergyLedger& L = sim.ledger();
+  return py::dict(
+      py::arg("step") = L.step, py::arg("kinetic_j") = L.kinetic(),
+      py::arg("bond_strain_j") = L.bond.total(), py::arg("contact_strain_j") = L.contact,
+      py::arg("boundary_work_j") = L.boundary_work, py::arg("external_work_j") = L.external_work,
+      py::arg("body_force_work_j") = L.body_force_work, py::arg("friction_j") = L.friction,
+      py::arg("local_damping_j") = L.local_damping,
+      py::arg("viscous_damping_j") = L.viscous_damping, py::arg("released_j") = L.released.total(),
+      py::arg("broken_bonds") = L.broken_bonds, py::arg("residual_j") = L.residual,
+      py::arg("residual_relative") = L.residual_relative);
+}
+
+// The crack catalogue as columns (the Python side makes a DataFrame of them).
+py::dict cracks(const Simulation& sim) {
+  const std::vector<CrackRecord>& c = sim.cracks();
+  const std::size_t n = c.size();
+  py::array_t<std::uint64_t> steps(n), id1(n), id2(n);
+  py::array_t<double> time(n), energy_j(n), xyz({n, std::size_t{3}});
+  py::list mode;
+  for (std::size_t k = 0; k < n; ++k) {
+    steps.mutable_at(k) = c[k].step;
+    id1.mutable_at(k) = c[k].id1;
+    id2.mutable_at(k) = c[k].id2;
+    time.mutable_at(k) = c[k].time;
+    energy_j.mutable_at(k) = c[k].energy.total();
+    for (py::ssize_t d = 0; d < 3; ++d) xyz.mutable_at(k, d) = c[k].position[static_cast<int>(d)];
+    mode.append(std::string(to_string(c[k].mode)));
+  }
+  return py::dict(py::arg("step") = steps, py::arg("time_s") = time, py::arg("id1") = id1,
+                  py::arg("id2") = id2, py::arg("position_m") = xyz, py::arg("mode") = mode,
+                  py::arg("energy_j") = energy_j);
+}
+
+py::list walls(const Simulation& sim) {
+  py::list out;
+  for (const Wall& w : sim.walls())
+    out.append(py::dict(
+        py::arg("name") = w.name,
+        py::arg("shape") = w.shape == WallShape::Plane ? "plane" : "cylinder",
+        py::arg("point_m") = std::array<double, 3>{w.point.x, w.point.y, w.point.z},
+        py::arg("normal") = std::array<double, 3>{w.normal.x, w.normal.y, w.normal.z},
+        py::arg("velocity_m_s") = std::array<double, 3>{w.velocity.x, w.velocity.y, w.velocity.z},
+        py::arg("force_n") = std::array<double, 3>{w.force.x, w.force.y, w.force.z},
+        py::arg("contacts") = w.contacts, py::arg("work_j") = w.work));
+  return out;
+}
+
+Vec3 vec(const std::array<double, 3>& a) {
+  return {a[0], a[1], a[2]};
+}
+
+std::size_t add_wall(Scripted& s, const std::string& name, const std::array<double, 3>& point,
+                     const std::array<double, 3>& normal, const std::array<double, 3>& velocity,
+                     double ramp_s) {
+  const Vec3 n = vec(normal);
+  const double length = norm(n);
+  if (!(length > 0.0))
+    throw InputError("add_wall('" + name + "')", "normal", "(0, 0, 0)", "a non-zero vector");
+  for (const Wall& w : s.sim().walls())
+    if (w.name == name)
+      throw InputError("add_wall('" + name + "')", "name", name, "a name no other wall has");
+  Wall w = Wall::plane(name, vec(point), n / length);
+  w.target_velocity = vec(velocity);
+  w.ramp = {s.sim().time(), ramp_s};
+  return s.sim().add_wall(std::move(w));
+}
+
+Wall& wall_named(Simulation& sim, const std::string& name) {
+  std::string names;
+  for (Wall& w : sim.walls()) {
+    if (w.name == name) return w;
+    names += (names.empty() ? "" : ", ") + w.name;
+  }
+  throw InputError("simulation", "wall", name, "one of the walls: " + names);
+}
+
+void set_wall_velocity(Scripted& s, const std::string& name, const std::array<double, 3>& v) {
+  Wall& w = wall_named(s.sim(), name);
+  if (w.controlled)
+    throw InputError("simulation", "wall", name,
+                     "a wall the test steers (servo); set the velocity of a wall you added");
+  w.target_velocity = vec(v);
+  w.ramp = {};
+}
+
+}  // namespace
+
+void bind_simulation(py::module_& m) {
+  py::class_<Scripted>(m, "Simulation")
+      .def(py::init(&make), py::arg("spec"), py::arg("log") = py::none())
+      .def("step", &step, py::arg("steps") = 1)
+      .def("measure", &measure)
+      .def("add_wall", &add_wall, py::arg("name"), py::arg("point"), py::arg("normal"),
+           py::arg("velocity") = std::array<double, 3>{0, 0, 0}, py::arg("ramp_s") = 0.0)
+      .def("set_wall_velocity", &set_wall_velocity, py::arg("name"), py::arg("velocity"))
+      .def("set_contact_friction",
+           [](Scripted& s, double mu) {
+             if (!(mu >= 0.0))
+               throw InputError("simulation", "friction", std::to_string(mu), "allowed: >= 0");
+             s.sim().set_contact_friction(mu);
+           })
+      .def("set_local_damping", [](Scripted& s, double a) { s.sim().set_local_damping(a); })
+      .def_property_readonly("test", [](const Scripted& s) { return s.built->protocol->label(); })
+      .def_property_readonly("consolidation_steps",
+                             [](const Scripted& s) { return s.built->consolidation_steps; })
+      .def_property_readonly("time", [](const Scripted& s) { return s.sim().time(); })
+      .def_property_readonly("step_count", [](const Scripted& s) { return s.sim().step_count(); })
+      .def_property_readonly("time_step", [](const Scripted& s) { return s.sim().time_step(); })
+      .def_property_readonly("dimension",
+                             [](const Scripted& s) { return s.sim().particles().planar() ? 2 : 3; })
+      .def_property_readonly("particle_count",
+                             [](const Scripted& s) { return s.sim().particles().size(); })
+      .def_property_readonly("intact_bonds",
+                             [](const Scripted& s) { return s.sim().intact_bonds(); })
+      .def_property_readonly("contacts",
+                             [](const Scripted& s) { return s.sim().active_contacts(); })
+      .def_property_readonly("energy", [](const Scripted& s) { return energy(s.sim()); })
+      .def_property_readonly("crack_columns", [](const Scripted& s) { return cracks(s.sim()); })
+      .def_property_readonly("walls", [](const Scripted& s) { return walls(s.sim()); })
+      .def_property_readonly("positions",
+                             [](py::object self) {
+                               const auto& p = self.cast<const Scripted&>().sim().particles();
+                               return view(&p.pos_rad.front().x.x, p.size(), 3, sizeof(PosRad),
+                                           self);
+                             })
+      .def_property_readonly("radii",
+                             [](py::object self) {
+                               const auto& p = self.cast<const Scripted&>().sim().particles();
+                               return view(&p.pos_rad.front().r, p.size(), 1, sizeof(PosRad), self);
+                             })
+      .def_property_readonly("velocities",
+                             [](py::object self) {
+                               return vectors(self.cast<const Scripted&>().sim().particles().vel,
+                                              self);
+                             })
+      .def_property_readonly("angular_velocities",
+                             [](py::object self) {
+                               return vectors(self.cast<const Scripted&>().sim().particles().angvel,
+                                              self);
+                             })
+      .def_property_readonly("forces",
+                             [](py::object self) {
+                               return vectors(self.cast<const Scripted&>().sim().particles().force,
+                                              self);
+                             })
+      .def_property_readonly(
+          "displacements",
+          [](py::object self) {
+            return vectors(self.cast<const Scripted&>().sim().particles().displacement, self);
+          })
+      .def_property_readonly("masses",
+                             [](py::object self) {
+                               const auto& p = self.cast<const Scripted&>().sim().particles();
+                               return view(p.mass.data(), p.size(), 1, sizeof(double), self);
+                             })
+      .def_property_readonly("tags", [](const Scripted& s) {
+        const auto& t = s.sim().particles().tag;
+        return py::array_t<std::uint64_t>(static_cast<py::ssize_t>(t.size()), t.data());
+      });
+}
+
+}  // namespace breccia::python

@@ -1,0 +1,197 @@
+"""The Python package (python/breccia) over the same engine: imports from the build tree, runs
+that match the command line's byte for byte, DataFrames with the documented columns, the
+command line's messages as Python exceptions, interrupt and resume, and step-level access."""
+import json
+import os
+import subprocess
+import tempfile
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import breccia
+
+CLI = os.environ["BRECCIA_CLI"]
+SOURCE = os.environ["BRECCIA_SOURCE_DIR"]
+
+# A 300-grain UCS sample from a file, loaded through the peak to 0.8 % strain in about 2 s
+# (the micro-parameters test_outputs.py uses, so that bonds break at this strain).
+SMALL = [
+    'sample.source="file"', f'sample.file="{SOURCE}/tests/data/ucs-small.geom"',
+    "engine.density_scaling=100", "loading.platen_speed=0.2", "loading.max_strain=0.008",
+    "output.snapshot_strain_interval=0", "output.plot=false", 'material.preset="custom"',
+    'contact.law="hertz_mindlin"', "contact.shear_modulus=29e9", "contact.poisson_ratio=0.33",
+    "contact.friction=0.4", "bond.modulus=8e9", "bond.tensile_strength=30e6",
+    "bond.cohesion=300e6"]
+TABLES = ["history", "cracks", "events", "indicators", "fragments", "b_value_windows",
+          "d2_windows"]
+# What differs between two identical runs: the clock.
+TIMING = {"wall_seconds", "particle_steps_per_second"}
+
+
+def cli_run(out, overrides=SMALL, extra=()):
+    cmd = [CLI, "run", "--quiet", "--output", out, *extra]
+    for o in overrides:
+        cmd += ["--set", o]
+    r = subprocess.run(cmd, capture_output=True, text=True, check=True)
+    return r.stdout.strip().splitlines()[-1]
+
+
+def read(path):
+    with open(path, "rb") as f:
+        return f.read()
+
+
+def without_timing(summary):
+    return {k: v for k, v in summary.items() if k not in TIMING}
+
+
+def test_package_imports_from_the_build_tree():
+    assert breccia.__file__.startswith(os.environ["BRECCIA_PYTHON_DIR"])
+    out = subprocess.run([CLI, "version"], capture_output=True, text=True, check=True).stdout
+    assert breccia.version in out
+    assert "berea" in list(breccia.materials()["name"])
+
+
+def test_a_run_from_python_matches_the_command_line_byte_for_byte():
+    with tempfile.TemporaryDirectory() as out:
+        cli = cli_run(os.path.join(out, "cli"))
+        py = breccia.run(breccia.Experiment(overrides=SMALL), output=os.path.join(out, "py"),
+                         progress=False)
+        assert isinstance(py, breccia.RunFolder) and py.complete
+        assert py.summary["bonds_broken"] > 0  # the run breaks bonds: the tables have rows
+        for t in TABLES:
+            assert read(os.path.join(cli, t + ".csv")) == read(py.file(t + ".csv")), t
+        # The resolved experiments differ in the output directory alone.
+        assert [line for line in read(os.path.join(cli, "experiment.toml")).splitlines()
+                if not line.startswith(b"directory = ")] == \
+            [line for line in read(py.file("experiment.toml")).splitlines()
+             if not line.startswith(b"directory = ")]
+        assert without_timing(json.load(open(os.path.join(cli, "summary.json")))) == \
+            without_timing(py.summary)
+        assert py.manifest["command"].startswith("python: breccia.run")
+
+
+def test_dataframes_have_the_documented_columns():
+    with tempfile.TemporaryDirectory() as out:
+        run = breccia.run(breccia.Experiment(overrides=SMALL), output=out, progress=False)
+        h = run.history
+        assert isinstance(h, pd.DataFrame) and len(h) > 10
+        for c in ("step", "time_s", "axial_strain", "deviatoric_stress_pa",
+                  "confining_stress_pa", "lateral_strain", "volumetric_strain",
+                  "broken_bonds", "tensile_cracks", "shear_cracks", "kinetic_j"):
+            assert c in h.columns, c
+        assert len(run.cracks) == run.summary["bonds_broken"]
+        for c in ("step", "time_s", "x_m", "y_m", "z_m", "mode", "energy_j", "event_id"):
+            assert c in run.cracks.columns, c
+        assert set(run.cracks["mode"]) <= {"tensile", "shear"}
+        for c in ("event_id", "cracks", "mw", "source_type"):
+            assert c in run.events.columns, c
+        for c in ("axial_strain", "b_value", "d2", "shear_fraction", "mc_var", "ae_var_j2",
+                  "damage_index"):
+            assert c in run.indicators.columns, c
+        for c in ("fragment_id", "particles", "mass_kg", "class"):
+            assert c in run.fragments.columns, c
+        arrays = run.arrays("history")
+        assert isinstance(arrays["axial_strain"], np.ndarray)
+        assert run.dimension == 3
+        assert breccia.read(run.path).path == run.path
+
+
+def test_bad_arguments_raise_the_command_lines_messages():
+    r = subprocess.run([CLI, "run", "--set", "sample.bogus=1"], capture_output=True, text=True)
+    assert r.returncode != 0
+    cli_message = r.stderr.strip().splitlines()[-1].removeprefix("error: ")
+    with pytest.raises(breccia.InputError) as e:
+        breccia.Experiment(sample={"bogus": 1})
+    assert str(e.value) == cli_message
+    assert isinstance(e.value, ValueError)
+    with pytest.raises(ValueError, match="engine.threads"):
+        breccia.Experiment(engine={"threads": -3})
+    with pytest.raises(ValueError, match="cannot open"):
+        breccia.Experiment("/no/such/experiment.toml")
+    with pytest.raises(TypeError, match="not a TOML value"):
+        breccia.Experiment(sample={"radius": object()})
+    with pytest.raises(FileNotFoundError, match="not a Breccia run"):
+        breccia.read(SOURCE)
+
+
+def test_experiments_from_a_dict_keywords_and_toml_text_agree():
+    a = breccia.Experiment.from_dict({"sample": {"max_particles": 900}, "engine": {"seed": 5}})
+    b = breccia.Experiment(sample={"max_particles": 900}, engine={"seed": 5})
+    c = breccia.Experiment(overrides={"sample.max_particles": 900, "engine.seed": 5})
+    d = breccia.Experiment.from_toml(a.to_toml())
+    assert a.to_toml() == b.to_toml() == c.to_toml() == d.to_toml()
+    assert a.seed == 5 and a["sample.max_particles"] == 900
+
+
+def test_an_interrupted_run_resumes_from_python_to_the_uninterrupted_result():
+    calls = []
+    with tempfile.TemporaryDirectory() as out:
+        whole = breccia.run(breccia.Experiment(overrides=SMALL), output=os.path.join(out, "a"),
+                            progress=calls.append)
+        half = whole.manifest["consolidation_steps"] + whole.summary["steps"] // 2
+        cut = breccia.run(breccia.Experiment(overrides=SMALL), output=os.path.join(out, "b"),
+                          progress=False, stop_at_step=half)
+        assert cut.status == "interrupted" and os.path.exists(cut.file("checkpoint.bin"))
+        done = breccia.resume(cut.path, progress=False)
+        assert done.complete
+        for t in ("history", "cracks", "events"):
+            assert read(whole.file(t + ".csv")) == read(done.file(t + ".csv")), t
+        # The callback came every 250 ms and once at the end, in order.
+        fractions = [c["fraction"] for c in calls]
+        assert len(calls) >= 1 and fractions == sorted(fractions)
+        assert calls[-1]["steps"] == whole.summary["steps"]
+        assert {"axial_strain", "deviatoric_stress_pa", "cracks", "elapsed_s"} <= set(calls[-1])
+
+
+def test_an_exception_in_the_progress_callback_stops_the_run_cleanly():
+    class Stop(Exception):
+        pass
+
+    def stop(_):
+        raise Stop("enough")
+
+    with tempfile.TemporaryDirectory() as out:
+        with pytest.raises(Stop):
+            breccia.run(breccia.Experiment(overrides=SMALL + ["loading.max_strain=0.05"]),
+                        output=out, progress=stop)
+        [folder] = os.listdir(out)
+        run = breccia.read(os.path.join(out, folder))
+        assert run.status == "interrupted"  # marked, tables kept, resumable
+        assert os.path.exists(run.file("checkpoint.bin")) and len(run.history) > 0
+
+
+def test_step_level_access_sees_the_engine_state():
+    sim = breccia.Simulation(breccia.Experiment(overrides=SMALL))
+    n = sim.particle_count
+    x = sim.positions
+    assert x.shape == (n, 3) and sim.radii.shape == (n,) and (sim.radii > 0).all()
+    assert not x.flags.writeable
+    with pytest.raises(ValueError):
+        x[0, 0] = 1.0
+    before = np.array(x)
+    t0, s0 = sim.time, sim.step_count
+    sim.step(500)
+    assert sim.step_count == s0 + 500
+    assert sim.time == pytest.approx(t0 + 500 * sim.time_step, rel=1e-9)
+    # The view is the engine's memory: it moved with the particles.
+    assert not np.array_equal(before, x)
+    row = sim.measure()
+    assert row["axial_strain"] > 0 and row["deviatoric_stress_pa"] > 0
+    # Total mass from the views equals the sample's (scaled) mass.
+    assert sim.masses.sum() == pytest.approx(
+        (sim.experiment["engine.density_scaling"] * 4 / 3 * np.pi * 2650 *
+         (sim.radii ** 3)).sum(), rel=1e-12)
+    assert sim.energy["boundary_work_j"] > 0
+    assert list(sim.cracks.columns)[:7] == ["step", "time_s", "id1", "id2", "x_m", "y_m", "z_m"]
+    with pytest.raises(breccia.InputError, match="local_damping"):
+        sim.set_local_damping(1.5)
+    walls = len(sim.walls)
+    top = float((x[:, 2] + sim.radii).max())
+    sim.add_wall("lid", point=(0, 0, top + 1e-3), normal=(0, 0, -1))
+    assert len(sim.walls) == walls + 1
+    with pytest.raises(breccia.InputError, match="a name no other wall has"):
+        sim.add_wall("lid", point=(0, 0, 1), normal=(0, 0, -1))
+    sim.step(10)
