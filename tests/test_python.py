@@ -195,3 +195,45 @@ def test_step_level_access_sees_the_engine_state():
     with pytest.raises(breccia.InputError, match="a name no other wall has"):
         sim.add_wall("lid", point=(0, 0, 1), normal=(0, 0, -1))
     sim.step(10)
+
+
+def test_ctrl_c_stops_a_python_run_with_a_checkpoint_and_raises_keyboard_interrupt():
+    """SIGINT in the middle of breccia.run: the run stops between two steps, its folder is
+    marked interrupted with a checkpoint, and the script gets KeyboardInterrupt naming it."""
+    import signal
+    import sys
+    import textwrap
+    script = textwrap.dedent(f"""
+        import sys, breccia
+        def started(p):
+            print("started", flush=True)
+        try:
+            breccia.run(breccia.Experiment(overrides={SMALL + ["loading.max_strain=0.5"]!r}),
+                        output=sys.argv[1], progress=started)
+        except KeyboardInterrupt as e:
+            print("interrupted;", " ".join(getattr(e, "__notes__", [])), flush=True)
+        """)
+    with tempfile.TemporaryDirectory() as out:
+        child = subprocess.Popen([sys.executable, "-c", script, out], stdout=subprocess.PIPE,
+                                 text=True, env=os.environ)
+        assert child.stdout.readline().strip() == "started"
+        child.send_signal(signal.SIGINT)
+        rest, _ = child.communicate(timeout=120)
+        assert child.returncode == 0
+        assert "interrupted;" in rest and "breccia.resume(" in rest
+        [folder] = [f for f in os.listdir(out) if f != "samples"]
+        run = breccia.read(os.path.join(out, folder))
+        assert run.status == "interrupted" and os.path.exists(run.file("checkpoint.bin"))
+
+
+def test_the_python_example_runs_and_compares_two_presets():
+    with tempfile.TemporaryDirectory() as out:
+        r = subprocess.run(["/usr/bin/python3", f"{SOURCE}/examples/python/compare_presets.py",
+                            out, "3"], capture_output=True, text=True, env=os.environ)
+        assert r.returncode == 0, r.stderr
+        assert os.path.getsize(os.path.join(out, "compare_presets.png")) > 20000
+        rows = {line.split()[0]: line.split() for line in r.stdout.splitlines()
+                if line.split() and line.split()[0] in ("berea", "lac_du_bonnet")}
+        # The granite is stronger and stiffer than the sandstone.
+        assert float(rows["lac_du_bonnet"][2]) > 1.5 * float(rows["berea"][2])
+        assert float(rows["lac_du_bonnet"][3]) > 4 * float(rows["berea"][3])
