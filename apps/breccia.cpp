@@ -1,5 +1,6 @@
 // The `breccia` command: one function per subcommand (run, resume, generate, sweep, summarise,
-// report, check, docs, calibrate, materials, version) declares its options and what it does.
+// report, check, docs, calibrate, materials, predict, version) declares its options and what it
+// does.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -348,6 +349,22 @@ Command add_materials(CLI::App& app) {
   return {c, [output] { return write_text(breccia::materials_docs(), *output); }};
 }
 
+// The failure predictor lives in the Python package (scikit-learn): its arguments go through.
+Command add_predict(CLI::App& app) {
+  auto args = std::make_shared<std::vector<std::string>>();
+  auto* c = app.add_subcommand(
+      "predict",
+      "failure predictor (seed 000): `predict train SWEEP... --output MODEL` or `predict apply "
+      "RUN --model MODEL`; `predict -h` for its options");
+  c->prefix_command();
+  c->set_help_flag();
+  return {c, [c, args] {
+            *args = c->remaining();
+            if (args->empty()) args->push_back("--help");
+            return breccia::run_python_command("predict", *args);
+          }};
+}
+
 Command add_version(CLI::App& app) {
   return {app.add_subcommand("version", "print the version"), [] {
             std::cout << "breccia " << breccia::kVersion << "\n";
@@ -395,6 +412,7 @@ int main(int argc, char** argv) {
                                          add_docs(app),
                                          add_calibrate(app, command_line),
                                          add_materials(app),
+                                         add_predict(app),
                                          add_version(app)};
   if (unknown_command(argc, argv, app)) return 2;
   CLI11_PARSE(app, argc, argv);

@@ -2,6 +2,7 @@
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -219,6 +220,21 @@ bool run_module(const char* module, const std::string& folder, const char* log_n
 bool run_python_module(const std::string& module, const std::string& folder,
                        const std::string& log_name) {
   return run_module(module.c_str(), folder, log_name.c_str());
+}
+
+int run_python_command(const std::string& module, const std::vector<std::string>& args) {
+  // Single-quoted for the shell, with each ' written as '\''.
+  auto quoted = [](const std::string& a) {
+    std::string q = "'";
+    for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+  };
+  std::string cmd = fmt::format("PYTHONPATH={} /usr/bin/python3 -m breccia.{}",
+                                quoted(BRECCIA_PYTHON_DIR), module);
+  for (const std::string& a : args) cmd += " " + quoted(a);
+  const int status = std::system(cmd.c_str());
+  if (status == -1) return 1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 bool plot_run(const std::string& folder) {

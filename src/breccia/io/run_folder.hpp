@@ -6,6 +6,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "breccia/io/experiment.hpp"
 
@@ -29,6 +30,9 @@ bool write_report(const std::string& folder);
 
 // Runs `python3 -m breccia.<module> <folder>` with Debian's Python; its output goes to
 // <folder>/<log_name>, removed when it succeeds. False if it failed.
+// Runs `python3 -m breccia.<module> <args>...` with Debian's Python, its output on this
+// process's; returns its exit status.
+int run_python_command(const std::string& module, const std::vector<std::string>& args);
 bool run_python_module(const std::string& module, const std::string& folder,
                        const std::string& log_name);
 

@@ -1,0 +1,161 @@
+"""The failure predictor (breccia.predict; analysis.md §10): Garson and Olden against the hand
+example and seed 000's tables S1/S2, the scalers and metrics against their worked examples, the
+network's own forward pass against scikit-learn's, recovery of a planted relation under
+leave-one-test-out with the planted input ranked first, the data set of a real run, and the
+command's errors."""
+import json
+import os
+import subprocess
+import tempfile
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from breccia import predict
+
+CLI = os.environ["BRECCIA_CLI"]
+SOURCE = os.environ["BRECCIA_SOURCE_DIR"]
+
+
+def test_garson_and_olden_reproduce_the_worked_example():
+    # analysis.md §10.6: w[input, hidden], v[hidden].
+    w = np.array([[1.0, 0.2], [-0.5, 0.8]])
+    v = np.array([2.0, -1.0])
+    assert predict.garson(w, v) == pytest.approx([0.43333, 0.56667], abs=1e-5)
+    assert predict.olden(w, v) == pytest.approx([1.8, -1.8])
+
+
+# Seed 000, tables S1 (stress to failure) and S2 (strain to failure): input-to-hidden weights,
+# one row per hidden neuron, inputs CP, MCvar, SF, D2, AEvar, b; output weights; and the
+# relative importances (%) the seed reports.
+S1_W = [[-12.787, -5.3654, 3.3737, 5.197, 5.529, -4.4557],
+        [-0.69941, 0.46166, 1.7681, -0.44316, -0.53642, 1.3435],
+        [-1.3795, 0.62373, 1.8093, -0.96023, -2.5051, 2.0473],
+        [-0.1906, -0.80925, -0.34267, 1.3237, -0.93371, -1.7405],
+        [-0.00902, -0.07215, -0.00188, 0.78122, -0.84251, -0.45002],
+        [-1.1023, -1.8656, 2.1003, 0.65579, 4.1812, 1.7924]]
+S1_V = [0.068337, -1.127, 0.39871, -0.81965, 0.92711, 0.81099]
+S1_RI = [12.726, 10.757, 14.453, 16.585, 24.072, 21.409]
+S2_W = [[0.003748, 0.36396, 0.97119, -0.43355, 1.8287, 2.9244],
+        [0.70824, -3.9489, -1.4084, -0.67197, -0.93546, -3.8996],
+        [-0.29575, 1.9861, 0.17713, -0.03881, -0.01627, 0.12422],
+        [-0.63046, 0.99101, 2.5128, -0.47049, 0.8302, 1.778],
+        [-0.77788, -2.9333, -1.075, 0.71918, -0.96588, 2.2468],
+        [-1.3277, -1.845, -0.68016, 1.1911, -0.97703, 1.8469]]
+S2_V = [0.84593, 0.56068, 0.53844, -0.32142, 1.831, -3.3834]
+S2_RI = [8.6543, 30.969, 14.93, 7.3054, 11.955, 26.186]
+
+
+@pytest.mark.parametrize("w, v, ri", [(S1_W, S1_V, S1_RI), (S2_W, S2_V, S2_RI)])
+def test_garson_reproduces_seed_000s_importances_from_its_weights(w, v, ri):
+    # The seed's tables give weights to 3-5 significant figures: 0.01 percentage points.
+    got = 100 * predict.garson(np.array(w).T, np.array(v))
+    assert got == pytest.approx(ri, abs=0.01)
+
+
+def test_min_max_scaling_and_metrics_match_the_worked_examples():
+    s = predict.MinMax.fit(np.array([5.0, 10.0, 20.0]))
+    assert s.scale([5.0, 10.0, 20.0]) == pytest.approx([-1.0, -1 / 3, 1.0])
+    assert s.unscale(s.scale([7.0])) == pytest.approx([7.0])
+    assert predict.MinMax.fit(np.array([3.0, 3.0])).scale([3.0]) == pytest.approx([0.0])
+    y, p = [1, 2, 3, 4], [1.1, 1.9, 3.2, 3.8]
+    assert predict.rmse(y, p) == pytest.approx(0.1581, abs=1e-4)
+    assert predict.r2(y, p) == pytest.approx(0.98, abs=1e-12)
+
+
+def planted(tests=6, per_test=60, seed=1):
+    """Windows of synthetic tests whose target is a known function of D2 alone (plus weak
+    noise); the other inputs are noise of their typical sizes."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for t in range(tests):
+        n = per_test
+        d2 = rng.uniform(0.8, 2.2, n)
+        rows.append(pd.DataFrame({
+            "test": f"t{t}", "confining_mpa": 10.0 * t,
+            "mc_var": 10 ** rng.uniform(-1, 2, n), "shear_fraction": rng.uniform(0, 0.3, n),
+            "d2": d2, "ae_var": 10 ** rng.uniform(-16, -12, n), "b_value": rng.uniform(0.5, 2, n),
+            "stress_to_failure_mpa": 40 * (d2 - 0.8) ** 2 + rng.normal(0, 0.5, n)}))
+    return pd.concat(rows, ignore_index=True)
+
+
+def test_the_network_recovers_a_planted_relation_and_ranks_its_input_first():
+    data = planted()
+    target = "stress_to_failure_mpa"
+    folds, pooled = predict.leave_one_test_out(data, predict.INPUTS, target, networks=3)
+    assert len(folds) == 6
+    # The target spans 0-78 MPa with noise 0.5 MPa: held-out tests are predicted to R^2 > 0.95.
+    assert predict.r2(pooled["y"], pooled["predicted"]) > 0.95
+    net, nets = predict.best_of(data[predict.INPUTS], data[target], data[predict.INPUTS],
+                                data[target], predict.INPUTS, target, networks=3)
+    ri = np.mean([n.garson() for n in nets], axis=0)
+    assert int(np.argmax(ri)) == predict.INPUTS.index("d2"), ri
+
+
+def test_the_networks_forward_pass_is_scikit_learns_and_survives_saving():
+    from sklearn.neural_network import MLPRegressor
+    data = planted(tests=2, per_test=40)
+    X, y = data[predict.INPUTS], data["stress_to_failure_mpa"]
+    net = predict.fit_network(X, y, predict.INPUTS, "stress_to_failure_mpa", seed=4)
+    # The same fit with scikit-learn's own predict on the scaled inputs.
+    Xt = predict._transform(X, predict.INPUTS)
+    mlp = MLPRegressor(hidden_layer_sizes=(6,), activation="tanh", solver="lbfgs", alpha=0.0,
+                       max_iter=1000, random_state=4)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        mlp.fit(net.x_scale.scale(Xt), net.y_scale.scale(y))
+    expected = net.y_scale.unscale(mlp.predict(net.x_scale.scale(Xt)))
+    assert net.predict(X) == pytest.approx(expected, rel=1e-10, abs=1e-9)
+    again = predict.Network.from_dict(json.loads(json.dumps(net.to_dict())))
+    assert again.predict(X) == pytest.approx(net.predict(X), rel=0, abs=0)
+
+
+def small_run(out):
+    cmd = [CLI, "run", "--quiet", "--output", out, "--set", 'sample.source="file"',
+           "--set", f'sample.file="{SOURCE}/tests/data/ucs-small.geom"',
+           "--set", "engine.density_scaling=100", "--set", "loading.platen_speed=0.2",
+           "--set", "loading.max_strain=0.008", "--set", "output.snapshot_strain_interval=0",
+           "--set", "output.plot=false", "--set", 'material.preset="custom"',
+           "--set", 'contact.law="hertz_mindlin"', "--set", "contact.shear_modulus=29e9",
+           "--set", "contact.poisson_ratio=0.33", "--set", "contact.friction=0.4",
+           "--set", "bond.modulus=8e9", "--set", "bond.tensile_strength=30e6",
+           "--set", "bond.cohesion=300e6"]
+    return subprocess.run(cmd, capture_output=True, text=True, check=True).stdout.split()[-1]
+
+
+def test_the_data_set_of_a_run_holds_its_pre_peak_windows_and_their_targets():
+    import breccia
+    with tempfile.TemporaryDirectory() as out:
+        run = breccia.read(small_run(out))
+        inputs = ["confining_mpa", "mc_var", "ae_var"]
+        rows, dropped = predict.windows(run, inputs)
+        s = run.summary
+        ind = run.indicators
+        pre = ind[ind["axial_strain"] <= s["axial_strain_at_peak"]]
+        assert len(rows) + dropped == len(pre) and len(rows) > 0
+        assert (rows["strain_to_failure"] >= 0).all()
+        assert rows["strain_to_failure"].to_numpy() == pytest.approx(
+            s["axial_strain_at_peak"] - rows["axial_strain"].to_numpy())
+        # q at a window end never exceeds the peak: stress to failure >= 0 (to rounding of
+        # the interpolation between history rows).
+        assert (rows["stress_to_failure_mpa"] >= -1e-9).all()
+        assert rows["mc_var"].to_numpy() == pytest.approx(
+            pre.loc[pre[["mc_var", "ae_var_j2"]].notna().all(axis=1), "mc_var"].to_numpy())
+        # Three runs of one sample are one test each; fewer than 3 tests are refused.
+        with pytest.raises(predict.PredictError, match="at least 3"):
+            predict.leave_one_test_out(rows.assign(stress=0.0), inputs, "stress", networks=1)
+
+
+def test_the_command_refuses_bad_input_with_a_message():
+    r = subprocess.run([CLI, "predict", "train", SOURCE, "--output", "/tmp/x"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "not a Breccia run" in r.stderr
+    with tempfile.TemporaryDirectory() as out:
+        r = subprocess.run([CLI, "predict", "train", out, "--output", out, "--inputs", "foo"],
+                           capture_output=True, text=True)
+        assert r.returncode == 2 and "allowed: any of confining_mpa" in r.stderr
+        r = subprocess.run([CLI, "predict", "apply", out, "--model", out],
+                           capture_output=True, text=True)
+        assert r.returncode == 2 and "no model.json" in r.stderr
