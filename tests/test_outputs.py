@@ -61,6 +61,32 @@ def test_snapshots_and_plot_are_readable():
             assert f.read(8) == b"\x89PNG\r\n\x1a\n"
 
 
+def assert_chromium_loads_every_image(folder, count):
+    """Opens a copy of report.html in headless Chromium with a script that, once the page has
+    loaded, writes how many images it holds and which failed to decode into the DOM."""
+    import shutil
+    chromium = shutil.which("chromium")
+    assert chromium, "chromium is missing (scripts/bootstrap installs it)"
+    probe = ("<script>window.addEventListener('load', () => {"
+             "const imgs = [...document.images];"
+             "document.body.setAttribute('data-images', imgs.length);"
+             "document.body.setAttribute('data-broken', imgs.filter("
+             "i => !(i.complete && i.naturalWidth > 0)).map(i => i.alt).join(',') || 'none');"
+             "});</script>")
+    page = open(os.path.join(folder, "report.html")).read()
+    check = os.path.join(folder, "report-check.html")
+    with open(check, "w") as f:
+        f.write(page.replace("</body>", probe + "</body>"))
+    with tempfile.TemporaryDirectory() as profile:
+        r = subprocess.run([chromium, "--headless", "--no-sandbox", "--disable-gpu",
+                            f"--user-data-dir={profile}", "--virtual-time-budget=10000",
+                            "--dump-dom", "file://" + check],
+                           capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert f'data-images="{count}"' in r.stdout, r.stdout[:300]
+    assert 'data-broken="none"' in r.stdout
+
+
 def test_report_renders_every_figure():
     """The report of a small run through the peak: every figure exists, is a real PNG of
     reasonable size and is not blank, and report.html embeds them all."""
@@ -75,7 +101,8 @@ def test_report_renders_every_figure():
                                 check=True).stdout.strip().splitlines()[-1]
         r = subprocess.run([CLI, "report", folder], capture_output=True, text=True)
         assert r.returncode == 0, r.stdout + r.stderr
-        expected = ["stress_strain.png", "crack_maps.png", "event_magnitudes.png",
+        expected = ["stress_strain.png", "crack_maps.png", "crack_field_3d.png",
+                    "event_magnitudes.png",
                     "b_value_d2.png", "gutenberg_richter.png", "hudson.png",
                     "energy_budget.png", "indicators.png", "fragment_sizes.png"]
         page = open(os.path.join(folder, "report.html")).read()
@@ -93,6 +120,7 @@ def test_report_renders_every_figure():
             assert repr_text not in table, repr_text
         for row in ("<th>sample</th>", "<th>loading</th>", "<th>run</th>", " MPa", " GPa"):
             assert row in table, row
+        assert_chromium_loads_every_image(folder, len(expected))
         # The catalogue files the figures come from.
         summary = json.load(open(os.path.join(folder, "summary.json")))
         ae = summary["acoustic_emission"]
@@ -100,3 +128,31 @@ def test_report_renders_every_figure():
         assert len(events) - 1 == ae["events"] > 10
         assert summary["energy_budget"]["classification"] in ("good", "warning")
         assert summary["fragments"]["count"] >= 1
+
+
+def test_the_report_carries_the_calibration_record_of_a_library_rock():
+    """A run of a calibrated preset reports its record (targets, achieved, verdicts, how to
+    reproduce it) and says so when the run overrides calibrated values."""
+    with tempfile.TemporaryDirectory() as out:
+        rows = {}
+        for label, extra in (("as calibrated", []), ("overridden", ["--set", "bond.modulus=9e9"])):
+            cmd = [CLI, "run", "--quiet", "--output", out, "--set", 'sample.source="file"',
+                   "--set", f'sample.file="{SOURCE}/tests/data/ucs-small.geom"',
+                   "--set", "engine.density_scaling=100", "--set", "loading.max_strain=0.002",
+                   "--set", "output.plot=false", "--set", "output.snapshot_strain_interval=0",
+                   "--set", 'material.preset="berea"', *extra]
+            folder = subprocess.run(cmd, capture_output=True, text=True,
+                                    check=True).stdout.strip().splitlines()[-1]
+            manifest = json.load(open(os.path.join(folder, "manifest.json")))
+            assert manifest["material"]["preset"] == "berea"
+            assert manifest["material"]["parameters_as_calibrated"] == (label == "as calibrated")
+            subprocess.run([CLI, "report", folder], capture_output=True, check=True)
+            page = open(os.path.join(folder, "report.html")).read()
+            start = page.index("<th>calibration</th>")
+            rows[label] = page[start:page.index("</tr>", start)]
+        row = rows["as calibrated"]
+        for text in ("preset berea", "UCS 96.41 MPa", "against 95 MPa", "met",
+                     "examples/calibrate-berea.toml"):
+            assert text in row, text
+        assert "overrides" not in row
+        assert "overrides some of the preset" in rows["overridden"]

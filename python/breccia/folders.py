@@ -136,7 +136,7 @@ class RunFolder(_Folder):
     def report(self):
         """Writes report.html and report/*.png; returns the path of report.html."""
         from . import report
-        report.main(self.path)
+        report.run_report(self.path)
         return self.file("report.html")
 
 
@@ -169,8 +169,9 @@ class SweepFolder(_Folder):
         return pd.DataFrame(self.sweep["runs"])
 
     def report(self):
+        """Writes the sweep's report.html and figures; returns the path of report.html."""
         from . import report
-        report.main(self.path)
+        report.sweep_report(self.path)
         return self.file("report.html")
 
 

@@ -134,6 +134,33 @@ def crack_maps(summary, cracks, outdir, figures):
     save(fig, outdir, "crack_maps.png", figures)
 
 
+def crack_field_3d(summary, cracks, outdir, figures):
+    """Every microcrack of a 3D run in perspective from two sides, tensile and shear apart, so
+    a shear band or axial splitting shows as a surface (the crack maps show one section)."""
+    if not cracks or summary.get("test_kind") == "brazilian" or \
+            summary.get("test", "").startswith("biaxial") or not any(col(cracks, "z_m")):
+        return
+    x, y, z = col(cracks, "x_m", 1e3), col(cracks, "y_m", 1e3), col(cracks, "z_m", 1e3)
+    tensile = np.array([c["mode"] == "tensile" for c in cracks])
+    fig = plt.figure(figsize=(11, 5.5))
+    for k, azimuth in enumerate((-60, 30), start=1):
+        ax = fig.add_subplot(1, 2, k, projection="3d")
+        # Shear cracks drawn last and larger: they are the few, and the band's signature.
+        for sel, m, size in ((tensile, "tensile", 3), (~tensile, "shear", 12)):
+            ax.scatter(x[sel], y[sel], z[sel], s=size, c=MODE_COLOURS[m], depthshade=True,
+                       label=f"{m} ({int(sel.sum())})")
+        ax.view_init(elev=15, azim=azimuth)
+        ax.set_box_aspect((np.ptp(x) or 1, np.ptp(y) or 1, np.ptp(z) or 1))
+        ax.set_xlabel("x (mm)")
+        ax.set_ylabel("y (mm)")
+        ax.set_zlabel("z (mm)")
+        ax.set_title(f"seen from azimuth {azimuth} deg", fontsize=9)
+    fig.axes[0].legend(fontsize=8, loc="upper left")
+    fig.suptitle(wrapped(f"All {len(cracks)} microcracks in 3D, coloured by mode (load along z)"),
+                 fontsize=10)
+    save(fig, outdir, "crack_field_3d.png", figures)
+
+
 def magnitudes(summary, events, hist, outdir, figures):
     if not events:
         return
@@ -238,6 +265,46 @@ def sample_text(spec, summary):
             f"{summary.get('particles')} grains, {summary.get('bonds_initial')} bonds")
 
 
+TARGET_NAMES = {"youngs_modulus": "E", "uniaxial_strength": "UCS", "tensile_strength": "TS",
+                "poisson_ratio": "nu", "cohesion": "C", "friction_angle_deg": "phi",
+                "crack_initiation_ratio": "sigma_ci / UCS", "critical_strain": "peak strain"}
+
+
+def quantity(value, unit, like=None):
+    """A value of a calibration record in the unit a rock mechanic reads (that of `like`, when
+    given: a spread in the unit of its mean)."""
+    if unit == "Pa":
+        giga = abs(like if like is not None else value) >= 1e9
+        return f"{value * 1e-9:.4g} GPa" if giga else f"{value * 1e-6:.4g} MPa"
+    if unit == "deg":
+        return f"{value:.3g} deg"
+    return f"{value:.3g}"
+
+
+def calibration_text(material):
+    """The preset's calibration record in one paragraph: each target, lab against achieved
+    (mean +/- s.d. over the verification seeds), error and verdict; how to reproduce it."""
+    r = material["record"]
+    parts = []
+    for v in r.get("verdicts", []):
+        err = (f"{100 * v['error']:+.1f} %" if v.get("relative")
+               else f"{v['error']:+.2f} {'' if v['unit'] == '-' else v['unit']}".rstrip())
+        parts.append(f"{TARGET_NAMES.get(v['target'], v['target'])} "
+                     f"{quantity(v['mean'], v['unit'])} +/- {quantity(v['sd'], v['unit'], v['mean'])} "
+                     f"against {quantity(v['value'], v['unit'])} ({v.get('source', '?')}): "
+                     f"{err}, {'met' if v.get('met') else 'MISSED'}")
+    sample = r.get("calibration_sample", {})
+    text = (f"preset {material['preset']} ({r.get('rock', '?')}): " + "; ".join(parts) +
+            f". Verified on {sample.get('particles', '?')} grains over packing seeds "
+            f"{', '.join(map(str, r.get('verify_seeds', [])))}; reproduce with `breccia calibrate "
+            f"{r.get('calibration_file', '?')}` (breccia {r.get('version', '?')}, "
+            f"{r.get('commit', '?')}).")
+    if material.get("parameters_as_calibrated") is False:
+        text += (" This run overrides some of the preset's calibrated values: the record "
+                 "describes the preset, not these parameters.")
+    return text
+
+
 def summary_rows(folder, summary):
     """The report's table: what was tested, on what, how, and the headline results, in words
     and units (never a Python repr)."""
@@ -253,6 +320,8 @@ def summary_rows(folder, summary):
         rows.append(("rock", f"material preset {mat.get('preset', '?')}; "
                              f"{con.get('law', '?')} contacts, {bond.get('law', '?')} bonds"))
         rows.append(("sample", sample_text(spec, summary)))
+    if manifest and (manifest.get("material") or {}).get("record"):
+        rows.append(("calibration", calibration_text(manifest["material"])))
     rows.append(("loading", f"platens at {fmt(summary.get('platen_speed_m_per_s'), '{:g}')} m/s "
                             f"(strain rate {fmt(summary.get('strain_rate_per_s'), '{:.3g}')} /s), "
                             f"density scaling {fmt(summary.get('density_scaling'), '{:g}')}, "
@@ -453,6 +522,7 @@ def write_html(folder, title, intro_rows, figures, captions):
 CAPTIONS = {
     "stress_strain.png": "Stress-strain curve with cracks by mode",
     "crack_maps.png": "Crack maps by deformation stage",
+    "crack_field_3d.png": "The crack field in 3D",
     "event_magnitudes.png": "Event magnitudes over strain",
     "b_value_d2.png": "b-value and correlation dimension over strain",
     "gutenberg_richter.png": "Gutenberg-Richter (frequency-magnitude) plot",
@@ -480,6 +550,7 @@ def run_report(folder):
     figures = []
     stress_strain(folder, summary, hist, outdir, figures)
     crack_maps(summary, cracks if cracks and "stage" in cracks[0] else [], outdir, figures)
+    crack_field_3d(summary, cracks, outdir, figures)
     magnitudes(summary, events, hist, outdir, figures)
     b_and_d2(summary, read_csv(os.path.join(folder, "b_value_windows.csv")),
              read_csv(os.path.join(folder, "d2_windows.csv")),

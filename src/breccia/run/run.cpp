@@ -19,9 +19,10 @@
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/parallel.hpp"
-#include "breccia/io/failure_analysis.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
+#include "breccia/material/library.hpp"
+#include "breccia/run/failure_analysis.hpp"
 #include "breccia/run/sample_build.hpp"
 #include "breccia/run/session.hpp"
 #include "breccia/version.hpp"
@@ -574,6 +575,21 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
 namespace {
 
 // manifest.json as a run starts: what made it, on what, from which experiment, "running".
+// Where the run's micro-parameters come from: the material preset and, for a library rock, its
+// calibration record, with whether the run kept the calibrated values (applying the preset
+// again to the resolved experiment changes nothing) or overrode some of them.
+json material_provenance(const ExperimentSpec& spec) {
+  json m = {{"preset", spec.preset}, {"record", nullptr}};
+  for (const EmbeddedMaterial& e : embedded_materials()) {
+    if (e.name != spec.preset || e.record.empty()) continue;
+    ExperimentSpec as_calibrated = spec;
+    apply_preset(as_calibrated, spec.preset, "material provenance");
+    m["parameters_as_calibrated"] = to_toml(as_calibrated) == to_toml(spec);
+    m["record"] = json::parse(e.record);
+  }
+  return m;
+}
+
 json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptions& opt) {
   return {{"program", "breccia"},
           {"version", kVersion},
@@ -590,6 +606,7 @@ json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptio
           {"simulated_density_kg_m3", spec.density * spec.density_scaling},
           {"bar_wave_speed_m_s", b.bar_wave_speed},
           {"sample", b.sample_report},
+          {"material", material_provenance(spec)},
           {"resolved_experiment", to_toml(spec)}};
 }
 

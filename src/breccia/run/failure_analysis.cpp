@@ -1,4 +1,4 @@
-#include "breccia/io/failure_analysis.hpp"
+#include "breccia/run/failure_analysis.hpp"
 
 #include <fmt/format.h>
 
