@@ -237,3 +237,21 @@ def test_the_python_example_runs_and_compares_two_presets():
         # The granite is stronger and stiffer than the sandstone.
         assert float(rows["lac_du_bonnet"][2]) > 1.5 * float(rows["berea"][2])
         assert float(rows["lac_du_bonnet"][3]) > 4 * float(rows["berea"][3])
+
+
+def test_a_sweep_from_python_in_this_process_and_in_child_processes_agree():
+    with tempfile.TemporaryDirectory() as out:
+        here = breccia.sweep(breccia.Experiment(overrides=SMALL), confining_mpa=[0, 5],
+                             output=os.path.join(out, "a"), jobs=1, progress=False)
+        children = breccia.sweep(breccia.Experiment(overrides=SMALL), confining_mpa=[0, 5],
+                                 output=os.path.join(out, "b"), jobs=2, progress=False)
+        assert isinstance(here, breccia.SweepFolder) and here.status == "complete"
+        a, b = here.results, children.results
+        assert list(a["confining_stress_pa"]) == [0.0, 5e6]
+        assert (a["status"] == "complete").all() and (b["status"] == "complete").all()
+        # Results do not depend on where a run ran.
+        assert list(a["sigma1_at_peak_pa"]) == list(b["sigma1_at_peak_pa"])
+        assert a["sigma1_at_peak_pa"][1] > a["sigma1_at_peak_pa"][0]
+        assert [r.complete for r in here.runs] == [True, True]
+    with pytest.raises(breccia.InputError, match="confining_mpa or strain_rates"):
+        breccia.sweep(breccia.Experiment(overrides=SMALL))
