@@ -255,3 +255,24 @@ def test_a_sweep_from_python_in_this_process_and_in_child_processes_agree():
         assert [r.complete for r in here.runs] == [True, True]
     with pytest.raises(breccia.InputError, match="confining_mpa or strain_rates"):
         breccia.sweep(breccia.Experiment(overrides=SMALL))
+
+
+def test_a_sample_generated_from_python_is_the_commands_and_reads_back():
+    tiny = ['sample.width=3e-3', 'sample.depth=3e-3', 'sample.height=6e-3']
+    with tempfile.TemporaryDirectory() as out:
+        cli = os.path.join(out, "cli.geom")
+        cmd = [CLI, "generate", "--output", cli]
+        for o in tiny:
+            cmd += ["--set", o]
+        subprocess.run(cmd, capture_output=True, check=True)
+        py = os.path.join(out, "py.geom")
+        report = breccia.generate(breccia.Experiment(overrides=tiny), py)
+        assert read(cli) == read(py)
+        particles, bonds = breccia.read_sample(py)
+        assert len(particles) == report["particles"] > 100
+        assert list(particles.columns) == ["tag", "x_m", "y_m", "z_m", "radius_m",
+                                           "density_kg_m3", "motion"]
+        assert len(bonds) == report["bonds"] and set(bonds.columns) == {"tag1", "tag2"}
+        assert bonds.isin(set(particles["tag"])).all().all()
+        with pytest.raises(breccia.InputError, match="cannot open"):
+            breccia.read_sample(os.path.join(out, "missing.geom"))

@@ -16,8 +16,8 @@ from .experiment import Experiment
 from .folders import CalibrationFolder, RunFolder, SweepFolder, read
 
 # The engine's names load on first use (PEP 562).
-_ENGINE = {"run", "resume", "sweep", "Simulation", "InputError", "materials", "version",
-           "commit"}
+_ENGINE = {"run", "resume", "sweep", "generate", "read_sample", "Simulation", "InputError",
+           "materials", "version", "commit"}
 
 
 def __getattr__(name):

@@ -110,6 +110,30 @@ def sweep(experiment=None, *, confining_mpa=None, strain_rates=None, output=None
     return SweepFolder(result["folder"])
 
 
+def generate(experiment=None, path=None, *, log=None):
+    """Packs and bonds the experiment's sample ([sample] keys) as `breccia generate` does and
+    writes it to `path` (a breccia-geometry file, with its packing report in path + ".json");
+    returns the packing report. Use it with Experiment(sample={"source": "file", "file": path}).
+    """
+    if path is None:
+        raise InputError("generate: 'path' = (none): the sample file to write")
+    exp = _experiment(experiment, None, None)
+    return _core.generate(exp._spec, os.fspath(path), _printer(log))
+
+
+def read_sample(path):
+    """A breccia-geometry file as (particles, bonds) DataFrames: tag, x_m, y_m, z_m, radius_m,
+    density_kg_m3, motion; and tag1, tag2 of each bond."""
+    g = _core.read_sample(os.fspath(path))
+    xyz = g["position_m"]
+    particles = pd.DataFrame({"tag": g["tag"], "x_m": xyz[:, 0], "y_m": xyz[:, 1],
+                              "z_m": xyz[:, 2], "radius_m": g["radius_m"],
+                              "density_kg_m3": g["density_kg_m3"], "motion": g["motion"]})
+    particles.attrs.update(dimension=g["dimension"], thickness_m=g["thickness_m"])
+    bonds = pd.DataFrame(g["bonds"], columns=["tag1", "tag2"])
+    return particles, bonds
+
+
 class Simulation:
     """Step-level access: the experiment's sample built and bonded, its test's boundaries in
     place and consolidated, ready to load, stepped by hand.

@@ -25,4 +25,5 @@ PYBIND11_MODULE(_core, m) {
   breccia::python::bind_experiment(m);
   breccia::python::bind_run(m);
   breccia::python::bind_simulation(m);
+  breccia::python::bind_sample(m);
 }

@@ -9,5 +9,6 @@ namespace breccia::python {
 void bind_experiment(pybind11::module_& m);
 void bind_run(pybind11::module_& m);
 void bind_simulation(pybind11::module_& m);
+void bind_sample(pybind11::module_& m);
 
 }  // namespace breccia::python
