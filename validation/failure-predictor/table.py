@@ -27,11 +27,11 @@ def main(model_dir):
     print(f"Inputs: {', '.join(model['inputs'])}; {model['windows']} windows from "
           f"{int((data['windows'] > 0).sum())} tests; {int(data['dropped_missing_input'].sum())} "
           "pre-peak windows dropped for a missing input.\n")
-    print("| test | sigma_3 (MPa) | windows | dropped |")
-    print("|---|---|---|---|")
-    for _, r in data.iterrows():
-        print(f"| {r['test']} | {r['confining_mpa']:g} | {r['windows']} | "
-              f"{r['dropped_missing_input']} |")
+    print("| sigma_3 (MPa) | " + " | ".join(f"{v:g}" for v in data["confining_mpa"]) + " |")
+    print("|---|" + "---|" * len(data))
+    print("| windows | " + " | ".join(str(v) for v in data["windows"]) + " |")
+    print("| dropped (an input missing) | " +
+          " | ".join(str(v) for v in data["dropped_missing_input"]) + " |")
     print("\n| held-out test sigma_3 (MPa) | stress to failure: RMSE (MPa) | R^2 | "
           "strain to failure: RMSE (%) | R^2 |")
     print("|---|---|---|---|---|")
