@@ -148,7 +148,9 @@ class Simulation {
   // Bonds every pair whose gap is at most gap_tolerance (physics.md §7.6). Returns the count.
   template <class Law>
   std::size_t bond_touching_pairs(double gap_tolerance);
-  // Adds a wall; before initialise() or between two steps (its contacts are then found at once).
+  // Adds a wall; before initialise() or between two steps (its contacts are then found at once;
+  // the time step stays as estimated: a wall contact adds about one grain contact's stiffness
+  // to the particles it touches, well inside the safety factor's margin).
   std::size_t add_wall(Wall w);
   // Adds a joint plane (physics.md §5): at initialise() the bonds it cuts are replaced by joints
   // of the joint law (bonded joints when its parameters say so), and every neighbour pair it cuts

@@ -574,7 +574,6 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
 
 namespace {
 
-// manifest.json as a run starts: what made it, on what, from which experiment, "running".
 // Where the run's micro-parameters come from: the material preset and, for a library rock, its
 // calibration record, with whether the run kept the calibrated values (applying the preset
 // again to the resolved experiment changes nothing) or overrode some of them.
@@ -590,6 +589,7 @@ json material_provenance(const ExperimentSpec& spec) {
   return m;
 }
 
+// manifest.json as a run starts: what made it, on what, from which experiment, "running".
 json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptions& opt) {
   return {{"program", "breccia"},
           {"version", kVersion},
