@@ -276,3 +276,12 @@ def test_a_sample_generated_from_python_is_the_commands_and_reads_back():
         assert bonds.isin(set(particles["tag"])).all().all()
         with pytest.raises(breccia.InputError, match="cannot open"):
             breccia.read_sample(os.path.join(out, "missing.geom"))
+
+
+def test_the_rate_law_fit_reproduces_the_worked_example():
+    # analysis.md §11: rates (0.1, 1, 10) /s, UCS (100.501, 105.127, 164.872) MPa -> a = 100 MPa,
+    # b = 0.05 s.
+    f = breccia.fit_rate_dependence([0.1, 1, 10], [100.501, 105.127, 164.872])
+    assert f["valid"] and f["a"] == pytest.approx(100.0, abs=1e-3)
+    assert f["b"] == pytest.approx(0.05, abs=1e-5)
+    assert not breccia.fit_rate_dependence([1, 2], [5, 6])["valid"]

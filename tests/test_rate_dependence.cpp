@@ -57,6 +57,22 @@ TEST(RateDependence, ScatterGivesStandardErrorsThatCoverThePlantedLaw) {
   EXPECT_LT(std::abs(f.b - 0.03), 3 * f.b_se);
 }
 
+TEST(RateDependence, StandardErrorsDoNotDependOnTheStrengthUnit) {
+  // The same scattered law in pascals (as sweeps fit it) and in megapascals: the standard
+  // errors of a scale with the unit and those of b do not change.
+  const std::vector<double> r{0.5, 1, 5, 10};
+  std::vector<double> mpa, pa;
+  for (std::size_t j = 0; j < r.size(); ++j) {
+    mpa.push_back(9.1 * std::exp(0.003 * r[j]) * (j % 2 ? 1.002 : 0.998));
+    pa.push_back(1e6 * mpa.back());
+  }
+  const ExponentialRateFit m = fit_rate_dependence(r, mpa), p = fit_rate_dependence(r, pa);
+  ASSERT_TRUE(m.valid && p.valid);
+  ASSERT_TRUE(std::isfinite(p.a_se) && std::isfinite(p.b_se));
+  EXPECT_NEAR(p.a_se, 1e6 * m.a_se, 1e-6 * p.a_se);
+  EXPECT_NEAR(p.b_se, m.b_se, 1e-6 * m.b_se);
+}
+
 TEST(RateDependence, TooFewPositiveStrengthsGiveNoFit) {
   const ExponentialRateFit f = fit_rate_dependence({0.1, 1, 10}, {100.0, -1.0, 120.0});
   EXPECT_FALSE(f.valid);

@@ -17,7 +17,7 @@ from .folders import CalibrationFolder, RunFolder, SweepFolder, read
 
 # The engine's names load on first use (PEP 562).
 _ENGINE = {"run", "resume", "sweep", "generate", "read_sample", "Simulation", "InputError",
-           "materials", "version", "commit"}
+           "materials", "fit_rate_dependence", "version", "commit"}
 
 
 def __getattr__(name):

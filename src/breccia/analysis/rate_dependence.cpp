@@ -64,12 +64,16 @@ LmResult levenberg_marquardt(const std::vector<double>& x, const std::vector<dou
   out.rms = std::sqrt(r.squaredNorm() / n);
   Eigen::MatrixXd J(f.values(), f.inputs());
   f.df(start, J);
-  const Eigen::MatrixXd JtJ = J.transpose() * J;
+  // Covariance s^2 (J^T J)^-1 with J's columns scaled to unit length first: in pascals the
+  // columns differ by ~1e7 (d/da ~ 1, d/db ~ a x), and unscaled J^T J looks singular to the LU.
+  const Eigen::VectorXd scale = J.colwise().norm().transpose();
   out.se = Eigen::VectorXd::Constant(f.inputs(), std::nan(""));
-  if (n > np) {
+  if (n > np && (scale.array() > 0.0).all()) {
+    const Eigen::MatrixXd Js = J * scale.cwiseInverse().asDiagonal();
     const double s2 = r.squaredNorm() / (n - np);
-    Eigen::FullPivLU<Eigen::MatrixXd> lu(JtJ);
-    if (lu.isInvertible()) out.se = (s2 * lu.inverse()).diagonal().cwiseMax(0.0).cwiseSqrt();
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(Js.transpose() * Js);
+    if (lu.isInvertible())
+      out.se = (s2 * lu.inverse()).diagonal().cwiseMax(0.0).cwiseSqrt().cwiseQuotient(scale);
   }
   out.ok = status != Eigen::LevenbergMarquardtSpace::ImproperInputParameters && start.allFinite();
   return out;
