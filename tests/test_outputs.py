@@ -79,6 +79,7 @@ def assert_chromium_loads_every_image(folder, count):
         f.write(page.replace("</body>", probe + "</body>"))
     with tempfile.TemporaryDirectory() as profile:
         r = subprocess.run([chromium, "--headless", "--no-sandbox", "--disable-gpu",
+                            "--disable-dev-shm-usage",
                             f"--user-data-dir={profile}", "--virtual-time-budget=10000",
                             "--dump-dom", "file://" + check],
                            capture_output=True, text=True, timeout=120)
