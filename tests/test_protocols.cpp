@@ -69,6 +69,15 @@ nlohmann::json run_file(const fs::path& dir, const std::string& name, const std:
   return nlohmann::json::parse(read(folder / "summary.json"));
 }
 
+// A fresh folder `dir` holding tiny.toml, the tiny experiment of `kind` named "tiny" (sweeps).
+fs::path tiny_file(const fs::path& dir, std::string_view kind) {
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path file = dir / "tiny.toml";
+  std::ofstream(file) << "name = \"tiny\"\n" + tiny_experiment(kind);
+  return file;
+}
+
 }  // namespace
 
 TEST(Protocols, EveryRegisteredTestIsDocumentedAndRunsATinyCase) {
@@ -276,10 +285,7 @@ TEST(Sweep, ParallelProcessesGiveWhatOneRunAfterAnotherGives) {
   // this process one after the other (with the machine's threads): the engine is deterministic
   // whatever the thread count, so both sweeps give the same peaks to the last digit.
   const fs::path dir = fs::temp_directory_path() / "breccia_sweep";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const fs::path file = dir / "tiny.toml";
-  std::ofstream(file) << "name = \"tiny\"\n" + tiny_experiment("biaxial");
+  const fs::path file = tiny_file(dir, "biaxial");
   std::map<int, nlohmann::json> sweeps;
   for (const int jobs : {2, 1}) {
     // The parallel sweep also writes its report: the trend table and figures.
@@ -322,10 +328,7 @@ TEST(Sweep, StrainRatesSetThePlatenSpeedFromTheSampleLength) {
   // (2 v / h0, h0 between the platens at the start of loading) is the one asked for, to the
   // gap between the grains' extent and the platens; two rates give no rate fit, and say so.
   const fs::path dir = fs::temp_directory_path() / "breccia_rate_sweep";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const fs::path file = dir / "tiny.toml";
-  std::ofstream(file) << "name = \"tiny\"\n" + tiny_experiment("ucs");
+  const fs::path file = tiny_file(dir, "ucs");
   // Density scaling would scale the inertia the study measures: refused before any folder.
   const Result refused = run(fmt::format("sweep --jobs 1 --strain-rates 20 200 --output {} {}",
                                          (dir / "out").string(), file.string()));

@@ -22,10 +22,15 @@ def _read_json(path):
 
 
 class _Folder:
+    # The file that makes a folder one of its kind, and the kind's name for errors.
+    MARKER, KIND = None, None
+
     def __init__(self, path):
         self.path = os.path.abspath(os.fspath(path))
         if not os.path.isdir(self.path):
             raise FileNotFoundError(f"{self.path}: not a folder")
+        if self.MARKER and not os.path.exists(self.file(self.MARKER)):
+            raise FileNotFoundError(f"{self.path}: no {self.MARKER} (not a {self.KIND})")
         self._tables = {}
 
     def file(self, name):
@@ -55,10 +60,7 @@ class _Folder:
 class RunFolder(_Folder):
     """One run: `breccia.read(path)` or the value of `breccia.run(...)`."""
 
-    def __init__(self, path):
-        super().__init__(path)
-        if not os.path.exists(self.file("manifest.json")):
-            raise FileNotFoundError(f"{self.path}: no manifest.json (not a run folder)")
+    MARKER, KIND = "manifest.json", "run folder"
 
     @property
     def manifest(self):
@@ -143,10 +145,7 @@ class RunFolder(_Folder):
 class SweepFolder(_Folder):
     """A sweep (confining stresses or strain rates): its runs, trends and fits."""
 
-    def __init__(self, path):
-        super().__init__(path)
-        if not os.path.exists(self.file("sweep.json")):
-            raise FileNotFoundError(f"{self.path}: no sweep.json (not a sweep folder)")
+    MARKER, KIND = "sweep.json", "sweep folder"
 
     @property
     def sweep(self):
@@ -178,10 +177,7 @@ class SweepFolder(_Folder):
 class CalibrationFolder(_Folder):
     """A `breccia calibrate` folder or an installed material (materials/<name>)."""
 
-    def __init__(self, path):
-        super().__init__(path)
-        if not os.path.exists(self.file("convergence.csv")):
-            raise FileNotFoundError(f"{self.path}: no convergence.csv (not a calibration folder)")
+    MARKER, KIND = "convergence.csv", "calibration folder"
 
     trials = property(lambda self: self.table("convergence"))
 
@@ -193,12 +189,9 @@ class CalibrationFolder(_Folder):
 def read(path):
     """A run, sweep or calibration folder, whichever `path` is."""
     p = os.fspath(path)
-    if os.path.exists(os.path.join(p, "sweep.json")):
-        return SweepFolder(p)
-    if os.path.exists(os.path.join(p, "convergence.csv")):
-        return CalibrationFolder(p)
-    if os.path.exists(os.path.join(p, "manifest.json")):
-        return RunFolder(p)
+    for kind in (SweepFolder, CalibrationFolder, RunFolder):
+        if os.path.exists(os.path.join(p, kind.MARKER)):
+            return kind(p)
     raise FileNotFoundError(f"{p}: not a Breccia run, sweep or calibration folder "
                             "(no manifest.json, sweep.json or convergence.csv)")
 
