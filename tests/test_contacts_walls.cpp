@@ -72,6 +72,14 @@ TEST(HertzMindlin, RigidWallUsesGrainModulusOnly) {
   EXPECT_NEAR(HertzMindlin::e_star(p, true), 10e9 / (1 - 0.0625), 1.0);
   EXPECT_NEAR(HertzMindlin::g_star(p, true), 4e9 / 1.75, 1.0);
   EXPECT_NEAR(HertzMindlin::e_star(p, false), 10e9 / (2 * (1 - 0.0625)), 1.0);
+  // A flat wall (R1 = 0) leaves the grain's radius; a 1 mm ball on a 0.5 mm grain gives
+  // R* = 1 x 0.5 / 1.5 mm.
+  PairGeometry g;
+  g.wall = true;
+  g.R2 = 0.5e-3;
+  EXPECT_DOUBLE_EQ(HertzMindlin::r_star(g), 0.5e-3);
+  g.R1 = 1e-3;
+  EXPECT_NEAR(HertzMindlin::r_star(g), 1e-3 / 3.0, 1e-18);
 }
 
 namespace {
@@ -327,4 +335,54 @@ TEST(Servo, IntegralTermRemovesTheLagBehindADilatingSample) {
     else
       EXPECT_NEAR(error, lag, 1e-6 * lag);
   }
+}
+
+TEST(Wall, FreeSphereCollidesWithAGrainAsTwoElasticBodies) {
+  // A rigid ball of mass M (a projectile wall) at 2 m/s meets a free grain of mass m head on,
+  // linear contact without damping or friction. Momentum and kinetic energy are conserved, so
+  // afterwards the ball moves at (M - m) / (M + m) v and the grain at 2 M / (M + m) v.
+  ParticleStore ps(Dimension::Three, 1.0);
+  ps.add({.tag = 1, .position = {0, 0, 0}, .radius = 0.5e-3, .density = 2650});
+  const double m = ps.mass[0];
+  const double M = 3.0 * m, v = 2.0;
+  EngineConfig cfg;
+  cfg.time_step = 1e-9;
+  cfg.energy_interval = 0;
+  LinearContact::Params lp;
+  lp.modulus = 10e9;
+  lp.friction = 0.0;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  const std::size_t ball =
+      sim.add_wall(Wall::sphere("ball", {0, 0, 1.5e-3 + 2e-7}, 1e-3, M, {0, 0, -v}));
+  sim.initialise();
+  // Contact from about step 100 for pi sqrt(mu / k) = 0.25 us (k = pi R E_c, mu = m M/(m+M)).
+  double peak_force = 0.0;
+  for (int s = 0; s < 2000; ++s) {
+    sim.step();
+    peak_force = std::max(peak_force, norm(sim.walls()[ball].force));
+  }
+  EXPECT_EQ(sim.walls()[ball].contacts, 0u);  // apart again
+  EXPECT_GT(peak_force, 0.0);
+  const double vb = sim.walls()[ball].velocity.z, vg = sim.particles().vel[0].z;
+  // Leapfrog conserves momentum exactly; the contact's start and end fall inside a step, an
+  // O(dt / contact time) = 1/250 relative error on the energy, well inside 1e-2.
+  EXPECT_NEAR(M * vb + m * vg, -M * v, 1e-12 * M * v);
+  EXPECT_NEAR(vb, -(M - m) / (M + m) * v, 1e-2 * v);
+  EXPECT_NEAR(vg, -2.0 * M / (M + m) * v, 1e-2 * v);
+  // The ball's lost kinetic energy is the work its wall contact did on the grain.
+  const double lost = 0.5 * M * (v * v - vb * vb);
+  EXPECT_NEAR(sim.walls()[ball].work, lost, 1e-2 * lost);
+}
+
+TEST(Wall, FreeSphereIsRefusedWhenControlledOrOutOfThePlane) {
+  ParticleStore ps(Dimension::Two, 1.0);
+  ps.add({.tag = 1, .position = {0, 0, 0}, .radius = 0.5e-3, .density = 2650});
+  LinearContact::Params lp;
+  Simulation sim(std::move(ps), EngineConfig{}, make_contact_model<LinearContact>(lp, lp));
+  Wall off = Wall::sphere("ball", {0, 0, 1e-3}, 1e-3, 1e-3, {});
+  EXPECT_THROW(sim.add_wall(off), InputError);
+  Wall both = Wall::sphere("ball", {0, 3e-3, 0}, 1e-3, 1e-3, {});
+  both.controlled = true;
+  EXPECT_THROW(sim.add_wall(both), InputError);
+  EXPECT_NO_THROW(sim.add_wall(Wall::sphere("ball", {0, 3e-3, 0}, 1e-3, 1e-3, {0, -1, 0})));
 }

@@ -126,7 +126,10 @@ py::list walls(const Simulation& sim) {
   for (const Wall& w : sim.walls())
     out.append(py::dict(
         py::arg("name") = w.name,
-        py::arg("shape") = w.shape == WallShape::Plane ? "plane" : "cylinder",
+        py::arg("shape") = w.shape == WallShape::Plane      ? "plane"
+                             : w.shape == WallShape::Cylinder ? "cylinder"
+                                                              : "sphere",
+        py::arg("radius_m") = w.radius, py::arg("mass_kg") = w.mass,
         py::arg("point_m") = std::array<double, 3>{w.point.x, w.point.y, w.point.z},
         py::arg("normal") = std::array<double, 3>{w.normal.x, w.normal.y, w.normal.z},
         py::arg("velocity_m_s") = std::array<double, 3>{w.velocity.x, w.velocity.y, w.velocity.z},

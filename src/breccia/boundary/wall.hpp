@@ -1,7 +1,9 @@
 #pragma once
-// Rigid walls (physics.md §6.1): an unbounded plane or a cylinder about an axis, moving with a
-// prescribed velocity reached through a cosine ramp, or driven by a controller (servo, later
-// issues) that sets the velocity each step. The wall is body 1 of every wall contact.
+// Rigid walls (physics.md §6.1): an unbounded plane, a cylinder about an axis, or a sphere, moving
+// with a prescribed velocity reached through a cosine ramp, driven by a controller (servo) that
+// sets the velocity each step, or, given a mass, free: a rigid body (a projectile) that the
+// contact forces and gravity move, integrated by the same leapfrog as the grains. The wall is body
+// 1 of every wall contact.
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -12,7 +14,7 @@
 
 namespace breccia {
 
-enum class WallShape : std::uint8_t { Plane, Cylinder };
+enum class WallShape : std::uint8_t { Plane, Cylinder, Sphere };
 
 // Cosine velocity ramp from 0 to 1 over `duration` seconds starting at `start` (§6.1).
 struct VelocityRamp {
@@ -30,16 +32,21 @@ struct Wall {
   WallShape shape = WallShape::Plane;
   // Plane: a point on it and the unit normal pointing into the sample.
   // Cylinder: a point on the axis, the unit axis, and the radius; particles are inside.
+  // Sphere: the centre and the radius; particles are outside (a rigid ball).
   Vec3 point;
   Vec3 normal{0, 0, 1};
   Vec3 axis{0, 0, 1};
   double radius = 0.0;
 
-  // Prescribed motion: plane velocity (any direction) or cylinder radial speed (positive inward).
+  // Prescribed motion: plane or sphere velocity (any direction) or cylinder radial speed (positive
+  // inward).
   Vec3 target_velocity;
   double target_radial_speed = 0.0;
   VelocityRamp ramp;
   bool controlled = false;  // true: a controller sets `velocity` / `radial_speed` each step
+  // > 0: a free rigid body of this mass (kg; 2D: per thickness t, like the grains). It starts at
+  // `velocity` and moves under minus its contact force plus gravity; it does not rotate.
+  double mass = 0.0;
 
   // Current motion over the step being taken.
   Vec3 velocity;
@@ -63,6 +70,19 @@ struct Wall {
     w.normal = unit(inward_normal);
     return w;
   }
+  // A free rigid ball (a projectile) of the given mass, starting at `velocity`.
+  static Wall sphere(std::string name, Vec3 centre, double radius, double mass, Vec3 velocity) {
+    Wall w;
+    w.name = std::move(name);
+    w.shape = WallShape::Sphere;
+    w.point = centre;
+    w.radius = radius;
+    w.mass = mass;
+    w.velocity = velocity;
+    w.target_velocity = velocity;
+    return w;
+  }
+  bool free_body() const noexcept { return mass > 0.0; }
   static Wall cylinder(std::string name, Vec3 axis_point, Vec3 axis, double radius) {
     Wall w;
     w.name = std::move(name);
@@ -75,7 +95,7 @@ struct Wall {
 
   // Velocity of the wall surface at a contact whose wall-to-particle normal is n.
   Vec3 surface_velocity(const Vec3& n) const noexcept {
-    return shape == WallShape::Plane ? velocity : n * radial_speed;
+    return shape == WallShape::Cylinder ? n * radial_speed : velocity;
   }
 
   // Signed gap between a sphere (x, R) and the wall surface, and the wall-to-particle normal.
@@ -85,6 +105,11 @@ struct Wall {
       return dot(x - point, normal) - R;
     }
     const Vec3 rel = x - point;
+    if (shape == WallShape::Sphere) {
+      const double d = norm(rel);
+      n = d > 0.0 ? rel * (1.0 / d) : Vec3{0, 0, 1};
+      return d - radius - R;
+    }
     const Vec3 radial = rel - axis * dot(rel, axis);
     const double rho = norm(radial);
     n = rho > 0.0 ? radial * (-1.0 / rho) : Vec3{};
@@ -93,14 +118,14 @@ struct Wall {
 
   // Sets the motion for the step starting at time t (prescribed walls only).
   void update_motion(double t) noexcept {
-    if (controlled) return;
+    if (controlled || free_body()) return;
     const double f = ramp.factor(t);
     velocity = target_velocity * f;
     radial_speed = target_radial_speed * f;
   }
 
   void advance(double dt) noexcept {
-    if (shape == WallShape::Plane) {
+    if (shape != WallShape::Cylinder) {
       point += velocity * dt;
       moved += norm(velocity) * dt;
     } else {

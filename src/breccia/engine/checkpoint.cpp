@@ -45,7 +45,7 @@ void transfer_set(Archive& a, BondSet<Law>& b) {
 
 // Walls hold a name (not plain data): transferred field by field. The size check fails to
 // compile when a field is added, as a reminder to add it here.
-static_assert(sizeof(Wall) == 304, "Wall changed: update the checkpoint (engine/checkpoint.cpp)");
+static_assert(sizeof(Wall) == 312, "Wall changed: update the checkpoint (engine/checkpoint.cpp)");
 
 template <class Archive>
 void transfer_wall(Archive& a, Wall& w) {
@@ -59,6 +59,7 @@ void transfer_wall(Archive& a, Wall& w) {
   a.value(w.target_radial_speed);
   a.value(w.ramp);
   a.value(w.controlled);
+  a.value(w.mass);
   a.value(w.velocity);
   a.value(w.radial_speed);
   a.value(w.force);

@@ -127,8 +127,18 @@ Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactMode
 }
 
 std::size_t Simulation::add_wall(Wall w) {
-  if (w.shape == WallShape::Cylinder && !(w.radius > 0.0))
+  if (w.shape != WallShape::Plane && !(w.radius > 0.0))
     throw InputError("wall '" + w.name + "'", "radius", num(w.radius), "must be > 0 m");
+  if (!(w.mass >= 0.0) || !std::isfinite(w.mass))
+    throw InputError("wall '" + w.name + "'", "mass", num(w.mass),
+                     "must be >= 0 kg (0: prescribed motion; > 0: a free rigid body)");
+  if (w.free_body() && w.controlled)
+    throw InputError("wall '" + w.name + "'", "mass", num(w.mass),
+                     "a free rigid body cannot also be controlled");
+  if (p_.planar() && w.shape == WallShape::Sphere &&
+      (w.point.z != 0.0 || w.velocity.z != 0.0 || w.target_velocity.z != 0.0))
+    throw InputError("wall '" + w.name + "'", "centre/velocity", "out of plane",
+                     "in 2D a sphere wall is a circle in the x-y plane (z = 0) moving in it");
   if (p_.planar() && w.shape == WallShape::Cylinder && (w.axis.x != 0.0 || w.axis.y != 0.0))
     throw InputError("wall '" + w.name + "'", "axis", "not along z",
                      "in 2D a cylinder wall is a circle in the x-y plane: its axis must be z");
@@ -399,6 +409,7 @@ void Simulation::estimate_time_step() {
             if (gap > 0.1 * q.r) continue;
             PairGeometry gw = g;
             gw.wall = true;
+            gw.R1 = w.shape == WallShape::Sphere ? w.radius : 0.0;
             gw.delta = std::max(-gap, 0.0);
             CL::timestep_stiffness(c.wall_params, gw, kn, ks);
             k_tr[i] += std::max(kn, ks);
@@ -700,7 +711,7 @@ void Simulation::compute_walls(ContactSet<CL>& c) {
         g.vc = p_.vel[i] + cross(p_.angvel[i], g.r2) - w.surface_velocity(nrm);
         g.w1 = {};
         g.w2 = p_.angvel[i];
-        g.R1 = q.r;
+        g.R1 = w.shape == WallShape::Sphere ? w.radius : 0.0;
         g.R2 = q.r;
         g.m2 = p_.mass[i];
         g.wall = true;
@@ -730,7 +741,7 @@ void Simulation::compute_walls(ContactSet<CL>& c) {
       stiffness += wc.stiffness[k];
     }
     // Trapezoidal work over the wall's last displacement (matches the leapfrog kinetic energy).
-    const double dw = w.shape == WallShape::Plane
+    const double dw = w.shape != WallShape::Cylinder
                           ? 0.5 * dot(w.force_prev + total, w.velocity) * dt
                           : 0.5 * (w.radial_force_prev + radial) * w.radial_speed * dt;
     w.work += dw;
@@ -957,6 +968,11 @@ void Simulation::step_impl(ContactSet<CL>& contacts) {
   }
   for (Wall& w : walls_) {
     w.update_motion(time_ + 0.5 * dt_);
+    // A free body's leapfrog kick: it feels minus the force it exerts on the grains.
+    if (w.free_body()) {
+      w.velocity += (cfg_.gravity - w.force * (1.0 / w.mass)) * dt_;
+      if (p_.planar()) w.velocity.z = 0.0;
+    }
     w.advance(dt_);
   }
   time_ += dt_;

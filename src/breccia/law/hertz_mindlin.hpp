@@ -60,8 +60,10 @@ struct HertzMindlin {
     const double one = (2.0 - p.poisson_ratio) / p.shear_modulus;
     return 1.0 / (wall ? one : 2.0 * one);
   }
+  // A flat wall has R1 = 0 (infinite curvature radius); a sphere wall its own radius.
   static double r_star(const PairGeometry& g) noexcept {
-    return g.wall ? g.R2 : g.R1 * g.R2 / (g.R1 + g.R2);
+    if (g.wall && !(g.R1 > 0.0)) return g.R2;
+    return g.R1 * g.R2 / (g.R1 + g.R2);
   }
 
   // Tangent stiffnesses at the current overlap, for the time-step estimate (§1.5); the stiffness

@@ -18,9 +18,11 @@ struct PairGeometry {
   Vec3 r1, r2;         // lever arms from the centres to the contact point
   Vec3 vc;             // relative velocity of the contact point, 2 minus 1
   Vec3 w1, w2;         // angular velocities
+  // Radii. Against a wall, R1 is the wall's convex curvature radius: a sphere wall's radius, 0
+  // for a flat (or concave) one.
   double R1 = 0.0, R2 = 0.0;
-  double m1 = 0.0, m2 = 0.0;   // masses (m1 unused against a wall)
-  bool wall = false;           // body 1 is a rigid wall (then R1 is not a radius)
+  double m1 = 0.0, m2 = 0.0;  // masses (m1 unused against a wall)
+  bool wall = false;          // body 1 is a rigid wall
   bool planar = false;         // 2D slab geometry
   bool planar_sphere = false;  // 2D run of spheres confined to the plane (§3.4), not disks
   double thickness = 1.0;
