@@ -195,13 +195,14 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
     std::string file, output;
     std::vector<std::string> overrides;
     std::vector<double> confining_mpa, strain_rates;
+    std::vector<std::string> over;
     int jobs = 0;
   };
   auto o = std::make_shared<Options>();
   auto* c = app.add_subcommand(
       "sweep",
-      "run the experiment at several confining stresses (fit Mohr-Coulomb, Hoek-Brown) or "
-      "strain rates (fit UCS against the rate)");
+      "run the experiment at several confining stresses (fit Mohr-Coulomb, Hoek-Brown), "
+      "strain rates (fit UCS against the rate), or values of any key (--over)");
   c->add_option("experiment", o->file, "experiment file (TOML); omit for the default");
   c->add_option("--set", o->overrides, "override a key: section.key=value")->take_all();
   auto* confining =
@@ -211,7 +212,13 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
                               "strain rates in 1/s, e.g. 0.05 0.1 0.5 1 5 10 (needs "
                               "engine.density_scaling = 1)")
                     ->expected(1, 100);
+  auto* over = c->add_option("--over", o->over,
+                             "a key and its values, e.g. --over sample.slab_thickness 5e-3 6e-3 "
+                             "7e-3 (any test)")
+                   ->expected(2, 101);
   confining->excludes(rates);
+  over->excludes(confining);
+  over->excludes(rates);
   c->add_option("--output", o->output, "folder that receives the sweep folder");
   c->add_option("--jobs", o->jobs,
                 "runs at once, as separate processes sharing the cores (0: as many as the cores "
@@ -230,14 +237,20 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
             opt.jobs = o->jobs;
             std::error_code ec;
             opt.executable = std::filesystem::read_symlink("/proc/self/exe", ec).string();
-            if (o->confining_mpa.empty() && o->strain_rates.empty())
-              throw breccia::InputError("sweep", "--confining-mpa / --strain-rates", "(none)",
-                                        "give the confining stresses or the strain rates");
+            if (o->confining_mpa.empty() && o->strain_rates.empty() && o->over.empty())
+              throw breccia::InputError("sweep", "--confining-mpa / --strain-rates / --over",
+                                        "(none)",
+                                        "give the confining stresses, the strain rates, or a key "
+                                        "and its values");
             std::vector<double> pa;
             for (double m : o->confining_mpa) pa.push_back(m * 1e6);
             const breccia::SweepResult r =
-                o->strain_rates.empty() ? breccia::run_sweep(spec, pa, opt)
-                                        : breccia::run_rate_sweep(spec, o->strain_rates, opt);
+                !o->over.empty()
+                    ? breccia::run_parameter_sweep(
+                          spec, o->over.front(),
+                          std::vector<std::string>(o->over.begin() + 1, o->over.end()), opt)
+                : o->strain_rates.empty() ? breccia::run_sweep(spec, pa, opt)
+                                          : breccia::run_rate_sweep(spec, o->strain_rates, opt);
             std::cerr << breccia::summarise_folder(r.folder);
             std::cout << r.folder << std::endl;
             return r.status == "complete" ? 0 : 130;

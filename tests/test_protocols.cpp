@@ -47,6 +47,14 @@ std::string tiny_experiment(std::string_view kind) {
            "[sample]\nshape = \"cylinder\"\ndiameter = 0.004\nheight = 0.002\n"
            "radius_min = 0.12e-3\nradius_max = 0.2e-3\n"
            "[test]\nkind = \"brazilian\"\nplaten_speed = 0.1\n";
+  // A ball of 1 mm at 20 m/s on a slab 2 x 3 x 3 grains thick; no mass scaling (refused).
+  if (kind == "impact")
+    return "[output]\nplot = false\nsnapshot_strain_interval = 0\n"
+           "[engine]\ndensity_scaling = 1\nlocal_damping = 0\n"
+           "[sample]\nshape = \"slab\"\nwidth = 0.004\ndepth = 0.004\nslab_thickness = 0.0015\n"
+           "radius_min = 0.2e-3\nradius_max = 0.3e-3\n"
+           "[test]\nkind = \"impact\"\nprojectile_diameter = 1e-3\nimpact_speed = 20\n"
+           "standoff = 0.02e-3\nduration = 6e-6\n";
   std::string s = common +
                   "[sample]\nwidth = 0.0024\ndepth = 0.0024\nheight = 0.0048\n"
                   "radius_min = 0.2e-3\nradius_max = 0.3e-3\n"
@@ -86,7 +94,7 @@ TEST(Protocols, EveryRegisteredTestIsDocumentedAndRunsATinyCase) {
   fs::remove_all(dir);
   std::vector<std::string> kinds;
   for_each_lab_test([&]<class T>() { kinds.emplace_back(T::name); });
-  EXPECT_EQ(kinds, (std::vector<std::string>{"ucs", "triaxial", "biaxial", "brazilian"}));
+  EXPECT_EQ(kinds, (std::vector<std::string>{"ucs", "triaxial", "biaxial", "brazilian", "impact"}));
   for_each_lab_test([&]<class T>() {
     const std::string name(T::name);
     EXPECT_NE(docs.find("`test` kind `\"" + name + "\"`"), std::string::npos) << name;
@@ -102,6 +110,63 @@ TEST(Protocols, EveryRegisteredTestIsDocumentedAndRunsATinyCase) {
     EXPECT_NE(to_toml(spec).find("kind = \"" + name + "\""), std::string::npos);
   });
   fs::remove_all(dir);
+}
+
+TEST(Impact, TheBallsLostEnergyAndMomentumGoIntoTheSlab) {
+  // The tiny slab on its floor, hit at 20 m/s by a 1 mm ball of 11,000 kg/m^3, undamped.
+  const fs::path dir = fs::temp_directory_path() / "breccia_impact";
+  fs::remove_all(dir);
+  fs::path folder;
+  const nlohmann::json s = run_file(dir, "impact", tiny_experiment("impact"), &folder);
+  ASSERT_EQ(s["status"], "complete");
+  const nlohmann::json& im = s["impact"];
+  const nlohmann::json& ball = im["projectile"];
+  // Hand numbers: m = 11000 x (4/3) pi (0.5 mm)^3 = 5.760e-6 kg; E = m v^2 / 2 = 1.152e-3 J.
+  const double m = 11000.0 * 4.0 / 3.0 * std::numbers::pi * std::pow(0.5e-3, 3);
+  EXPECT_NEAR(ball["mass_kg"].get<double>(), m, 1e-12 * m);
+  EXPECT_NEAR(ball["kinetic_energy_in_j"].get<double>(), 0.5 * m * 400.0, 1e-12);
+  EXPECT_NEAR(ball["momentum_in_kg_m_s"].get<double>(), m * 20.0, 1e-15);
+  // It cannot touch before its 0.02 mm flight to the slab's highest point is over (1 us at
+  // 20 m/s); the grains under its axis lie at most one grain diameter (0.6 mm) lower.
+  const double first = im["first_contact_s"].get<double>();
+  EXPECT_GE(first, 1e-6 - s["time_step_s"].get<double>());
+  EXPECT_LE(first, (0.02e-3 + 0.6e-3) / 20.0);
+  EXPECT_GT(im["contact_time_s"].get<double>(), 0.0);
+  EXPECT_GT(im["max_indentation_m"].get<double>(), 0.0);
+  // Energy: what the ball lost is the work its contacts did, to the leapfrog's O(dt) at the
+  // contact's start and end (below 1e-3 of the energy at about 100 steps per contact).
+  const double lost =
+      ball["kinetic_energy_in_j"].get<double>() - ball["kinetic_energy_out_j"].get<double>();
+  EXPECT_GT(lost, 0.0);
+  EXPECT_NEAR(ball["work_on_slab_j"].get<double>(), lost, 1e-3 * lost);
+  // The slab's own ledger closes with that work as its input (the floor does none: it stays).
+  EXPECT_NEAR(s["energy"]["boundary_work_j"].get<double>(), ball["work_on_slab_j"].get<double>(),
+              1e-9);
+  EXPECT_LT(std::abs(s["energy"]["residual_relative"].get<double>()), 1e-2);
+  // The history has the ball's columns, its velocity starting at -20 m/s (down the z axis).
+  const std::string history = read(folder / "history.csv");
+  EXPECT_NE(history.find(",projectile_velocity_m_s,"), std::string::npos);
+  EXPECT_NE(history.find(",-20,"), std::string::npos);
+  // Not a stress-strain test: no moduli, its own headline instead.
+  EXPECT_FALSE(s.contains("youngs_modulus_pa"));
+  EXPECT_FALSE(im["headline"].empty());
+  fs::remove_all(dir);
+}
+
+TEST(Impact, DensityScalingAndOtherShapesAreRefused) {
+  EXPECT_NO_THROW(parse_experiment(tiny_experiment("impact"), "impact.toml", {}));
+  try {
+    parse_experiment(tiny_experiment("impact"), "impact.toml", {"engine.density_scaling=10"});
+    ADD_FAILURE() << "density scaling accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("engine.density_scaling"), std::string::npos);
+  }
+  try {
+    parse_experiment(tiny_experiment("impact"), "impact.toml", {"sample.shape=\"cylinder\""});
+    ADD_FAILURE() << "cylinder accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("slab"), std::string::npos);
+  }
 }
 
 TEST(Protocols, OldLoadingTableStillReadsAsTheTestItMeant) {

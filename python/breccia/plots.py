@@ -17,16 +17,16 @@ def main(folder):
     rows = list(csv.DictReader(open(os.path.join(folder, "history.csv"))))
     if not rows:
         sys.exit(f"{folder}/history.csv has no rows")
+    path = os.path.join(folder, "summary.json")
+    summary = json.load(open(path)) if os.path.exists(path) else {}
+    if "headline" in summary.get(summary.get("test_kind"), {}):
+        return  # a slab or dynamic test: no stress-strain curve (its figures are in the report)
     strain = [float(r["axial_strain"]) * 100 for r in rows]
     q = [float(r["deviatoric_stress_pa"]) * 1e-6 for r in rows]
     lat = [float(r["lateral_strain"]) * 100 for r in rows]
     vol = [float(r["volumetric_strain"]) * 100 for r in rows]
     tens = [int(r["tensile_cracks"]) for r in rows]
     shear = [int(r["shear_cracks"]) for r in rows]
-    summary = {}
-    path = os.path.join(folder, "summary.json")
-    if os.path.exists(path):
-        summary = json.load(open(path))
     fig, ax = plt.subplots(figsize=(7.5, 5))
     ax.plot(strain, q, "k-", lw=1.6, label="deviatoric stress q (axial strain)")
     ax.plot(lat, q, "b--", lw=1.0, label="q (lateral strain)")

@@ -538,6 +538,30 @@ CAPTIONS = {
 }
 
 
+def slab_test_report(folder, summary, hist, cracks, outdir):
+    """Slab and dynamic tests (breccia.slab_report): their own figures and rows, then the
+    crack field, fragments and energy ledger every run has."""
+    from breccia import slab_report
+    figures = []
+    kind = summary.get("test_kind")
+    rows = [("test", f"{summary.get('test')} ({summary.get('status')}: "
+                     f"{summary.get('stop_reason')})")]
+    rows += slab_report.SECTIONS[kind](folder, summary, hist, cracks, outdir, figures)
+    crack_field_3d(summary, cracks, outdir, figures)
+    fragment_sizes(summary, read_csv(os.path.join(folder, "fragments.csv")), outdir, figures)
+    rows += [r for r in summary_rows(folder, summary) if r[0] in SHARED_ROWS]
+    for w in summary.get("warnings", []):
+        rows.append(("warning", w))
+    write_html(folder, f"Breccia report: {summary.get('experiment', '')}", rows, figures,
+               {**CAPTIONS, **slab_report.CAPTIONS})
+    return figures
+
+
+# The rows of summary_rows that slab and dynamic tests share with compression tests.
+SHARED_ROWS = ("rock", "sample", "calibration", "microcracks", "acoustic emission",
+               "energy balance", "run")
+
+
 def run_report(folder):
     summary = json.load(open(os.path.join(folder, "summary.json")))
     hist = read_csv(os.path.join(folder, "history.csv"))
@@ -547,6 +571,8 @@ def run_report(folder):
     events = read_csv(os.path.join(folder, "events.csv"))
     outdir = os.path.join(folder, "report")
     os.makedirs(outdir, exist_ok=True)
+    if "headline" in summary.get(summary.get("test_kind"), {}):
+        return slab_test_report(folder, summary, hist, cracks, outdir)
     figures = []
     stress_strain(folder, summary, hist, outdir, figures)
     crack_maps(summary, cracks if cracks and "stage" in cracks[0] else [], outdir, figures)
@@ -820,6 +846,9 @@ def sweep_report(folder):
     sweep = json.load(open(os.path.join(folder, "sweep.json")))
     if sweep.get("variable") == "strain_rate":
         return rate_sweep_report(folder, sweep)
+    if sweep.get("variable") != "confining_stress":
+        from breccia import slab_report
+        return slab_report.parameter_sweep_report(folder, sweep)
     runs = [r for r in sweep["runs"] if r.get("status") == "complete"]
     outdir = os.path.join(folder, "report")
     os.makedirs(outdir, exist_ok=True)

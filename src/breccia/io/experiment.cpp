@@ -360,10 +360,12 @@ const std::vector<Key>& key_table() {
                            "gengeo: an ESyS-Particle GenGeo LSMGeometry 1.2 file; lattice: FCC "
                            "(3D) or hexagonal (2D) block of equal particles",
                            &ExperimentSpec::sample_source));
-    k.push_back(choice_key("sample", "shape", {"prism", "cylinder", "rectangle", "disk"},
+    k.push_back(choice_key("sample", "shape", {"prism", "cylinder", "rectangle", "disk", "slab"},
                            "generated sample shape: prism or cylinder (axis z) in 3D, rectangle "
                            "or disk (diameter) in 2D; also chooses the confining boundary of "
-                           "triaxial tests",
+                           "triaxial tests; slab: a plate width x depth (x, y) of slab_thickness "
+                           "along z for the slab tests (2D: its cross-section, width x "
+                           "slab_thickness along y)",
                            &ExperimentSpec::shape));
     k.push_back(real_key("sample", "width", "m", 0, kInf, true, "prism/rectangle size along x",
                          &ExperimentSpec::width));
@@ -374,6 +376,9 @@ const std::vector<Key>& key_table() {
                          &ExperimentSpec::height));
     k.push_back(real_key("sample", "diameter", "m", 0, kInf, true, "cylinder or disk diameter",
                          &ExperimentSpec::diameter));
+    k.push_back(real_key("sample", "slab_thickness", "m", 0, kInf, true,
+                         "slab: thickness along z (2D: along y); seed 001's slabs are 5-10 mm",
+                         &ExperimentSpec::slab_thickness));
     k.push_back(choice_key("sample", "distribution", {"uniform", "lognormal", "classes"},
                            "radius distribution (physics.md §7.1): uniform on [radius_min, "
                            "radius_max]; lognormal with radius_mean and radius_sd truncated to "
@@ -830,12 +835,12 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
                      "has no disk form; set sample.planar_body = \"planar_sphere\" (or "
                      "\"auto\") for RICEBAL-style planar spheres (physics.md §3.4)");
   if (s.sample_source == "generate") {
-    if (s.dimension == 2 && s.shape != "rectangle" && s.shape != "disk")
+    if (s.dimension == 2 && s.shape != "rectangle" && s.shape != "disk" && s.shape != "slab")
       throw InputError(source, "sample.shape", "\"" + s.shape + "\"",
-                       "2D samples are generated as \"rectangle\" or \"disk\"");
+                       "2D samples are generated as \"rectangle\", \"disk\" or \"slab\"");
     if (s.dimension == 3 && (s.shape == "rectangle" || s.shape == "disk"))
       throw InputError(source, "sample.shape", "\"" + s.shape + "\"",
-                       "3D samples are \"prism\" or \"cylinder\"");
+                       "3D samples are \"prism\", \"cylinder\" or \"slab\"");
     if (s.packing == "preconsolidation" && s.shape != "rectangle")
       throw InputError(source, "sample.packing", "\"preconsolidation\"",
                        "preconsolidation between particle rows is a 2D procedure (seed 002): it "
@@ -1016,11 +1021,13 @@ void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string
   double speed = 0, ramp = 0, strain = 0, stop = 0, relax = 0.5;
   std::visit(
       [&](const auto& p) {
-        speed = p.platen_speed;
-        ramp = p.ramp_time;
-        strain = p.max_strain;
-        stop = p.stop_fraction;
-        if constexpr (requires { p.servo_relaxation; }) relax = p.servo_relaxation;
+        if constexpr (kCompressionParams<std::decay_t<decltype(p)>>) {
+          speed = p.platen_speed;
+          ramp = p.ramp_time;
+          strain = p.max_strain;
+          stop = p.stop_fraction;
+          if constexpr (requires { p.servo_relaxation; }) relax = p.servo_relaxation;
+        }
       },
       spec.test);
   if (!(sigma3 > 0.0)) {
@@ -1037,17 +1044,22 @@ void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string
 
 void set_platen_speed(ExperimentSpec& spec, double speed, const std::string& where) {
   require_compression(spec, where, "strain-rate");
-  std::visit([&](auto& p) { p.platen_speed = speed; }, spec.test);
+  std::visit(
+      [&](auto& p) {
+        if constexpr (kCompressionParams<std::decay_t<decltype(p)>>) p.platen_speed = speed;
+      },
+      spec.test);
 }
 
 SampleInfo sample_info(const ExperimentSpec& s) {
   SampleInfo info;
   info.dimension = static_cast<int>(s.dimension);
   info.thickness = s.thickness;
+  info.density_scaling = s.density_scaling;
   if (s.sample_source == "generate") {
     info.shape = s.shape;
     info.diameter = s.diameter;
-    info.height = s.height;
+    info.height = s.shape == "slab" ? s.slab_thickness : s.height;
     info.r_max = s.distribution == "classes" && !s.class_radii.empty()
                      ? *std::max_element(s.class_radii.begin(), s.class_radii.end())
                      : s.radius_max;

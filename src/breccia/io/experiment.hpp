@@ -43,6 +43,7 @@ struct ExperimentSpec {
   std::string sample_source = "generate";
   std::string shape = "prism";  // generate: prism or cylinder (3D), rectangle (2D)
   double width = 8e-3, depth = 8e-3, height = 16e-3, diameter = 8e-3;
+  double slab_thickness = 5e-3;  // shape "slab": along z (2D: y)
   std::string distribution = "uniform";
   double radius_min = 0.3e-3, radius_max = 0.5e-3, radius_mean = 0.4e-3, radius_sd = 0.05e-3;
   std::vector<double> class_radii, class_mass_fractions;

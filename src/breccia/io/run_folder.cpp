@@ -115,6 +115,15 @@ std::string summarise_sweep(const fs::path& file) {
                : "rate law: no fit (" + f->text("flag", "") + ")\n";
     return s;
   }
+  const std::string variable = j.text("variable", "confining_stress");
+  if (variable != "confining_stress") {
+    s += fmt::format("  {:>16}   status      cracks   scaled   fragments\n", variable);
+    for (const JsonView& r : j.elements("runs"))
+      s += fmt::format("  {:>16}   {:<9}   {:>6}   {:>6}   {:>9}\n", r.text("value", "?"),
+                       r.text("status", "?"), plain(r, "cracks", "{:.0f}"),
+                       plain(r, "cracks_scaled", "{:.2f}"), plain(r, "fragments", "{:.0f}"));
+    return s;
+  }
   s += "  sigma3 (MPa)   peak q (MPa)   sigma1 (MPa)   E_t50 (GPa)   cracks\n";
   for (const JsonView& r : j.elements("runs"))
     s += fmt::format("  {:>12.2f}   {:>12.2f}   {:>12.2f}   {:>11}   {:>6}\n",
@@ -155,25 +164,46 @@ std::string summarise_acoustic_emission(const JsonView& ae) {
 std::string summarise_run(const fs::path& file) {
   const json doc = read_json_object(file.string());
   const JsonView j(doc, file.string());
-  std::string s =
-      fmt::format("{}: {}, sigma3 = {} ({}; {})\n", j.text("experiment", ""), j.text("test", ""),
-                  mpa(j, "confining_stress_pa"), j.text("status", ""), j.text("stop_reason", ""));
-  if (j.has("tensile_strength_pa"))
-    s += fmt::format("  tensile strength sigma_t = 2F/(pi D t) {} (peak force {} N) at strain {}\n",
-                     mpa(j, "tensile_strength_pa"), plain(j, "peak_force_n", "{:.4g}"),
-                     plain(j, "axial_strain_at_peak", "{:.5f}"));
-  else
-    s +=
-        fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
-                    mpa(j, "peak_deviatoric_stress_pa"), plain(j, "axial_strain_at_peak", "{:.5f}"),
-                    gpa(j, "youngs_modulus_pa"), plain(j, "poisson_ratio"));
-  s += fmt::format("  crack initiation {}, crack damage {}, residual {}\n",
-                   mpa(j, "crack_initiation_stress_pa"), mpa(j, "crack_damage_stress_pa"),
-                   mpa(j, "residual_strength_pa"));
+  // Tests that are not read as stress-strain curves write their own headline lines.
+  const auto own = j.find(j.text("test_kind", ""));
+  const bool headline = own && own->has("headline");
+  std::string s = fmt::format("{}: {}{} ({}; {})\n", j.text("experiment", ""), j.text("test", ""),
+                              headline ? "" : ", sigma3 = " + mpa(j, "confining_stress_pa"),
+                              j.text("status", ""), j.text("stop_reason", ""));
+  if (headline) {
+    for (const JsonView& line : own->elements("headline")) s += "  " + line.as_text() + "\n";
+  } else {
+    if (j.has("tensile_strength_pa"))
+      s += fmt::format(
+          "  tensile strength sigma_t = 2F/(pi D t) {} (peak force {} N) at strain {}\n",
+          mpa(j, "tensile_strength_pa"), plain(j, "peak_force_n", "{:.4g}"),
+          plain(j, "axial_strain_at_peak", "{:.5f}"));
+    else
+      s += fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
+                       mpa(j, "peak_deviatoric_stress_pa"),
+                       plain(j, "axial_strain_at_peak", "{:.5f}"), gpa(j, "youngs_modulus_pa"),
+                       plain(j, "poisson_ratio"));
+    s += fmt::format("  crack initiation {}, crack damage {}, residual {}\n",
+                     mpa(j, "crack_initiation_stress_pa"), mpa(j, "crack_damage_stress_pa"),
+                     mpa(j, "residual_strength_pa"));
+  }
   s += fmt::format("  {} particles, {} bonds; {} cracks ({} tensile, {} shear)\n",
                    plain(j, "particles", "{:.0f}"), plain(j, "bonds_initial", "{:.0f}"),
                    plain(j, "bonds_broken", "{:.0f}"), plain(j, "cracks_tensile", "{:.0f}"),
                    plain(j, "cracks_shear", "{:.0f}"));
+  if (const auto fr = j.find("fragments"))
+    if (const auto cl = fr->find("classes_without_debris")) {
+      const auto count = [&](const char* k) {
+        const auto c = cl->find(k);
+        return c ? plain(*c, "count", "{:.0f}") : std::string("n/a");
+      };
+      s += fmt::format(
+          "  fragments: {} ({} single grains); largest {} of the mass; without single grains: {} "
+          "below 0.1 of the largest, {} between, {} above 0.9\n",
+          plain(*fr, "count", "{:.0f}"), plain(*fr, "single_particle_debris", "{:.0f}"),
+          plain(*fr, "largest_fraction_of_total", "{:.3f}"), count("smallest_below_0.1_of_largest"),
+          count("intermediate"), count("biggest_above_0.9_of_largest"));
+    }
   if (const auto cp = j.find("crack_pattern")) {
     const auto q = cp->elements("quarter_shares_along_axis");
     if (q.size() == 4)

@@ -21,8 +21,8 @@ struct PairGeometry {
   // Radii. Against a wall, R1 is the wall's convex curvature radius: a sphere wall's radius, 0
   // for a flat (or concave) one.
   double R1 = 0.0, R2 = 0.0;
-  double m1 = 0.0, m2 = 0.0;  // masses (m1 unused against a wall)
-  bool wall = false;          // body 1 is a rigid wall
+  double m1 = 0.0, m2 = 0.0;   // masses (m1 unused against a wall)
+  bool wall = false;           // body 1 is a rigid wall
   bool planar = false;         // 2D slab geometry
   bool planar_sphere = false;  // 2D run of spheres confined to the plane (§3.4), not disks
   double thickness = 1.0;

@@ -50,40 +50,51 @@ void CsvFile::flush() {
   if (f_) std::fflush(f_);
 }
 
-HistoryRecorder::HistoryRecorder(const std::string& path)
-    : csv_(path, {"step",
-                  "time_s",
-                  "axial_strain",
-                  "axial_stress_pa",
-                  "axial_stress_nominal_pa",
-                  "deviatoric_stress_pa",
-                  "confining_stress_pa",
-                  "lateral_strain",
-                  "volumetric_strain",
-                  "gauge_axial_strain",
-                  "gauge_lateral_strain",
-                  "platen_force_bottom_n",
-                  "platen_force_top_n",
-                  "broken_bonds",
-                  "tensile_cracks",
-                  "shear_cracks",
-                  "intact_bonds",
-                  "contacts",
-                  "kinetic_j",
-                  "bond_tension_j",
-                  "bond_compression_j",
-                  "bond_shear_j",
-                  "bond_bending_j",
-                  "bond_twisting_j",
-                  "contact_strain_j",
-                  "boundary_work_j",
-                  "friction_j",
-                  "local_damping_j",
-                  "viscous_damping_j",
-                  "deleted_springs_j",
-                  "released_by_breaks_j",
-                  "energy_residual_j",
-                  "energy_residual_relative"}) {}
+namespace {
+
+// The columns every test writes, then the test's own (Protocol::history_columns).
+std::vector<std::string> history_header(const std::vector<std::string>& extra) {
+  std::vector<std::string> c{"step",
+                             "time_s",
+                             "axial_strain",
+                             "axial_stress_pa",
+                             "axial_stress_nominal_pa",
+                             "deviatoric_stress_pa",
+                             "confining_stress_pa",
+                             "lateral_strain",
+                             "volumetric_strain",
+                             "gauge_axial_strain",
+                             "gauge_lateral_strain",
+                             "platen_force_bottom_n",
+                             "platen_force_top_n",
+                             "broken_bonds",
+                             "tensile_cracks",
+                             "shear_cracks",
+                             "intact_bonds",
+                             "contacts",
+                             "kinetic_j",
+                             "bond_tension_j",
+                             "bond_compression_j",
+                             "bond_shear_j",
+                             "bond_bending_j",
+                             "bond_twisting_j",
+                             "contact_strain_j",
+                             "boundary_work_j",
+                             "friction_j",
+                             "local_damping_j",
+                             "viscous_damping_j",
+                             "deleted_springs_j",
+                             "released_by_breaks_j",
+                             "energy_residual_j",
+                             "energy_residual_relative"};
+  c.insert(c.end(), extra.begin(), extra.end());
+  return c;
+}
+
+}  // namespace
+
+HistoryRecorder::HistoryRecorder(const std::string& path, const std::vector<std::string>& extra)
+    : csv_(path, history_header(extra)) {}
 
 HistoryRecorder::HistoryRecorder(const std::string& path, ArchiveReader& a)
     : csv_(path, (a.label("history"), a.get<std::uint64_t>())) {
@@ -98,13 +109,14 @@ void HistoryRecorder::save_state(ArchiveWriter& a) {
   a.value(tensile_);
 }
 
-void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
+void HistoryRecorder::record(const Simulation& sim, const AxialState& a,
+                             const std::vector<double>& extra) {
   const auto& cracks = sim.cracks();
   for (; cracks_seen_ < cracks.size(); ++cracks_seen_)
     tensile_ += cracks[cracks_seen_].mode == CrackMode::Tensile ? 1 : 0;
   const std::size_t tensile = tensile_;
   const EnergyLedger& L = sim.ledger();
-  csv_.write_line(fmt::format(
+  std::string line = fmt::format(
       "{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
       "{},{},{},{},{},"
       "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
@@ -115,7 +127,9 @@ void HistoryRecorder::record(const Simulation& sim, const AxialState& a) {
       sim.cracks().size() - tensile, sim.intact_bonds(), sim.active_contacts(), L.kinetic(),
       L.bond.tension, L.bond.compression, L.bond.shear, L.bond.bending, L.bond.twisting, L.contact,
       L.boundary_work, L.friction, L.local_damping, L.viscous_damping, L.deleted,
-      L.released.total(), L.residual, L.residual_relative));
+      L.released.total(), L.residual, L.residual_relative);
+  for (double v : extra) line += fmt::format(",{:.9g}", v);
+  csv_.write_line(line);
 }
 
 std::string crack_row(const CrackRecord& c) {

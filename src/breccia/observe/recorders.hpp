@@ -34,13 +34,15 @@ class CsvFile {
   std::string path_;
 };
 
-// history.csv: one row per sample with the axial state, counts and the energy ledger.
+// history.csv: one row per sample with the axial state, counts and the energy ledger, then the
+// test's own columns (`extra`).
 class HistoryRecorder {
  public:
-  explicit HistoryRecorder(const std::string& path);
+  explicit HistoryRecorder(const std::string& path, const std::vector<std::string>& extra = {});
   // Resumes the table of a checkpoint (see save_state).
   HistoryRecorder(const std::string& path, ArchiveReader& a);
-  void record(const Simulation& sim, const AxialState& axial);
+  void record(const Simulation& sim, const AxialState& axial,
+              const std::vector<double>& extra = {});
   void flush() { csv_.flush(); }
   void save_state(ArchiveWriter& a);
 

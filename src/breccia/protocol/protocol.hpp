@@ -4,10 +4,17 @@
 // every step, measures one row of the test's state, and says when to stop. Each registered test
 // (protocol/registry.hpp) is a type with a `Params` table that drives parsing, validation and the
 // generated docs, and `create` / `restore` functions that make one of these.
+//
+// Compression-type tests (UCS, triaxial, biaxial, Brazilian) are read as stress-strain curves:
+// moduli, strengths, quasi-static checks. Slab and dynamic tests (impact, cantilever, ...) are
+// not: they say so with `stress_strain_test()`, add their own history columns and their own
+// block of summary.json, and report their progress in their own measure (time, displacement).
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
+#include <vector>
 
 #include "breccia/engine/simulation.hpp"
 
@@ -17,7 +24,8 @@ class ArchiveWriter;
 class ArchiveReader;
 
 // One row of a test's state. "Axial" is the loading direction: the sample axis of a compression
-// test, the loaded diameter of a Brazilian test. Compression-positive.
+// test, the loaded diameter of a Brazilian test, the path of a projectile. Compression-positive.
+// Each test's header says what its strain and stress are.
 struct AxialState {
   double strain = 0.0;                         // platen approach / initial length along the load
   double stress = 0.0;                         // Pa, the test's stress measure (current area)
@@ -38,11 +46,28 @@ struct AxialState {
 // What a test needs to know about the sample it is given.
 struct SampleInfo {
   int dimension = 3;
-  std::string shape;       // "prism", "cylinder", "rectangle", "disk", or "" (imported, unknown)
+  // "prism", "cylinder", "rectangle", "disk", "slab", or "" (imported, unknown)
+  std::string shape;
   double thickness = 1.0;  // 2D disk thickness
-  // Generated samples: the requested size and the largest grain radius (0 when not known
-  // before the sample is built).
+  // Generated samples: the requested size (a slab's thickness is its height) and the largest
+  // grain radius (0 when not known before the sample is built).
   double diameter = 0.0, height = 0.0, r_max = 0.0;
+  // The run's mass scaling (physics.md §1.5): dynamic tests measure inertia and refuse it.
+  double density_scaling = 1.0;
+};
+
+// What a test will need, checked before it runs (run/sample_build.cpp): the simulated time, the
+// fastest boundary speed, the largest strain its bins and snapshots span, and the keys and
+// remedies an error names. Compression tests get theirs from their platen fields; other tests
+// provide `static TestBudget budget(const Params&, double length, double bar_wave_speed)`.
+struct TestBudget {
+  double time = 0.0;        // s
+  double speed = 0.0;       // m/s
+  double max_strain = 0.0;  // of the rows' strain measure
+  std::string what;         // how the time was found
+  std::string keys = "test.platen_speed / test.max_strain / test.ramp_time";
+  std::string speed_key = "test.platen_speed";
+  std::string remedy = "raise the platen speed, lower the strain or the ramp";
 };
 
 class Protocol {
@@ -74,6 +99,22 @@ class Protocol {
   // The loading axis (2: z in 3D, 1: y) and where the bottom platen stood when loading began.
   virtual int axis() const noexcept = 0;
   virtual double origin0() const noexcept = 0;
+
+  // Whether the rows are a stress-strain curve to read moduli, strengths and the quasi-static
+  // checks from (compression tests), or a test that reports its own results (summarise()).
+  virtual bool stress_strain_test() const noexcept { return true; }
+  // How far the test has gone (0-1), for progress bars.
+  virtual double progress(const AxialState& s, const Simulation&) const {
+    return max_strain() > 0.0 ? s.strain / max_strain() : 0.0;
+  }
+  // Simulated time between history rows that the test needs to be resolved (an impact lasts
+  // microseconds), or 0: the experiment's output settings alone decide.
+  virtual double row_time() const noexcept { return 0.0; }
+  // Columns the test adds to history.csv after the common ones, and their values in a row.
+  virtual std::vector<std::string> history_columns() const { return {}; }
+  virtual void history_values(const Simulation&, std::vector<double>&) const {}
+  // The test's own results, written under its kind in summary.json when it ends.
+  virtual void summarise(const Simulation&, nlohmann::json&) const {}
 
   // Checkpoints: the test's own state (its walls live in the simulation's state).
   virtual void save_state(ArchiveWriter& a) const = 0;

@@ -10,10 +10,11 @@
 #include "breccia/law/registry.hpp"
 #include "breccia/protocol/brazilian_test.hpp"
 #include "breccia/protocol/compression_test.hpp"
+#include "breccia/protocol/impact_test.hpp"
 
 namespace breccia {
 
-using LabTests = TypeList<UcsTest, TriaxialTest, BiaxialTest, BrazilianTest>;
+using LabTests = TypeList<UcsTest, TriaxialTest, BiaxialTest, BrazilianTest, ImpactTest>;
 
 // The chosen test's parameters (the experiment's [test] table).
 using TestParams = ParamsVariant<LabTests>;

@@ -644,32 +644,38 @@ json energy_budget_summary(const fs::path& folder, const FailureInputs& in) {
   for (std::size_t k = 0; k <= ip; ++k)
     if (s.volumetric_strain[k] > s.volumetric_strain[icd]) icd = k;
   const double rel_end = hist.at(last, "energy_residual_relative");
+  json landmarks = {{"at_end", ledger_row(hist, last)}};
+  if (in.stress_strain)
+    landmarks.update(json{{"at_crack_initiation", ledger_row(hist, ici)},
+                          {"at_crack_damage", ledger_row(hist, icd)},
+                          {"at_peak", ledger_row(hist, ip)}});
   double rel_max = 0.0;
   const double w_final = hist.at(last, "boundary_work_j");
   for (std::size_t r = 0; r <= last; ++r)
     if (std::abs(hist.at(r, "boundary_work_j")) > 0.01 * std::abs(w_final))
       rel_max = std::max(rel_max, std::abs(hist.at(r, "energy_residual_relative")));
-  return {{"convention",
-           "cumulative from the engine's first step (consolidation included); residual = work "
-           "in - change of stored energy - dissipated (physics.md §2.4)"},
-          {"at_crack_initiation", ledger_row(hist, ici)},
-          {"at_crack_damage", ledger_row(hist, icd)},
-          {"at_peak", ledger_row(hist, ip)},
-          {"at_end", ledger_row(hist, last)},
-          {"residual_relative_at_end", rel_end},
-          {"residual_relative_max_after_1pct_work", rel_max},
-          {"classification", rel_max <= 0.01   ? "good"
-                             : rel_max <= 0.05 ? "warning"
-                                               : "energy_balance_failed"},
-          {"continuum_estimates", continuum_estimates(in, hist, ip)}};
+  json out = {{"convention",
+               "cumulative from the engine's first step (consolidation included); residual = "
+               "work in - change of stored energy - dissipated (physics.md §2.4)"},
+              {"residual_relative_at_end", rel_end},
+              {"residual_relative_max_after_1pct_work", rel_max},
+              {"classification", rel_max <= 0.01   ? "good"
+                                 : rel_max <= 0.05 ? "warning"
+                                                   : "energy_balance_failed"}};
+  out.update(landmarks);
+  if (in.stress_strain) out["continuum_estimates"] = continuum_estimates(in, hist, ip);
+  return out;
 }
 
 }  // namespace
 
 json write_failure_analysis(const fs::path& folder, const FailureInputs& in) {
   const analysis::CompressionSeries& s = in.series;
-  const analysis::Stages stages = analysis::find_stages(s.axial_strain, s.deviatoric,
-                                                        in.result.residual, in.result.peak_reached);
+  // Stages belong to a stress-strain curve; other tests leave every crack's stage undefined.
+  const analysis::Stages stages =
+      in.stress_strain ? analysis::find_stages(s.axial_strain, s.deviatoric, in.result.residual,
+                                               in.result.peak_reached)
+                       : analysis::Stages{};
   const CrackPoints cp = crack_points(in);
   const EventCatalogue cat = catalogue_events(in);
   write_events_csv(folder, in, cat, stages);
@@ -679,7 +685,7 @@ json write_failure_analysis(const fs::path& folder, const FailureInputs& in) {
   write_indicators(folder, in, cp, cat, ms, d2, stages);
   json out;
   out["fragments"] = fragments_summary(folder, in);
-  out["stages"] = stages_summary(in, stages, cat, ms, cp.count);
+  if (in.stress_strain) out["stages"] = stages_summary(in, stages, cat, ms, cp.count);
   out["acoustic_emission"] = acoustic_emission_summary(in, cp, cat, ms, d2);
   if (json budget = energy_budget_summary(folder, in); !budget.is_null())
     out["energy_budget"] = std::move(budget);

@@ -25,6 +25,9 @@ struct FailureInputs {
   double initial_porosity = 0.0;   // n0 at the start of loading
   double sample_length_min = 0.0;  // smallest sample dimension (D2 upper radius 0.25 L)
   std::string wave_speed_method;   // how v_S was obtained
+  // false for tests not read as a stress-strain curve (impact, ...): no deformation stages, and
+  // the energy budget at the end only.
+  bool stress_strain = true;
 };
 
 nlohmann::json write_failure_analysis(const std::filesystem::path& folder, const FailureInputs& in);

@@ -167,13 +167,15 @@ void check_finite_state(const Simulation& sim, const AxialState& a) {
 }
 
 // Steps between history rows: output.history_interval, or the steps in which the platens, at
-// full speed, strain the sample by output.history_strain_interval.
+// full speed, strain the sample by output.history_strain_interval; at most the steps of the
+// test's own row time.
 std::uint64_t history_step_interval(const ExperimentSpec& spec, const Protocol& test,
                                     const Simulation& sim) {
   const double strain_rate = 2.0 * test.platen_speed() / test.length0();
-  if (spec.history_strain_interval <= 0.0 || !(strain_rate > 0.0))
-    return static_cast<std::uint64_t>(spec.history_interval);
-  const double steps = spec.history_strain_interval / (strain_rate * sim.time_step());
+  double steps = static_cast<double>(spec.history_interval);
+  if (spec.history_strain_interval > 0.0 && strain_rate > 0.0)
+    steps = spec.history_strain_interval / (strain_rate * sim.time_step());
+  if (test.row_time() > 0.0) steps = std::min(steps, test.row_time() / sim.time_step());
   return static_cast<std::uint64_t>(std::clamp(std::round(steps), 1.0, 1e9));
 }
 
@@ -188,7 +190,9 @@ struct LoopEnd {
 void record_row(const ExperimentSpec& spec, Session& ss, const AxialState& a) {
   const Simulation& sim = ss.sim;
   LoopState& L = ss.loop;
-  ss.history.record(sim, a);
+  std::vector<double> extra;
+  ss.test->history_values(sim, extra);
+  ss.history.record(sim, a, extra);
   ss.cracks.record(sim);
   ss.history.flush();
   ss.cracks.flush();
@@ -215,7 +219,7 @@ void record_row(const ExperimentSpec& spec, Session& ss, const AxialState& a) {
 }
 
 void print_progress_bar(const Session& ss, const AxialState& a, double elapsed) {
-  const double frac = std::clamp(a.strain / ss.test->max_strain(), 1e-9, 1.0);
+  const double frac = std::clamp(ss.test->progress(a, ss.sim), 1e-9, 1.0);
   const int width = 30, fill = static_cast<int>(frac * width);
   std::fprintf(stderr,
                "\r[%s%s] strain %.4f  q %.2f MPa  cracks %zu  %.0fs elapsed, <= %.0fs left ",
@@ -226,7 +230,7 @@ void print_progress_bar(const Session& ss, const AxialState& a, double elapsed) 
 }
 
 RunProgress progress_of(const Session& ss, const AxialState& a, double elapsed) {
-  return {.fraction = std::clamp(a.strain / ss.test->max_strain(), 0.0, 1.0),
+  return {.fraction = std::clamp(ss.test->progress(a, ss.sim), 0.0, 1.0),
           .axial_strain = a.strain,
           .deviatoric_stress = a.deviatoric,
           .cracks = ss.sim.cracks().size(),
@@ -321,6 +325,7 @@ QualityVerdict judge_quality(const LoopState& L, const analysis::CompressionResu
 
 std::vector<std::string> quality_warnings(const QualityVerdict& q, const Protocol& test) {
   std::vector<std::string> w;
+  if (!test.stress_strain_test()) return w;  // dynamic by design
   if (!q.quasi_static())
     w.push_back(fmt::format(
         "the test was not quasi-static before the peak: platen force imbalance {:.3g} (limit "
@@ -455,11 +460,17 @@ json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult&
                {"wall_seconds", r.wall_seconds},
                {"particle_steps_per_second",
                 static_cast<double>(r.particles) * static_cast<double>(r.steps) / r.wall_seconds}};
-  summary.update(compression_fields(an));
-  summary.update(quality_fields(q));
-  summary.update(json{{"platen_speed_m_per_s", test.platen_speed()},
-                      {"strain_rate_per_s", 2.0 * test.platen_speed() / test.length0()},
-                      {"sample_height_m", test.length0()},
+  if (test.stress_strain_test()) {
+    summary.update(compression_fields(an));
+    summary.update(quality_fields(q));
+    summary.update(json{{"platen_speed_m_per_s", test.platen_speed()},
+                        {"strain_rate_per_s", 2.0 * test.platen_speed() / test.length0()}});
+  } else {
+    json own = json::object();
+    test.summarise(sim, own);
+    summary[test.kind()] = std::move(own);
+  }
+  summary.update(json{{"sample_height_m", test.length0()},
                       {"sample_area_m2", test.area0()},
                       {"sample", manifest.value("sample", json::object())},
                       {"energy", ledger_json(sim.ledger())},
@@ -522,8 +533,9 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   json summary = run_summary(spec, ss, result, an, q, warnings, manifest);
   // Failure analysis: events, indicators, stages, fragments, energy budget (analysis.md §2-§9).
   const json failure = write_failure_analysis(
-      folder, FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0,
-                            ss.loop.porosity0, ss.loop.length_min, ss.loop.wave_speed_method});
+      folder,
+      FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0, ss.loop.porosity0,
+                    ss.loop.length_min, ss.loop.wave_speed_method, ss.test->stress_strain_test()});
   for (const auto& [key, value] : failure.items()) summary[key] = value;
   write_json(folder / "summary.json", summary);
   list_run_files(spec, folder, end, manifest, log);
@@ -676,10 +688,12 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
       spec.ae_clustering == "grain" ? analysis::Linkage::Grain : analysis::Linkage::SourceRadius;
   std::unique_ptr<Session> ss;
   try {
-    ss.reset(new Session{
-        std::move(b.sim), std::move(b.protocol), HistoryRecorder((folder / "history.csv").string()),
-        CrackRecorder((folder / "cracks.csv").string()),
-        SnapshotWriter((folder / "snapshots").string()), std::move(loop), AeMonitor(ae_settings)});
+    const std::vector<std::string> test_columns = b.protocol->history_columns();
+    ss.reset(new Session{std::move(b.sim), std::move(b.protocol),
+                         HistoryRecorder((folder / "history.csv").string(), test_columns),
+                         CrackRecorder((folder / "cracks.csv").string()),
+                         SnapshotWriter((folder / "snapshots").string()), std::move(loop),
+                         AeMonitor(ae_settings)});
     if (spec.ae_shear_wave_speed > 0.0) {
       ss->ae.configure(spec.ae_shear_wave_speed);
       ss->loop.wave_speed_method = "given in the experiment file (ae.shear_wave_speed)";

@@ -82,4 +82,11 @@ SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& con
 SweepResult run_rate_sweep(const ExperimentSpec& spec, const std::vector<double>& strain_rates,
                            const RunOptions& options);
 
+// Runs the experiment once per value of one key (section.key, e.g. sample.slab_thickness): any
+// test, each run on its own sample when the key changes it. sweep.json lists each run's cracks
+// (and their share of the most any run had, as seed 001 scales them), its fragments and the
+// test's own sweep metrics. Every value is checked like an override before any run starts.
+SweepResult run_parameter_sweep(const ExperimentSpec& spec, const std::string& key,
+                                const std::vector<std::string>& values, const RunOptions& options);
+
 }  // namespace breccia

@@ -129,13 +129,15 @@ ContactModel contact_model(const ExperimentSpec& s) {
 
 PackingSettings packing_settings(const ExperimentSpec& s) {
   PackingSettings p;
-  p.shape = s.shape == "cylinder"    ? SampleShape::Cylinder
-            : s.shape == "rectangle" ? SampleShape::Rectangle
-            : s.shape == "disk"      ? SampleShape::Disk
-                                     : SampleShape::Prism;
+  p.shape = s.shape == "cylinder"                   ? SampleShape::Cylinder
+            : s.shape == "rectangle"                ? SampleShape::Rectangle
+            : s.shape == "disk"                     ? SampleShape::Disk
+            : s.shape == "slab" && s.dimension == 2 ? SampleShape::Rectangle
+                                                    : SampleShape::Prism;
   p.width = s.width;
   p.depth = s.depth;
-  p.height = s.height;
+  // A slab is a prism (2D: rectangle) whose height is the slab's thickness.
+  p.height = s.shape == "slab" ? s.slab_thickness : s.height;
   p.diameter = s.diameter;
   p.thickness = s.thickness;
   p.planar_body = s.grain_body();
@@ -202,7 +204,7 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info
       report = read_json_object(p + ".json");
       // A sample written by `breccia generate` says its shape in its settings.
       if (report.contains("settings") && report["settings"].is_string())
-        for (const char* shape : {"prism", "cylinder", "rectangle", "disk"})
+        for (const char* shape : {"prism", "cylinder", "rectangle", "disk", "slab"})
           if (report["settings"].get<std::string>().find(fmt::format("shape = \"{}\"", shape)) !=
               std::string::npos)
             info.shape = shape;
@@ -249,41 +251,53 @@ constexpr double kMaxSnapshotsPerRun = 1e5;
 // radius) and the explicit integration both assume far smaller moves per step.
 constexpr double kMaxPlatenTravelPerStep = 0.05;
 
-// The steps the test needs at most: its ramp plus the platen travel to max_strain at the platen
-// speed (each platen moves, so the sample shortens at twice that speed).
+// What a test needs at most: the simulated time (the ramp plus the platen travel to max_strain
+// at the platen speed, each platen moving; or a test's own TestBudget), the fastest boundary
+// speed and the strain its bins and snapshots span.
+TestBudget test_budget(const ExperimentSpec& s, double length, double v_bar) {
+  TestBudget b;
+  visit_lab_test(s.test, [&]<class T>(const typename T::Params& p) {
+    if constexpr (requires { T::budget(p, length, v_bar); }) {
+      b = T::budget(p, length, v_bar);
+    } else {
+      const double ramp = p.ramp_time > 0.0 ? p.ramp_time : 10.0 * length / v_bar;
+      b.time = ramp + p.max_strain * length / (2.0 * p.platen_speed);
+      b.speed = p.platen_speed;
+      b.max_strain = p.max_strain;
+      b.what = fmt::format(
+          "ramp {} s + max_strain {} x sample length {} m / (2 x platen_speed {} "
+          "m/s)",
+          num(ramp), num(p.max_strain), num(length), num(p.platen_speed));
+    }
+  });
+  return b;
+}
+
 void check_run_budget(const ExperimentSpec& s, const Simulation& sim, double length, double v_bar) {
   const double dt = sim.time_step();
   if (!(std::isfinite(dt) && dt > 0.0))
     throw InputError(s.source, "engine.time_step", num(dt),
                      "the time step must be finite and > 0; check the grain radii, densities and "
                      "stiffnesses");
-  double ramp = 0.0, speed = 0.0, max_strain = 0.0;
-  visit_lab_test(s.test, [&]<class T>(const typename T::Params& p) {
-    ramp = p.ramp_time > 0.0 ? p.ramp_time : 10.0 * length / v_bar;
-    speed = p.platen_speed;
-    max_strain = p.max_strain;
-  });
-  const double steps = (ramp + max_strain * length / (2.0 * speed)) / dt;
+  const TestBudget budget = test_budget(s, length, v_bar);
+  const double speed = budget.speed, max_strain = budget.max_strain;
+  const double steps = budget.time / dt;
   const double n = static_cast<double>(sim.particles().size());
-  const std::string what = fmt::format(
-      "ramp {} s + max_strain {} x sample length {} m / (2 x platen_speed {} m/s), at a time step "
-      "of {} s",
-      num(ramp), num(max_strain), num(length), num(speed), num(dt));
+  const std::string what = fmt::format("{}, at a time step of {} s", budget.what, num(dt));
   if (!(steps <= kMaxRunSteps) || !(steps * n <= kMaxParticleSteps))
-    throw InputError(s.source, "test.platen_speed / test.max_strain / test.ramp_time",
+    throw InputError(s.source, budget.keys,
                      fmt::format("{:.3g} steps of {} particles", steps, sim.particles().size()),
                      fmt::format("a test may take at most {:.0e} steps and {:.0e} particle-steps; "
-                                 "this one needs {}: raise the platen speed, lower the strain or "
-                                 "the ramp, or check engine.time_step and the grain radii",
-                                 kMaxRunSteps, kMaxParticleSteps, what));
+                                 "this one needs {}: {}, or check engine.time_step and the grain "
+                                 "radii",
+                                 kMaxRunSteps, kMaxParticleSteps, what, budget.remedy));
   double r_min = std::numeric_limits<double>::infinity();
   for (const PosRad& q : sim.particles().pos_rad) r_min = std::min(r_min, q.r);
   if (!(speed * dt <= kMaxPlatenTravelPerStep * r_min))
-    throw InputError(s.source, "test.platen_speed", num(speed) + " m/s",
-                     fmt::format("a platen may move at most {} of the smallest grain radius ({} "
+    throw InputError(s.source, budget.speed_key, num(speed) + " m/s",
+                     fmt::format("a boundary may move at most {} of the smallest grain radius ({} "
                                  "m) per time step ({} s), i.e. at most {} m/s: faster, contacts "
-                                 "are crossed within a step and the test is no longer quasi-static "
-                                 "(use a few cm/s or less)",
+                                 "are crossed within a step (platens: use a few cm/s or less)",
                                  kMaxPlatenTravelPerStep, num(r_min), num(dt),
                                  num(kMaxPlatenTravelPerStep * r_min / dt)));
   if (max_strain / s.ae_bin_width > kMaxStrainBins)
