@@ -128,7 +128,8 @@ py::list walls(const Simulation& sim) {
         py::arg("name") = w.name,
         py::arg("shape") = w.shape == WallShape::Plane      ? "plane"
                            : w.shape == WallShape::Cylinder ? "cylinder"
-                                                            : "sphere",
+                           : w.shape == WallShape::Sphere   ? "sphere"
+                                                            : "rod",
         py::arg("radius_m") = w.radius, py::arg("mass_kg") = w.mass,
         py::arg("point_m") = std::array<double, 3>{w.point.x, w.point.y, w.point.z},
         py::arg("normal") = std::array<double, 3>{w.normal.x, w.normal.y, w.normal.z},

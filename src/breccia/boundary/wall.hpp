@@ -14,7 +14,7 @@
 
 namespace breccia {
 
-enum class WallShape : std::uint8_t { Plane, Cylinder, Sphere };
+enum class WallShape : std::uint8_t { Plane, Cylinder, Sphere, Rod };
 
 // Cosine velocity ramp from 0 to 1 over `duration` seconds starting at `start` (§6.1).
 struct VelocityRamp {
@@ -33,6 +33,8 @@ struct Wall {
   // Plane: a point on it and the unit normal pointing into the sample.
   // Cylinder: a point on the axis, the unit axis, and the radius; particles are inside.
   // Sphere: the centre and the radius; particles are outside (a rigid ball).
+  // Rod: a point on the axis, the unit axis, and the radius; particles are outside (a loading
+  // nose or roller, moving as a whole).
   Vec3 point;
   Vec3 normal{0, 0, 1};
   Vec3 axis{0, 0, 1};
@@ -82,7 +84,25 @@ struct Wall {
     w.target_velocity = velocity;
     return w;
   }
+  // A rigid rod (particles outside) moving at `velocity` (prescribed, through the ramp).
+  static Wall rod(std::string name, Vec3 axis_point, Vec3 axis, double radius) {
+    Wall w;
+    w.name = std::move(name);
+    w.shape = WallShape::Rod;
+    w.point = axis_point;
+    w.axis = unit(axis);
+    w.radius = radius;
+    return w;
+  }
   bool free_body() const noexcept { return mass > 0.0; }
+  // The curvature radius a contact law sees (PairGeometry::R1): a sphere's radius, a rod's in 2D
+  // (a circle); 0 (flat) otherwise. A rod in 3D is curved across its axis only: its contacts
+  // are taken as flat, which overstates their Hertz stiffness a little (the rod is a loading
+  // nose; its contact compliance is not what a test measures).
+  double convex_radius(bool planar) const noexcept {
+    if (shape == WallShape::Sphere || (shape == WallShape::Rod && planar)) return radius;
+    return 0.0;
+  }
   static Wall cylinder(std::string name, Vec3 axis_point, Vec3 axis, double radius) {
     Wall w;
     w.name = std::move(name);
@@ -109,6 +129,12 @@ struct Wall {
       const double d = norm(rel);
       n = d > 0.0 ? rel * (1.0 / d) : Vec3{0, 0, 1};
       return d - radius - R;
+    }
+    if (shape == WallShape::Rod) {
+      const Vec3 radial = rel - axis * dot(rel, axis);
+      const double rho = norm(radial);
+      n = rho > 0.0 ? radial * (1.0 / rho) : Vec3{0, 0, 1};
+      return rho - radius - R;
     }
     const Vec3 radial = rel - axis * dot(rel, axis);
     const double rho = norm(radial);

@@ -139,9 +139,11 @@ std::size_t Simulation::add_wall(Wall w) {
       (w.point.z != 0.0 || w.velocity.z != 0.0 || w.target_velocity.z != 0.0))
     throw InputError("wall '" + w.name + "'", "centre/velocity", "out of plane",
                      "in 2D a sphere wall is a circle in the x-y plane (z = 0) moving in it");
-  if (p_.planar() && w.shape == WallShape::Cylinder && (w.axis.x != 0.0 || w.axis.y != 0.0))
+  if (p_.planar() && (w.shape == WallShape::Cylinder || w.shape == WallShape::Rod) &&
+      (w.axis.x != 0.0 || w.axis.y != 0.0))
     throw InputError("wall '" + w.name + "'", "axis", "not along z",
-                     "in 2D a cylinder wall is a circle in the x-y plane: its axis must be z");
+                     "in 2D a cylinder or rod wall is a circle in the x-y plane: its axis must be "
+                     "z");
   if (p_.planar() && w.shape == WallShape::Plane &&
       (w.normal.z != 0.0 || w.target_velocity.z != 0.0))
     throw InputError("wall '" + w.name + "'", "normal/velocity", "out of plane",
@@ -409,7 +411,7 @@ void Simulation::estimate_time_step() {
             if (gap > 0.1 * q.r) continue;
             PairGeometry gw = g;
             gw.wall = true;
-            gw.R1 = w.shape == WallShape::Sphere ? w.radius : 0.0;
+            gw.R1 = w.convex_radius(p_.planar());
             gw.delta = std::max(-gap, 0.0);
             CL::timestep_stiffness(c.wall_params, gw, kn, ks);
             k_tr[i] += std::max(kn, ks);
@@ -711,7 +713,7 @@ void Simulation::compute_walls(ContactSet<CL>& c) {
         g.vc = p_.vel[i] + cross(p_.angvel[i], g.r2) - w.surface_velocity(nrm);
         g.w1 = {};
         g.w2 = p_.angvel[i];
-        g.R1 = w.shape == WallShape::Sphere ? w.radius : 0.0;
+        g.R1 = w.convex_radius(p_.planar());
         g.R2 = q.r;
         g.m2 = p_.mass[i];
         g.wall = true;

@@ -101,7 +101,8 @@ class ImpactTest final : public Protocol {
   template <class Archive>
   void transfer(Archive& a);
   double contact_force(const Simulation& sim) const;  // on the ball, along +axis
-  double indentation(const Simulation& sim) const;    // lowest point below the initial top face
+  double ball_kinetic(const Simulation& sim) const;
+  double indentation(const Simulation& sim) const;  // lowest point below the initial top face
 
   Params p_;
   int axis_ = 2;

@@ -9,12 +9,14 @@
 
 #include "breccia/law/registry.hpp"
 #include "breccia/protocol/brazilian_test.hpp"
+#include "breccia/protocol/cantilever_test.hpp"
 #include "breccia/protocol/compression_test.hpp"
 #include "breccia/protocol/impact_test.hpp"
 
 namespace breccia {
 
-using LabTests = TypeList<UcsTest, TriaxialTest, BiaxialTest, BrazilianTest, ImpactTest>;
+using LabTests =
+    TypeList<UcsTest, TriaxialTest, BiaxialTest, BrazilianTest, ImpactTest, CantileverTest>;
 
 // The chosen test's parameters (the experiment's [test] table).
 using TestParams = ParamsVariant<LabTests>;
