@@ -55,6 +55,14 @@ std::string tiny_experiment(std::string_view kind) {
            "radius_min = 0.2e-3\nradius_max = 0.3e-3\n"
            "[test]\nkind = \"impact\"\nprojectile_diameter = 1e-3\nimpact_speed = 20\n"
            "standoff = 0.02e-3\nduration = 6e-6\n";
+  // The bottom face of a 4 x 4 x 1.5 mm slab shaken along its normal: 3 cycles at 100 kHz.
+  if (kind == "vibration")
+    return "[output]\nplot = false\nsnapshot_strain_interval = 0\n"
+           "[engine]\ndensity_scaling = 1\n"
+           "[sample]\nshape = \"slab\"\nwidth = 0.004\ndepth = 0.004\nslab_thickness = 0.0015\n"
+           "radius_min = 0.2e-3\nradius_max = 0.3e-3\n"
+           "[test]\nkind = \"vibration\"\nfrequency = 1e5\namplitude = 5e-6\ncycles = 3\n"
+           "grip_length = 0\n";
   // A slab 8 x 3 x 1.5 mm, 3 mm in the vice, pushed by a rod 1 mm from its free end.
   if (kind == "cantilever")
     return "[output]\nplot = false\nsnapshot_strain_interval = 0\nhistory_interval = 50\n"
@@ -103,7 +111,7 @@ TEST(Protocols, EveryRegisteredTestIsDocumentedAndRunsATinyCase) {
   std::vector<std::string> kinds;
   for_each_lab_test([&]<class T>() { kinds.emplace_back(T::name); });
   EXPECT_EQ(kinds, (std::vector<std::string>{"ucs", "triaxial", "biaxial", "brazilian", "impact",
-                                             "cantilever"}));
+                                             "cantilever", "vibration"}));
   for_each_lab_test([&]<class T>() {
     const std::string name(T::name);
     EXPECT_NE(docs.find("`test` kind `\"" + name + "\"`"), std::string::npos) << name;
@@ -184,6 +192,52 @@ TEST(Cantilever, TheSlabBreaksAtTheVicesEdgeUnderTheBendingStressOfBeamTheory) {
   // The rod's and the vice's forces are columns of the history.
   const std::string history = read(folder / "history.csv");
   EXPECT_NE(history.find(",rod_travel_m,rod_force_n,vice_force_n"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(Vibration, TheShakenFaceFollowsTheSineAndTheShakerWorkFeedsTheSlab) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_vibration";
+  fs::remove_all(dir);
+  fs::path folder;
+  const nlohmann::json s = run_file(dir, "vibration", tiny_experiment("vibration"), &folder);
+  ASSERT_EQ(s["status"], "complete");
+  const nlohmann::json& v = s["vibration"];
+  // Hand numbers: A = 5 um at f = 100 kHz: peak speed A 2 pi f = 3.14 m/s, acceleration
+  // A (2 pi f)^2 = 1.97e6 m/s^2.
+  EXPECT_NEAR(v["peak_velocity_m_s"].get<double>(), 5e-6 * 2 * std::numbers::pi * 1e5, 1e-12);
+  EXPECT_NEAR(v["peak_acceleration_m_s2"].get<double>(),
+              5e-6 * std::pow(2 * std::numbers::pi * 1e5, 2), 1e-3);
+  // The face's displacement is A sin(2 pi f t) at every step; the rows (40 a cycle) sample the
+  // sine at phases no further than 2 pi / 80 from its crest: at least A cos(pi / 40).
+  const double followed = v["amplitude_followed_m"].get<double>();
+  EXPECT_LE(followed, 5e-6 * (1 + 1e-9));
+  EXPECT_GE(followed, 5e-6 * std::cos(std::numbers::pi / 40.0));
+  EXPECT_NEAR(v["cycles"].get<double>(), 3.0, 0.1);
+  // Every row's face displacement lies on the sine of the row's time.
+  const std::string history = read(folder / "history.csv");
+  std::istringstream in(history);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> names;
+  for (std::istringstream h(line); std::getline(h, line, ',');) names.push_back(line);
+  const auto column = [&](const std::string& n) {
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin());
+  };
+  const std::size_t ct = column("time_s"), cd = column("face_displacement_m");
+  ASSERT_LT(cd, names.size());
+  std::size_t rows = 0;
+  double t0 = 0.0;
+  while (std::getline(in, line)) {
+    std::vector<double> x;
+    for (std::istringstream r(line); std::getline(r, line, ',');) x.push_back(std::stod(line));
+    if (rows == 0) t0 = x[ct] - s["time_step_s"].get<double>();  // the first row is step 1
+    EXPECT_NEAR(x[cd], 5e-6 * std::sin(2 * std::numbers::pi * 1e5 * (x[ct] - t0)), 1e-12);
+    ++rows;
+  }
+  EXPECT_GT(rows, 100u);
+  // The shaker's work is what the slab's ledger takes in.
+  EXPECT_GT(v["shaker_work_j"].get<double>(), 0.0);
+  EXPECT_LT(std::abs(s["energy"]["residual_relative"].get<double>()), 1e-2);
   fs::remove_all(dir);
 }
 

@@ -63,10 +63,10 @@ CantileverTest::CantileverTest(Simulation& sim, const Params& p) : p_(p) {
   bottom0_ = lo[axis_];
   width_ = ps.planar() ? ps.thickness() : hi.y - lo.y;
   if (!(free_length_ > 0.0))
-    throw InputError("cantilever test", "test.clamp_length / test.load_distance",
-                     num(p.clamp_length) + " m / " + num(p.load_distance) + " m",
-                     "the slab is " + num(length_) +
-                         " m long: the rod must push beyond the vice's edge");
+    throw InputError(
+        "cantilever test", "test.clamp_length / test.load_distance",
+        num(p.clamp_length) + " m / " + num(p.load_distance) + " m",
+        "the slab is " + num(length_) + " m long: the rod must push beyond the vice's edge");
   // The vice holds the grains whose centres lie in the clamped length.
   for (std::uint32_t i = 0; i < ps.size(); ++i)
     if (ps.pos_rad[i].x.x <= root_) {
@@ -133,8 +133,8 @@ bool CantileverTest::finished(const AxialState& s, std::size_t broken_bonds) {
   deflection_.push_back(s.strain * free_length_);
   peak_ = std::max(peak_, s.force_top);
   if (s.strain * free_length_ >= p_.max_deflection) {
-    stop_reason_ = fmt::format("the rod travelled the maximum deflection, {:.4g} m",
-                               p_.max_deflection);
+    stop_reason_ =
+        fmt::format("the rod travelled the maximum deflection, {:.4g} m", p_.max_deflection);
     return true;
   }
   if (broken_bonds > 0 && peak_ > 0.0 && s.force_top < p_.stop_fraction * peak_) {
@@ -192,12 +192,12 @@ void CantileverTest::summarise(const Simulation& sim, nlohmann::json& out) const
       imbalance = std::max(imbalance, std::abs(force_[k] - vice_load_[k]) / force_[k]);
   std::vector<std::string> headline{
       fmt::format("largest force {:.4g} N at a rod travel of {:.3g} mm; flexural strength "
-                    "6 F L / (b h^2) = {:.3g} MPa",
-                    f_max, 1e3 * (force_.empty() ? 0.0 : deflection_[ip]), 1e-6 * strength),
-        fmt::format("slab {:.3g} mm thick, {:.3g} mm wide; {:.3g} mm in the vice, lever {:.3g} "
-                    "mm; initial stiffness {}",
-                    1e3 * thickness_, 1e3 * width_, 1e3 * p_.clamp_length, 1e3 * free_length_,
-                    fit.valid ? fmt::format("{:.4g} N/mm", 1e-3 * fit.slope) : "n/a"),
+                  "6 F L / (b h^2) = {:.3g} MPa",
+                  f_max, 1e3 * (force_.empty() ? 0.0 : deflection_[ip]), 1e-6 * strength),
+      fmt::format("slab {:.3g} mm thick, {:.3g} mm wide; {:.3g} mm in the vice, lever {:.3g} "
+                  "mm; initial stiffness {}",
+                  1e3 * thickness_, 1e3 * width_, 1e3 * p_.clamp_length, 1e3 * free_length_,
+                  fit.valid ? fmt::format("{:.4g} N/mm", 1e-3 * fit.slope) : "n/a"),
       fmt::format("{} cracks: {:.0f} % in the third of the lever next to the vice, {:.0f} % "
                   "inside the vice",
                   d.size(), 100.0 * static_cast<double>(near_root) / n,
@@ -207,39 +207,39 @@ void CantileverTest::summarise(const Simulation& sim, nlohmann::json& out) const
         "not quasi-static before the peak: the rod's and the vice's forces differ by up to "
         "{:.0f} % (limit 5 %): the slab vibrates; lower test.pusher_speed",
         100.0 * imbalance));
-  out = {
-      {"headline", headline},
-      {"sweep_metrics",
-       {{"max_force_n", f_max},
-        {"flexural_strength_pa", strength},
-        {"deflection_at_max_m", force_.empty() ? 0.0 : deflection_[ip]},
-        {"initial_stiffness_n_per_m", fit.valid ? nlohmann::json(fit.slope) : nullptr}}},
-      {"max_force_n", f_max},
-      {"deflection_at_max_force_m", force_.empty() ? 0.0 : deflection_[ip]},
-      {"flexural_strength_pa", strength},
-      {"flexural_strength_method",
-       "bending stress at the root of an elastic cantilever under an end load: 6 F_max L / (b "
-       "h^2) with L the lever, b the width, h the thickness"},
-      {"initial_stiffness_n_per_m", fit.valid ? nlohmann::json(fit.slope) : nullptr},
-      {"initial_stiffness_method",
-       "least-squares slope of the rod's force on its travel over 10-50 % of the largest force, "
-       "before it; an elastic cantilever has 3 E I / L^3 (I = b h^3 / 12), less the compliance "
-       "of the rod's contacts and of shear in a short lever"},
-      {"quasi_static",
-       {{"ok", imbalance <= 0.05},
-        {"max_force_imbalance_before_peak", imbalance},
-        {"note", "|F_pusher - F_vice| / F_pusher over the rows above 10 % of the largest force, "
-                 "up to it (limit 0.05, as the platens' of physics.md §6.1)"}}},
-      {"lever_m", free_length_},
-      {"lever_note", "from the vice's edge to the rod's axis"},
-      {"clamp_length_m", p_.clamp_length},
-      {"slab_thickness_m", thickness_},
-      {"slab_width_m", width_},
-      {"cracks_near_root_share", static_cast<double>(near_root) / n},
-      {"cracks_in_vice_share", static_cast<double>(in_vice) / n},
-      {"crack_location_note",
-       "near the root: within a third of the lever from the vice's edge, where the bending "
-       "moment is largest"}};
+  out = {{"headline", headline},
+         {"sweep_metrics",
+          {{"max_force_n", f_max},
+           {"flexural_strength_pa", strength},
+           {"deflection_at_max_m", force_.empty() ? 0.0 : deflection_[ip]},
+           {"initial_stiffness_n_per_m", fit.valid ? nlohmann::json(fit.slope) : nullptr}}},
+         {"max_force_n", f_max},
+         {"deflection_at_max_force_m", force_.empty() ? 0.0 : deflection_[ip]},
+         {"flexural_strength_pa", strength},
+         {"flexural_strength_method",
+          "bending stress at the root of an elastic cantilever under an end load: 6 F_max L / (b "
+          "h^2) with L the lever, b the width, h the thickness"},
+         {"initial_stiffness_n_per_m", fit.valid ? nlohmann::json(fit.slope) : nullptr},
+         {"initial_stiffness_method",
+          "least-squares slope of the rod's force on its travel over 10-50 % of the largest force, "
+          "before it; an elastic cantilever has 3 E I / L^3 (I = b h^3 / 12), less the compliance "
+          "of the rod's contacts and of shear in a short lever"},
+         {"quasi_static",
+          {{"ok", imbalance <= 0.05},
+           {"max_force_imbalance_before_peak", imbalance},
+           {"note",
+            "|F_pusher - F_vice| / F_pusher over the rows above 10 % of the largest force, "
+            "up to it (limit 0.05, as the platens' of physics.md §6.1)"}}},
+         {"lever_m", free_length_},
+         {"lever_note", "from the vice's edge to the rod's axis"},
+         {"clamp_length_m", p_.clamp_length},
+         {"slab_thickness_m", thickness_},
+         {"slab_width_m", width_},
+         {"cracks_near_root_share", static_cast<double>(near_root) / n},
+         {"cracks_in_vice_share", static_cast<double>(in_vice) / n},
+         {"crack_location_note",
+          "near the root: within a third of the lever from the vice's edge, where the bending "
+          "moment is largest"}};
 }
 
 template <class Archive>

@@ -12,11 +12,12 @@
 #include "breccia/protocol/cantilever_test.hpp"
 #include "breccia/protocol/compression_test.hpp"
 #include "breccia/protocol/impact_test.hpp"
+#include "breccia/protocol/vibration_test.hpp"
 
 namespace breccia {
 
-using LabTests =
-    TypeList<UcsTest, TriaxialTest, BiaxialTest, BrazilianTest, ImpactTest, CantileverTest>;
+using LabTests = TypeList<UcsTest, TriaxialTest, BiaxialTest, BrazilianTest, ImpactTest,
+                          CantileverTest, VibrationTest>;
 
 // The chosen test's parameters (the experiment's [test] table).
 using TestParams = ParamsVariant<LabTests>;
