@@ -157,3 +157,49 @@ def test_the_report_carries_the_calibration_record_of_a_library_rock():
             assert text in row, text
         assert "overrides" not in row
         assert "overrides some of the preset" in rows["overridden"]
+
+
+def test_a_slab_test_report_draws_its_own_figures_and_a_thickness_sweep_its_trends():
+    """An impact on a tiny slab: the report has the ball's figures (no stress-strain curve),
+    reads as text, and loads in Chromium; a sweep over the slab's thickness plots its trends."""
+    with tempfile.TemporaryDirectory() as out:
+        path = os.path.join(out, "impact.toml")
+        with open(path, "w") as f:
+            f.write('name = "impact"\n[engine]\ndensity_scaling = 1\nlocal_damping = 0\n'
+                    '[sample]\nshape = "slab"\nwidth = 0.004\ndepth = 0.004\n'
+                    'slab_thickness = 0.0015\nradius_min = 0.2e-3\nradius_max = 0.3e-3\n'
+                    '[test]\nkind = "impact"\nprojectile_diameter = 1e-3\nimpact_speed = 60\n'
+                    'standoff = 0.02e-3\nduration = 6e-6\n'
+                    '[output]\nsnapshot_strain_interval = 0\n')
+        r = subprocess.run([CLI, "run", "--quiet", "--output", out, path],
+                           capture_output=True, text=True, check=True)
+        folder = r.stdout.strip().splitlines()[-1]
+        figures = ["impact.png", "impact_energy.png", "impact_cracks.png", "crack_field_3d.png",
+                   "fragment_sizes.png"]
+        page = open(os.path.join(folder, "report.html")).read()
+        for name in figures:
+            assert os.path.getsize(os.path.join(folder, "report", name)) > 10000, name
+            assert f"alt='{name}'" in page, name
+        assert not os.path.exists(os.path.join(folder, "stress_strain.png"))
+        table = page[page.index("<table>"):page.index("</table>")]
+        for repr_text in ("['", "False", "True", "None"):
+            assert repr_text not in table, repr_text
+        assert "<th>result</th>" in table and "m/s" in table
+        assert_chromium_loads_every_image(folder, len(figures))
+        text = subprocess.run([CLI, "summarise", folder], capture_output=True, text=True,
+                              check=True).stdout
+        assert "ball 1 mm" in text and "fragments:" in text
+        r = subprocess.run([CLI, "sweep", path, "--jobs", "1", "--output", out, "--over",
+                            "sample.slab_thickness", "1.2e-3", "1.5e-3"],
+                           capture_output=True, text=True, check=True)
+        sweep_folder = r.stdout.strip().splitlines()[-1]
+        sweep = json.load(open(os.path.join(sweep_folder, "sweep.json")))
+        assert sweep["variable"] == "sample.slab_thickness"
+        assert [e["value"] for e in sweep["runs"]] == ["1.2e-3", "1.5e-3"]
+        assert max(e["cracks_scaled"] for e in sweep["runs"]) == 1.0
+        assert "max_indentation_m" in sweep["runs"][0]["metrics"]
+        assert os.path.exists(os.path.join(sweep_folder, "report", "parameter_trends.png"))
+        # A bad key or value is refused before any run, with the experiment's own message.
+        bad = subprocess.run([CLI, "sweep", path, "--output", out, "--over",
+                              "sample.slab_thicknes", "1e-3"], capture_output=True, text=True)
+        assert bad.returncode != 0 and "slab_thicknes" in bad.stderr

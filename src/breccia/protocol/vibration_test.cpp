@@ -143,44 +143,43 @@ void VibrationTest::summarise(const Simulation& sim, nlohmann::json& out) const 
   const double cycles = (sim.time() - t0_) * p_.frequency;
   const double per_cycle = cycles > 0.0 ? static_cast<double>(sim.cracks().size()) / cycles : 0.0;
   const double w = 2.0 * std::numbers::pi * p_.frequency;
-  out = {
-      {"headline",
-       {fmt::format("{} ({} grains) shaken {} at {:.5g} Hz, amplitude {:.3g} um (it "
-                    "followed {:.3g} um), {:.3g} cycles; peak acceleration {:.3g} m/s^2",
-                    end_grip() ? fmt::format("the slab's end, {:.3g} mm of it,",
-                                             1e3 * p_.grip_length)
-                               : std::string("the bottom face"),
-                    face_.size(), p_.normal ? "along the normal" : "along the length",
-                    p_.frequency, 1e6 * p_.amplitude, 1e6 * max_displacement_, cycles,
-                    p_.amplitude * w * w),
-        fmt::format("{} cracks, {:.3g} per cycle; the shaker put in {:.4g} J: {:.1f} % released "
-                    "by breaking bonds, {:.1f} % friction, {:.1f} % damping",
-                    sim.cracks().size(), per_cycle, work, 100.0 * share(L.released.total()),
-                    100.0 * share(L.friction),
-                    100.0 * share(L.local_damping + L.viscous_damping))}},
-      {"sweep_metrics",
-       {{"cracks_per_cycle", per_cycle}, {"shaker_work_j", work},
-        {"released_by_breaks_fraction", share(L.released.total())}}},
-      {"frequency_hz", p_.frequency},
-      {"amplitude_m", p_.amplitude},
-      {"amplitude_followed_m", max_displacement_},
-      {"amplitude_note", "largest |mean displacement| of the shaken grains over the rows"},
-      {"direction", p_.normal ? "normal" : "length"},
-      {"cycles", cycles},
-      {"shaken_grains", face_.size()},
-      {"grip", end_grip() ? "end" : "bottom face"},
-      {"grip_length_m", p_.grip_length},
-      {"peak_velocity_m_s", p_.amplitude * w},
-      {"peak_acceleration_m_s2", p_.amplitude * w * w},
-      {"slab_thickness_m", thickness_},
-      {"cracks_per_cycle", per_cycle},
-      {"shaker_work_j", work},
-      {"energy_shares_of_shaker_work",
-       {{"released_by_breaks", share(L.released.total())},
-        {"friction", share(L.friction)},
-        {"damping", share(L.local_damping + L.viscous_damping)},
-        {"kinetic_at_end", share(L.kinetic())},
-        {"strain_at_end", share(L.bond.total() + L.contact)}}}};
+  out = {{"headline",
+          {fmt::format(
+               "{} ({} grains) shaken {} at {:.5g} Hz, amplitude {:.3g} um (it "
+               "followed {:.3g} um), {:.3g} cycles; peak acceleration {:.3g} m/s^2",
+               end_grip() ? fmt::format("the slab's end, {:.3g} mm of it,", 1e3 * p_.grip_length)
+                          : std::string("the bottom face"),
+               face_.size(), p_.normal ? "along the normal" : "along the length", p_.frequency,
+               1e6 * p_.amplitude, 1e6 * max_displacement_, cycles, p_.amplitude * w * w),
+           fmt::format("{} cracks, {:.3g} per cycle; the shaker put in {:.4g} J: {:.1f} % released "
+                       "by breaking bonds, {:.1f} % friction, {:.1f} % damping",
+                       sim.cracks().size(), per_cycle, work, 100.0 * share(L.released.total()),
+                       100.0 * share(L.friction),
+                       100.0 * share(L.local_damping + L.viscous_damping))}},
+         {"sweep_metrics",
+          {{"cracks_per_cycle", per_cycle},
+           {"shaker_work_j", work},
+           {"released_by_breaks_fraction", share(L.released.total())}}},
+         {"frequency_hz", p_.frequency},
+         {"amplitude_m", p_.amplitude},
+         {"amplitude_followed_m", max_displacement_},
+         {"amplitude_note", "largest |mean displacement| of the shaken grains over the rows"},
+         {"direction", p_.normal ? "normal" : "length"},
+         {"cycles", cycles},
+         {"shaken_grains", face_.size()},
+         {"grip", end_grip() ? "end" : "bottom face"},
+         {"grip_length_m", p_.grip_length},
+         {"peak_velocity_m_s", p_.amplitude * w},
+         {"peak_acceleration_m_s2", p_.amplitude * w * w},
+         {"slab_thickness_m", thickness_},
+         {"cracks_per_cycle", per_cycle},
+         {"shaker_work_j", work},
+         {"energy_shares_of_shaker_work",
+          {{"released_by_breaks", share(L.released.total())},
+           {"friction", share(L.friction)},
+           {"damping", share(L.local_damping + L.viscous_damping)},
+           {"kinetic_at_end", share(L.kinetic())},
+           {"strain_at_end", share(L.bond.total() + L.contact)}}}};
 }
 
 template <class Archive>
