@@ -63,6 +63,13 @@ std::string tiny_experiment(std::string_view kind) {
            "radius_min = 0.2e-3\nradius_max = 0.3e-3\n"
            "[test]\nkind = \"vibration\"\nfrequency = 1e5\namplitude = 5e-6\ncycles = 3\n"
            "grip_length = 0\n";
+  // A plate at 1 MPa slid 0.1 mm over a 4 x 4 x 1.5 mm slab held at its base.
+  if (kind == "abrasion")
+    return common +
+           "[sample]\nshape = \"slab\"\nwidth = 0.004\ndepth = 0.004\nslab_thickness = 0.0015\n"
+           "radius_min = 0.2e-3\nradius_max = 0.3e-3\n"
+           "[test]\nkind = \"abrasion\"\nnormal_stress = 1e6\nsliding_speed = 0.1\n"
+           "slide_distance = 0.1e-3\n";
   // A slab 8 x 3 x 1.5 mm, 3 mm in the vice, pushed by a rod 1 mm from its free end.
   if (kind == "cantilever")
     return "[output]\nplot = false\nsnapshot_strain_interval = 0\nhistory_interval = 50\n"
@@ -111,7 +118,7 @@ TEST(Protocols, EveryRegisteredTestIsDocumentedAndRunsATinyCase) {
   std::vector<std::string> kinds;
   for_each_lab_test([&]<class T>() { kinds.emplace_back(T::name); });
   EXPECT_EQ(kinds, (std::vector<std::string>{"ucs", "triaxial", "biaxial", "brazilian", "impact",
-                                             "cantilever", "vibration"}));
+                                             "cantilever", "vibration", "abrasion"}));
   for_each_lab_test([&]<class T>() {
     const std::string name(T::name);
     EXPECT_NE(docs.find("`test` kind `\"" + name + "\"`"), std::string::npos) << name;
@@ -238,6 +245,31 @@ TEST(Vibration, TheShakenFaceFollowsTheSineAndTheShakerWorkFeedsTheSlab) {
   // The shaker's work is what the slab's ledger takes in.
   EXPECT_GT(v["shaker_work_j"].get<double>(), 0.0);
   EXPECT_LT(std::abs(s["energy"]["residual_relative"].get<double>()), 1e-2);
+  fs::remove_all(dir);
+}
+
+TEST(Abrasion, AnUnbreakableSlabSlidesAtThePlatesFrictionCoefficient) {
+  // Bonds that cannot break keep the top face whole: every contact under the plate slides once
+  // the plate moves, each carrying mu F_n, so shear over normal force is the plate's friction.
+  const fs::path dir = fs::temp_directory_path() / "breccia_abrasion";
+  fs::remove_all(dir);
+  const std::string toml = tiny_experiment("abrasion") +
+                           "[contact]\nwall_friction = 0.3\n"
+                           "[bond]\ntensile_strength = 1e10\ncohesion = 1e10\n";
+  fs::path folder;
+  const nlohmann::json s = run_file(dir, "abrasion", toml, &folder);
+  ASSERT_EQ(s["status"], "complete");
+  const nlohmann::json& a = s["abrasion"];
+  EXPECT_TRUE(a["settled"].get<bool>());
+  EXPECT_EQ(s["bonds_broken"].get<int>(), 0);
+  // 2 %: contacts that stick for a step while the plate's servo adjusts its normal force.
+  EXPECT_NEAR(a["bulk_friction_mean"].get<double>(), 0.3, 0.006);
+  EXPECT_GE(a["slid_m"].get<double>(), 0.1e-3);
+  EXPECT_EQ(a["worn_mass_kg"].get<double>(), 0.0);
+  // The normal force the servo held, over the face's area, is the normal stress (2 %).
+  const std::string history = read(folder / "history.csv");
+  EXPECT_NE(history.find(",plate_normal_force_n,plate_shear_force_n,bulk_friction"),
+            std::string::npos);
   fs::remove_all(dir);
 }
 

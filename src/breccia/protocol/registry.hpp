@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "breccia/law/registry.hpp"
+#include "breccia/protocol/abrasion_test.hpp"
 #include "breccia/protocol/brazilian_test.hpp"
 #include "breccia/protocol/cantilever_test.hpp"
 #include "breccia/protocol/compression_test.hpp"
@@ -17,7 +18,7 @@
 namespace breccia {
 
 using LabTests = TypeList<UcsTest, TriaxialTest, BiaxialTest, BrazilianTest, ImpactTest,
-                          CantileverTest, VibrationTest>;
+                          CantileverTest, VibrationTest, AbrasionTest>;
 
 // The chosen test's parameters (the experiment's [test] table).
 using TestParams = ParamsVariant<LabTests>;

@@ -1,0 +1,117 @@
+#pragma once
+// The abrasion resistance test of seed 001: a slab whose base is held (the grains within
+// base_depth of z = min fixed) is pressed by a rigid plate on its top face with a constant normal
+// stress while the plate slides along x at a constant speed; the bulk friction coefficient is the
+// shear force needed to keep the plate sliding over the normal force (seed 001), and the mass
+// worn off is the mass no longer bonded to the slab. The plate is a plane wall whose roughness is
+// its Coulomb friction with the grains, `contact.wall_friction`: on an unbreakable slab whose
+// contacts all slide, the bulk coefficient is that friction exactly (tests/test_protocols.cpp);
+// breaking bonds and loose grains rolling between plate and slab change it. A servo holds the
+// normal stress (physics.md §6.2): first until it settles, then through the sliding, reached
+// through a cosine ramp. 2D: the slab's top is y = max and the plate slides along x.
+//
+// Rows: strain = the distance slid over the slab's length; stress = the shear stress on the top
+// face; force_top = the normal force, force_bottom = the shear force. The summary gives the bulk
+// friction coefficient over time and its mean over the second half of the sliding, the cracks,
+// and the mass worn off.
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "breccia/boundary/servo.hpp"
+#include "breccia/law/param_table.hpp"
+#include "breccia/protocol/protocol.hpp"
+
+namespace breccia {
+
+class AbrasionTest final : public Protocol {
+ public:
+  static constexpr std::string_view name = "abrasion";
+  static constexpr std::string_view summary =
+      "abrasion resistance (seed 001): a rigid plate pressed on a slab's top face with a constant "
+      "normal stress slides along it at a constant speed; the bulk friction coefficient (shear "
+      "over normal force) over time and the mass worn off.";
+  struct Params {
+    double normal_stress = 1e6, sliding_speed = 0.1, slide_distance = 2e-3, ramp_time = 0.0;
+    double base_depth = 0.0, servo_relaxation = 0.2;
+  };
+  static constexpr std::array<ParamField<Params>, 6> fields() {
+    return {{
+        {"normal_stress", "Pa", &Params::normal_stress, 0, 1e10, false, true,
+         "normal stress the plate holds on the top face (normal force over the face's area)"},
+        {"sliding_speed", "m/s", &Params::sliding_speed, 0, kInf, false, true,
+         "speed of the plate along x"},
+        {"slide_distance", "m", &Params::slide_distance, 0, kInf, false, true,
+         "stop once the plate has slid this far"},
+        {"ramp_time", "s", &Params::ramp_time, 0, kInf, true, true,
+         "cosine ramp of the sliding speed; 0 = 10 bar-wave transits along the slab"},
+        {"base_depth", "m", &Params::base_depth, 0, kInf, true, true,
+         "grains whose centres lie this close to the bottom face are held fixed; 0 = one "
+         "largest grain diameter"},
+        {"servo_relaxation", "-", &Params::servo_relaxation, 0, 1, false, true,
+         "alpha_s of the plate's normal-stress servo (physics.md §6.2)"},
+    }};
+  }
+  static void check(const Params& p, const SampleInfo& s, const std::string& where);
+  static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s);
+  static std::unique_ptr<AbrasionTest> restore(ArchiveReader& a);
+  static TestBudget budget(const Params& p, double length, double bar_wave_speed);
+
+  AbrasionTest(Simulation& sim, const Params& p, double density_scaling);
+
+  const char* kind() const noexcept override { return "abrasion"; }
+  std::string label() const override { return "abrasion resistance (sliding plate)"; }
+  std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
+  void control(Simulation& sim) override;
+  AxialState measure(const Simulation& sim) const override;
+  bool finished(const AxialState& s, std::size_t broken_bonds) override;
+  const std::string& stop_reason() const noexcept override { return stop_reason_; }
+
+  double confining_stress() const noexcept override { return 0.0; }
+  bool consolidated() const noexcept override { return consolidated_; }
+  double max_strain() const noexcept override { return p_.slide_distance / length_; }
+  double platen_speed() const noexcept override { return 0.0; }
+  double length0() const noexcept override { return thickness_; }
+  double area0() const noexcept override { return area_; }
+  double width0() const noexcept override { return length_; }
+  double depth0() const noexcept override { return width_; }
+  std::string lateral_boundary() const override { return "none"; }
+  int axis() const noexcept override { return axis_; }
+  double origin0() const noexcept override { return bottom0_; }
+
+  bool stress_strain_test() const noexcept override { return false; }
+  std::vector<std::string> history_columns() const override;
+  void history_values(const Simulation& sim, std::vector<double>& out) const override;
+  void summarise(const Simulation& sim, nlohmann::json& out) const override;
+
+  void save_state(ArchiveWriter& a) const override;
+  void check_restored(const Simulation& sim, const std::string& where) const override;
+
+  std::size_t plate() const noexcept { return plate_; }
+
+ private:
+  AbrasionTest() = default;
+  template <class Archive>
+  void transfer(Archive& a);
+  double normal_force(const Simulation& sim) const;  // the plate's push on the slab, down
+  double shear_force(const Simulation& sim) const;   // the plate's drag on the slab, along +x
+  double slid(const Simulation& sim) const;
+  void drive(Simulation& sim, double sliding_factor);
+
+  Params p_;
+  int axis_ = 2;
+  std::size_t plate_ = 0;
+  std::vector<std::uint32_t> base_;
+  double length_ = 0.0, width_ = 0.0, area_ = 0.0, thickness_ = 0.0, bottom0_ = 0.0;
+  double x0_ = 0.0, t0_ = 0.0, ramp_ = 0.0, k_min_ = 0.0;
+  bool consolidated_ = false;
+  double density_scaling_ = 1.0;
+  double unbonded0_ = 0.0;  // mass without a bond to the slab when the sliding began
+  std::size_t pieces0_ = 0;
+  // The rows' friction coefficient and distance slid (its mean over the second half).
+  std::vector<double> mu_, slid_;
+  std::string stop_reason_;
+};
+
+}  // namespace breccia
