@@ -62,7 +62,7 @@ std::string tiny_experiment(std::string_view kind) {
            "[sample]\nshape = \"slab\"\nwidth = 0.004\ndepth = 0.004\nslab_thickness = 0.0015\n"
            "radius_min = 0.2e-3\nradius_max = 0.3e-3\n"
            "[test]\nkind = \"vibration\"\nfrequency = 1e5\namplitude = 5e-6\ncycles = 3\n"
-           "grip_length = 0\n";
+           "grip_length = 0\nramp_cycles = 0\n";
   // A plate at 1 MPa slid 0.1 mm over a 4 x 4 x 1.5 mm slab held at its base.
   if (kind == "abrasion")
     return common +

@@ -82,6 +82,66 @@ def impact_section(folder, summary, hist, cracks, outdir, figures):
     return [("result", line) for line in im.get("headline", [])]
 
 
+def _two_panels(hist, outdir, figures, name, x, xlabel, top, bottom, title):
+    """Two stacked plots against one x column: `top` and `bottom` are lists of (column, scale,
+    label, colour); the bottom panel also shows the cumulative cracks on a second axis."""
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6.2), sharex=True)
+    xs = R.col(hist, x[0], x[1])
+    for ax, series in ((a1, top), (a2, bottom)):
+        for column, scale, label, colour in series:
+            ax.plot(xs, R.col(hist, column, scale), color=colour, lw=1.1, label=label)
+        ax.legend(fontsize=7, loc="upper left")
+        ax.grid(alpha=0.3)
+    a2b = a2.twinx()
+    a2b.plot(xs, R.col(hist, "broken_bonds"), color="tab:orange", lw=1, ls="--")
+    a2b.set_ylabel("cumulative cracks", color="tab:orange")
+    a2.set_xlabel(xlabel)
+    a1.set_title(R.wrapped(title), fontsize=9)
+    fig.tight_layout()
+    R.save(fig, outdir, name, figures)
+
+
+def cantilever_section(folder, summary, hist, cracks, outdir, figures):
+    """Force against the rod's travel (the rod's and the vice's), and the cracks."""
+    c = summary.get("cantilever", {})
+    _two_panels(hist, outdir, figures, "cantilever.png", ("rod_travel_m", 1e3),
+                "rod travel (mm)",
+                [("rod_force_n", 1.0, "rod force (N)", "k"),
+                 ("vice_force_n", 1.0, "load on the vice (N)", "tab:blue")],
+                [("deviatoric_stress_pa", 1e-6, "root bending stress 6 F L / (b h^2) (MPa)",
+                  "tab:red")],
+                f"Cantilever: largest force {R.fmt(c.get('max_force_n'), '{:.4g}')} N, flexural "
+                f"strength {R.fmt(1e-6 * c.get('flexural_strength_pa', float('nan')), '{:.3g}')}"
+                f" MPa; {R.fmt(100 * c.get('cracks_near_root_share', float('nan')), '{:.0f}')} % "
+                "of the cracks next to the vice")
+    return [("result", line) for line in c.get("headline", [])]
+
+
+def vibration_section(folder, summary, hist, cracks, outdir, figures):
+    """The grip's displacement and force over the cycles, and the cracks."""
+    v = summary.get("vibration", {})
+    _two_panels(hist, outdir, figures, "vibration.png", ("cycles_done", 1.0), "cycles",
+                [("face_displacement_m", 1e6, "grip displacement (um)", "k")],
+                [("face_force_n", 1.0, "grip force on the slab (N)", "tab:blue")],
+                f"Vibration: {R.fmt(v.get('frequency_hz'), '{:.5g}')} Hz, amplitude "
+                f"{R.fmt(1e6 * v.get('amplitude_m', float('nan')), '{:.3g}')} um; "
+                f"{R.fmt(v.get('cracks_per_cycle'), '{:.3g}')} cracks per cycle")
+    return [("result", line) for line in v.get("headline", [])]
+
+
+def abrasion_section(folder, summary, hist, cracks, outdir, figures):
+    """The bulk friction coefficient and the plate's forces against the distance slid."""
+    a = summary.get("abrasion", {})
+    _two_panels(hist, outdir, figures, "abrasion.png", ("slid_m", 1e3), "distance slid (mm)",
+                [("bulk_friction", 1.0, "bulk friction coefficient", "k")],
+                [("plate_normal_force_n", 1.0, "normal force (N)", "tab:blue"),
+                 ("plate_shear_force_n", 1.0, "shear force (N)", "tab:red")],
+                f"Abrasion: bulk friction {R.fmt(a.get('bulk_friction_mean'), '{:.3f}')} over "
+                f"the second half; worn off "
+                f"{R.fmt(1e3 * a.get('worn_mass_kg', float('nan')), '{:.3g}')} g")
+    return [("result", line) for line in a.get("headline", [])]
+
+
 def _number(v):
     try:
         return float(v)
@@ -130,11 +190,15 @@ def parameter_sweep_report(folder, sweep):
 
 
 # The report section of each slab or dynamic test kind.
-SECTIONS = {"impact": impact_section}
+SECTIONS = {"impact": impact_section, "cantilever": cantilever_section,
+            "vibration": vibration_section, "abrasion": abrasion_section}
 
 CAPTIONS = {
     "impact.png": "The ball: velocity, indentation and contact forces over time",
     "impact_energy.png": "Energy of the impact over time",
     "impact_cracks.png": "Cracks around the impact point",
     "parameter_trends.png": "Results against the swept key",
+    "cantilever.png": "Force against the rod's travel, and the cracks",
+    "vibration.png": "The grip's displacement and force over the cycles, and the cracks",
+    "abrasion.png": "Bulk friction coefficient and the plate's forces against the distance slid",
 }

@@ -153,8 +153,8 @@ std::uint64_t AbrasionTest::start(Simulation& sim, double bar_wave_speed) {
     if (recent.size() > 10) recent.erase(recent.begin());
     const double avg =
         std::accumulate(recent.begin(), recent.end(), 0.0) / static_cast<double>(recent.size());
-    const bool ok =
-        recent.size() == 10 && std::abs(avg - p_.normal_stress) <= kSettleTolerance * p_.normal_stress;
+    const bool ok = recent.size() == 10 &&
+                    std::abs(avg - p_.normal_stress) <= kSettleTolerance * p_.normal_stress;
     held = ok ? held + 1 : 0;
   }
   consolidated_ = held >= 20;
@@ -228,8 +228,8 @@ void AbrasionTest::summarise(const Simulation& sim, nlohmann::json& out) const {
       ++n;
     }
   const double mean = n > 0 ? sum / static_cast<double>(n) : std::nan("");
-  const double sd = n > 1 ? std::sqrt(std::max(0.0, sum2 / static_cast<double>(n) - mean * mean))
-                          : std::nan("");
+  const double sd =
+      n > 1 ? std::sqrt(std::max(0.0, sum2 / static_cast<double>(n) - mean * mean)) : std::nan("");
   std::size_t pieces = 0;
   const double worn = std::max(0.0, worn_mass(sim, density_scaling_, pieces) - unbonded0_);
   pieces = pieces > pieces0_ ? pieces - pieces0_ : 0;
@@ -307,8 +307,9 @@ void AbrasionTest::check_restored(const Simulation& sim, const std::string& wher
   bool ok = plate_ < sim.walls().size();
   for (std::uint32_t i : base_) ok = ok && i < n;
   if (!ok)
-    throw InputError(where, "abrasion test", "wall or particle index",
-                     "refers to a wall or particle the simulation lacks: the checkpoint is corrupt");
+    throw InputError(
+        where, "abrasion test", "wall or particle index",
+        "refers to a wall or particle the simulation lacks: the checkpoint is corrupt");
 }
 
 }  // namespace breccia

@@ -84,13 +84,17 @@ std::uint64_t VibrationTest::start(Simulation& sim, double) {
   return 0;
 }
 
+double VibrationTest::grip_position(double t) const noexcept {
+  const VelocityRamp ramp{0.0, p_.ramp_cycles / p_.frequency};
+  return p_.amplitude * ramp.factor(t) * std::sin(2.0 * std::numbers::pi * p_.frequency * t);
+}
+
 void VibrationTest::control(Simulation& sim) {
-  // The step's velocity moves the face from A sin(w t) to A sin(w (t + dt)) exactly.
-  const double w = 2.0 * std::numbers::pi * p_.frequency, dt = sim.time_step();
-  const double t = sim.time() - t0_;
+  // The step's velocity moves the grip from u(t) to u(t + dt) exactly.
+  const double dt = sim.time_step(), t = sim.time() - t0_;
   elapsed_ = t + dt;
   Vec3 v;
-  v[direction()] = p_.amplitude * (std::sin(w * (t + dt)) - std::sin(w * t)) / dt;
+  v[direction()] = (grip_position(t + dt) - grip_position(t)) / dt;
   ParticleStore& ps = sim.particles_mut();
   for (std::uint32_t i : face_) ps.drive_vel[i] = v;
 }

@@ -5,8 +5,9 @@
 // slab hangs out of it as a cantilever, whose first bending mode lies near 8 kHz for seed 001's
 // 30 mm slabs) or, with grip_length = 0, its bottom face (the grains within grip_depth of z = min;
 // 2D: y = min). The gripped grains are driven so that their displacement is exactly
-// A sin(2 pi f t), along the slab's normal (normal = true) or along its length x; the rest of the
-// slab follows through its bonds and contacts.
+// A r(t) sin(2 pi f t), along the slab's normal (normal = true) or along its length x, where r
+// is the cosine ramp from 0 to 1 over ramp_cycles; the rest of the slab follows through its
+// bonds and contacts.
 //
 // Rows: strain = the grip's displacement over the slab's thickness; stress = the force the grip
 // exerts on the slab along the shaking direction over the gripped face's area; force_top = that
@@ -34,10 +35,10 @@ class VibrationTest final : public Protocol {
       "classes.";
   struct Params {
     double frequency = 8157.0, amplitude = 50e-6, cycles = 10.0, grip_length = 10e-3;
-    double grip_depth = 0.0;
+    double grip_depth = 0.0, ramp_cycles = 1.0;
     bool normal = true;
   };
-  static constexpr std::array<ParamField<Params>, 6> fields() {
+  static constexpr std::array<ParamField<Params>, 7> fields() {
     return {{
         {"frequency", "Hz", &Params::frequency, 0, kInf, false, true,
          "shaking frequency f (seed 001: 8157 Hz)"},
@@ -50,6 +51,9 @@ class VibrationTest final : public Protocol {
         {"grip_depth", "m", &Params::grip_depth, 0, kInf, true, true,
          "grip_length = 0: grains whose centres lie this close to the bottom face are shaken; 0 "
          "= one largest grain diameter"},
+        {"ramp_cycles", "-", &Params::ramp_cycles, 0, 1e6, true, true,
+         "the amplitude grows from 0 through a cosine ramp over this many cycles, as a shaker "
+         "starts (0: the full sine from the first step, a jump of the grip's speed to A 2 pi f)"},
         {"normal", "-", &Params::normal, 0, 0, true, true,
          "shake along the slab's normal (true) or along its length x (false)"},
     }};
@@ -101,6 +105,7 @@ class VibrationTest final : public Protocol {
   template <class Archive>
   void transfer(Archive& a);
   int direction() const noexcept { return p_.normal ? axis_ : 0; }
+  double grip_position(double t) const noexcept;          // A r(t) sin(2 pi f t), t from the start
   double face_displacement(const Simulation& sim) const;  // mean, along the shaking direction
   double face_force(const Simulation& sim) const;         // on the slab, along it
 
