@@ -143,7 +143,8 @@ class RunFolder(_Folder):
 
 
 class SweepFolder(_Folder):
-    """A sweep (confining stresses or strain rates): its runs, trends and fits."""
+    """A sweep (confining stresses, strain rates, or the values of one key): its runs, trends
+    and fits."""
 
     MARKER, KIND = "sweep.json", "sweep folder"
 
