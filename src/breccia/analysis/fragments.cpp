@@ -90,4 +90,17 @@ FragmentResult find_fragments(const std::vector<double>& mass, const std::vector
   return r;
 }
 
+FragmentResult find_fragments(const ParticleStore& p,
+                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
+                              double density_scaling) {
+  std::vector<double> mass(p.size()), vol(p.size());
+  std::vector<Vec3> x(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    vol[i] = p.mass[i] / p.density[i];
+    mass[i] = p.mass[i] / density_scaling;
+    x[i] = p.pos_rad[i].x;
+  }
+  return find_fragments(mass, vol, x, bonds);
+}
+
 }  // namespace breccia::analysis

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "breccia/core/vec3.hpp"
+#include "breccia/state/particle_store.hpp"
 
 namespace breccia::analysis {
 
@@ -36,5 +37,11 @@ struct FragmentResult {
 FragmentResult find_fragments(const std::vector<double>& mass, const std::vector<double>& volume,
                               const std::vector<Vec3>& position,
                               const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds);
+
+// The fragments of a particle store: volumes from mass and density, masses divided by the run's
+// density scaling (the grains' own density).
+FragmentResult find_fragments(const ParticleStore& p,
+                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
+                              double density_scaling);
 
 }  // namespace breccia::analysis

@@ -1001,6 +1001,16 @@ std::size_t Simulation::intact_bonds() const noexcept {
   return n;
 }
 
+std::vector<std::pair<std::uint32_t, std::uint32_t>> Simulation::intact_bond_pairs() const {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+  auto one = [&](const auto& b) {
+    for (std::size_t k = 0; k < b.size(); ++k)
+      if (b.intact[k]) out.emplace_back(b.pairs.first[k], b.pairs.second[k]);
+  };
+  std::apply([&](const auto&... set) { (one(set), ...); }, bonds_);
+  return out;
+}
+
 std::size_t Simulation::joint_count() const noexcept {
   std::size_t n = 0;
   std::apply([&](const auto&... set) { ((n += set.size()), ...); }, joints_);

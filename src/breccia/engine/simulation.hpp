@@ -208,6 +208,8 @@ class Simulation {
   std::size_t bonded_joints() const noexcept;
   const ContactModel& contact_model() const noexcept { return contact_; }
   std::size_t intact_bonds() const noexcept;
+  // The particle index pairs of the intact bonds of every law (fragments, wear).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> intact_bond_pairs() const;
   // The moduli of the bond law called `law` with this simulation's parameters (crack records
   // name their law); zero for a name that is not a bond law.
   BondModuli bond_moduli(std::string_view law) const noexcept;

@@ -25,27 +25,8 @@ constexpr double kSettleTolerance = 0.02;
 
 // The mass no longer bonded to the slab: every fragment but the largest (which holds the base).
 double worn_mass(const Simulation& sim, double density_scaling, std::size_t& pieces) {
-  const ParticleStore& p = sim.particles();
-  std::vector<double> vol(p.size());
-  std::vector<Vec3> x(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    vol[i] = p.mass[i] / p.density[i];
-    x[i] = p.pos_rad[i].x;
-  }
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> bonds;
-  std::apply(
-      [&](const auto&... set) {
-        (
-            [&](const auto& b) {
-              for (std::size_t k = 0; k < b.size(); ++k)
-                if (b.intact[k]) bonds.emplace_back(b.pairs.first[k], b.pairs.second[k]);
-            }(set),
-            ...);
-      },
-      sim.bonds());
-  std::vector<double> mass = p.mass;
-  for (double& m : mass) m /= density_scaling;  // the grains' own density
-  const analysis::FragmentResult f = analysis::find_fragments(mass, vol, x, bonds);
+  const analysis::FragmentResult f =
+      analysis::find_fragments(sim.particles(), sim.intact_bond_pairs(), density_scaling);
   pieces = f.fragments.empty() ? 0 : f.fragments.size() - 1;
   return f.total_mass - f.largest_mass;
 }
@@ -83,16 +64,7 @@ AbrasionTest::AbrasionTest(Simulation& sim, const Params& p, double density_scal
     : p_(p), density_scaling_(density_scaling) {
   ParticleStore& ps = sim.particles_mut();
   axis_ = ps.planar() ? 1 : 2;
-  const double inf = std::numeric_limits<double>::infinity();
-  Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-  double r_max = 0.0;
-  for (const PosRad& q : ps.pos_rad) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], q.x[k] - q.r);
-      hi[k] = std::max(hi[k], q.x[k] + q.r);
-    }
-    r_max = std::max(r_max, q.r);
-  }
+  const auto [lo, hi, r_max] = sample_bounds(ps);
   length_ = hi.x - lo.x;
   width_ = ps.planar() ? ps.thickness() : hi.y - lo.y;
   area_ = length_ * width_;
@@ -121,24 +93,7 @@ void AbrasionTest::drive(Simulation& sim, double sliding_factor) {
 }
 
 std::uint64_t AbrasionTest::start(Simulation& sim, double bar_wave_speed) {
-  // Smallest servo stiffness: one wall contact of a mean-size grain at a small overlap.
-  {
-    double rsum = 0.0;
-    for (const PosRad& q : sim.particles().pos_rad) rsum += q.r;
-    const double r = rsum / static_cast<double>(sim.particles().size());
-    const bool planar = sim.particles().planar();
-    const double t = sim.particles().thickness();
-    std::visit(
-        [&]<class CL>(const ContactSet<CL>& c) {
-          PairGeometry g = pair_geometry({}, r, {0, 0, 2 * r}, r, {}, {}, {}, {}, 1, 1, planar, t);
-          g.wall = true;
-          g.delta = 1e-4 * r;
-          double kn = 0.0, ks = 0.0;
-          CL::timestep_stiffness(c.wall_params, g, kn, ks);
-          k_min_ = kn;
-        },
-        sim.contact_model());
-  }
+  k_min_ = smallest_wall_stiffness(sim);
   // The plate settles on the slab at the normal stress before it slides.
   const std::uint64_t step0 = sim.step_count();
   std::vector<double> recent;

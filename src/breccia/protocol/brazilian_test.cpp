@@ -58,16 +58,7 @@ void BrazilianTest::check(const Params&, const SampleInfo& s, const std::string&
 
 BrazilianTest::BrazilianTest(Simulation& sim, const Params& p, const SampleInfo& s) : p_(p) {
   const ParticleStore& ps = sim.particles();
-  const double inf = std::numeric_limits<double>::infinity();
-  Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-  double r_max = 0.0;
-  for (const PosRad& q : ps.pos_rad) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], q.x[k] - q.r);
-      hi[k] = std::max(hi[k], q.x[k] + q.r);
-    }
-    r_max = std::max(r_max, q.r);
-  }
+  const auto [lo, hi, r_max] = sample_bounds(ps);
   centre_ = (lo + hi) * 0.5;
   t_ = ps.planar() ? ps.thickness() : hi.z - lo.z;
   check_disc(hi.y - lo.y, t_, r_max, ps.planar(), "brazilian test");

@@ -47,13 +47,7 @@ std::unique_ptr<Protocol> CantileverTest::create(Simulation& sim, const Params& 
 CantileverTest::CantileverTest(Simulation& sim, const Params& p) : p_(p) {
   ParticleStore& ps = sim.particles_mut();
   axis_ = ps.planar() ? 1 : 2;
-  const double inf = std::numeric_limits<double>::infinity();
-  Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-  for (const PosRad& q : ps.pos_rad)
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], q.x[k] - q.r);
-      hi[k] = std::max(hi[k], q.x[k] + q.r);
-    }
+  const auto [lo, hi, r_max] = sample_bounds(ps);
   x_lo_ = lo.x;
   length_ = hi.x - lo.x;
   root_ = lo.x + p.clamp_length;
@@ -163,19 +157,30 @@ std::vector<double> crack_distances(const std::vector<CrackRecord>& cracks, doub
 
 }  // namespace
 
-void CantileverTest::summarise(const Simulation& sim, nlohmann::json& out) const {
-  std::size_t ip = 0;
+CantileverTest::Curve CantileverTest::read_curve() const {
+  Curve c;
   for (std::size_t k = 0; k < force_.size(); ++k)
-    if (force_[k] > force_[ip]) ip = k;
-  const double f_max = force_.empty() ? 0.0 : force_[ip];
-  // Initial stiffness: the slope of force on deflection over 10-50 % of the peak, before it.
+    if (force_[k] > force_[c.peak]) c.peak = k;
+  c.f_max = force_.empty() ? 0.0 : force_[c.peak];
+  c.travel_at_max = force_.empty() ? 0.0 : deflection_[c.peak];
+  // Initial stiffness: the slope of force on travel over 10-50 % of the peak, before it.
+  // Quasi-static: the vice carries what the rod puts on the beam (rows above 10 %, up to it).
   std::vector<double> x, y;
-  for (std::size_t k = 0; k <= ip && k < force_.size(); ++k)
-    if (force_[k] >= 0.1 * f_max && force_[k] <= 0.5 * f_max) {
-      x.push_back(deflection_[k]);
-      y.push_back(force_[k]);
-    }
-  const analysis::LinearFit fit = analysis::fit_line(x, y, 3);
+  for (std::size_t k = 0; k <= c.peak && k < force_.size(); ++k) {
+    if (force_[k] < 0.1 * c.f_max) continue;
+    c.imbalance = std::max(c.imbalance, std::abs(force_[k] - vice_load_[k]) / force_[k]);
+    if (force_[k] > 0.5 * c.f_max) continue;
+    x.push_back(deflection_[k]);
+    y.push_back(force_[k]);
+  }
+  c.stiffness = analysis::fit_line(x, y, 3);
+  return c;
+}
+
+void CantileverTest::summarise(const Simulation& sim, nlohmann::json& out) const {
+  const Curve curve = read_curve();
+  const double f_max = curve.f_max, imbalance = curve.imbalance;
+  const analysis::LinearFit& fit = curve.stiffness;
   const std::vector<double> d = crack_distances(sim.cracks(), root_);
   std::size_t near_root = 0, in_vice = 0;
   for (double v : d) {
@@ -184,16 +189,10 @@ void CantileverTest::summarise(const Simulation& sim, nlohmann::json& out) const
   }
   const double n = static_cast<double>(std::max<std::size_t>(d.size(), 1));
   const double strength = 6.0 * f_max * free_length_ / (width_ * thickness_ * thickness_);
-  // Quasi-static: the vice carries what the pusher puts on the beam (rows above 10 % of the
-  // peak, up to it).
-  double imbalance = 0.0;
-  for (std::size_t k = 0; k <= ip && k < force_.size(); ++k)
-    if (force_[k] >= 0.1 * f_max)
-      imbalance = std::max(imbalance, std::abs(force_[k] - vice_load_[k]) / force_[k]);
   std::vector<std::string> headline{
       fmt::format("largest force {:.4g} N at a rod travel of {:.3g} mm; flexural strength "
                   "6 F L / (b h^2) = {:.3g} MPa",
-                  f_max, 1e3 * (force_.empty() ? 0.0 : deflection_[ip]), 1e-6 * strength),
+                  f_max, 1e3 * curve.travel_at_max, 1e-6 * strength),
       fmt::format("slab {:.3g} mm thick, {:.3g} mm wide; {:.3g} mm in the vice, lever {:.3g} "
                   "mm; initial stiffness {}",
                   1e3 * thickness_, 1e3 * width_, 1e3 * p_.clamp_length, 1e3 * free_length_,
@@ -211,10 +210,10 @@ void CantileverTest::summarise(const Simulation& sim, nlohmann::json& out) const
          {"sweep_metrics",
           {{"max_force_n", f_max},
            {"flexural_strength_pa", strength},
-           {"deflection_at_max_m", force_.empty() ? 0.0 : deflection_[ip]},
+           {"deflection_at_max_m", curve.travel_at_max},
            {"initial_stiffness_n_per_m", fit.valid ? nlohmann::json(fit.slope) : nullptr}}},
          {"max_force_n", f_max},
-         {"deflection_at_max_force_m", force_.empty() ? 0.0 : deflection_[ip]},
+         {"deflection_at_max_force_m", curve.travel_at_max},
          {"flexural_strength_pa", strength},
          {"flexural_strength_method",
           "bending stress at the root of an elastic cantilever under an end load: 6 F_max L / (b "

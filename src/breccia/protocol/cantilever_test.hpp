@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "breccia/analysis/stress_strain.hpp"
 #include "breccia/law/param_table.hpp"
 #include "breccia/protocol/protocol.hpp"
 
@@ -101,6 +102,13 @@ class CantileverTest final : public Protocol {
   double rod_force(const Simulation& sim) const;
   double vice_force(const Simulation& sim) const;
   double deflection(const Simulation& sim) const;  // the rod's travel, down
+  // The force-travel curve of the rows: its peak, initial stiffness and quasi-static check.
+  struct Curve {
+    std::size_t peak = 0;
+    double f_max = 0.0, travel_at_max = 0.0, imbalance = 0.0;
+    analysis::LinearFit stiffness;
+  };
+  Curve read_curve() const;
 
   Params p_;
   int axis_ = 2;

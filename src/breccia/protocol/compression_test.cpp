@@ -23,14 +23,7 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
   // Membranes are 2D only, a cylindrical wall 3D only.
   if (planar_ && lateral_ == LateralBoundary::Cylinder) lateral_ = LateralBoundary::Prism;
   if (!planar_ && lateral_ == LateralBoundary::Membrane) lateral_ = LateralBoundary::Prism;
-  const double inf = std::numeric_limits<double>::infinity();
-  Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-  for (const PosRad& q : p.pos_rad) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], q.x[k] - q.r);
-      hi[k] = std::max(hi[k], q.x[k] + q.r);
-    }
-  }
+  const auto [lo, hi, r_max] = sample_bounds(p);
   Vec3 up{};
   up[axis_] = 1.0;
   Wall b = Wall::plane("platen_bottom", lo, up);
@@ -54,7 +47,7 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
       }
     }
   } else if (!confined()) {
-    find_face_grains(sim, -inf, inf, face_);  // they measure the lateral strain (§1.1)
+    find_face_grains(sim, -kInf, kInf, face_);  // they measure the lateral strain (§1.1)
   }
   servo_ = StressServo{st_.confining_stress, st_.servo_relaxation, 10.0 * st_.platen_speed};
 }
@@ -217,23 +210,7 @@ void PlatenCompression::control(Simulation& sim) {
 }
 
 std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
-  // Smallest servo stiffness: one wall contact of a mean-size particle at a small overlap.
-  {
-    double rsum = 0.0;
-    for (const PosRad& q : sim.particles().pos_rad) rsum += q.r;
-    const double r = rsum / static_cast<double>(sim.particles().size());
-    std::visit(
-        [&]<class CL>(const ContactSet<CL>& c) {
-          PairGeometry g =
-              pair_geometry({}, r, {0, 0, 2 * r}, r, {}, {}, {}, {}, 1, 1, planar_, thickness_);
-          g.wall = true;
-          g.delta = 1e-4 * r;
-          double kn = 0.0, ks = 0.0;
-          CL::timestep_stiffness(c.wall_params, g, kn, ks);
-          k_min_ = kn;
-        },
-        sim.contact_model());
-  }
+  k_min_ = smallest_wall_stiffness(sim);
   auto& W = sim.walls();
   const std::uint64_t step0 = sim.step_count();
   if (confined()) {

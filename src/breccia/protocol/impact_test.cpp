@@ -76,13 +76,7 @@ ImpactTest::ImpactTest(Simulation& sim, const Params& p) : p_(p) {
   if (ps.size() == 0)
     throw InputError("impact test", "sample", "(empty)", "the slab has no grains");
   axis_ = ps.planar() ? 1 : 2;
-  const double inf = std::numeric_limits<double>::infinity();
-  Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-  for (const PosRad& q : ps.pos_rad)
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], q.x[k] - q.r);
-      hi[k] = std::max(hi[k], q.x[k] + q.r);
-    }
+  const auto [lo, hi, r_max] = sample_bounds(ps);
   top0_ = hi[axis_];
   thickness_ = hi[axis_] - lo[axis_];
   width_[0] = hi.x - lo.x;

@@ -9,11 +9,13 @@
 // moduli, strengths, quasi-static checks. Slab and dynamic tests (impact, cantilever, ...) are
 // not: they say so with `stress_strain_test()`, add their own history columns and their own
 // block of summary.json, and report their progress in their own measure (time, displacement).
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "breccia/engine/simulation.hpp"
@@ -55,6 +57,46 @@ struct SampleInfo {
   // The run's mass scaling (physics.md §1.5): dynamic tests measure inertia and refuse it.
   double density_scaling = 1.0;
 };
+
+// The box the grains' surfaces span, and the largest radius: where a test puts its walls.
+struct SampleBounds {
+  Vec3 lo, hi;
+  double r_max = 0.0;
+};
+inline SampleBounds sample_bounds(const ParticleStore& p) {
+  const double inf = std::numeric_limits<double>::infinity();
+  SampleBounds b{{inf, inf, inf}, {-inf, -inf, -inf}, 0.0};
+  for (const PosRad& q : p.pos_rad) {
+    for (int k = 0; k < 3; ++k) {
+      b.lo[k] = std::min(b.lo[k], q.x[k] - q.r);
+      b.hi[k] = std::max(b.hi[k], q.x[k] + q.r);
+    }
+    b.r_max = std::max(b.r_max, q.r);
+  }
+  return b;
+}
+
+// The smallest stiffness a wall servo divides by (physics.md §6.2): one wall contact of a
+// mean-size grain at a small overlap, so that a wall without contacts still moves at a bounded
+// speed.
+inline double smallest_wall_stiffness(const Simulation& sim) {
+  const ParticleStore& p = sim.particles();
+  double rsum = 0.0;
+  for (const PosRad& q : p.pos_rad) rsum += q.r;
+  const double r = rsum / static_cast<double>(p.size());
+  double k = 0.0;
+  std::visit(
+      [&]<class CL>(const ContactSet<CL>& c) {
+        PairGeometry g =
+            pair_geometry({}, r, {0, 0, 2 * r}, r, {}, {}, {}, {}, 1, 1, p.planar(), p.thickness());
+        g.wall = true;
+        g.delta = 1e-4 * r;
+        double ks = 0.0;
+        CL::timestep_stiffness(c.wall_params, g, k, ks);
+      },
+      sim.contact_model());
+  return k;
+}
 
 // What a test will need, checked before it runs (run/sample_build.cpp): the simulated time, the
 // fastest boundary speed, the largest strain its bins and snapshots span, and the keys and

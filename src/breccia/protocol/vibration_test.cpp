@@ -45,16 +45,7 @@ std::unique_ptr<Protocol> VibrationTest::create(Simulation& sim, const Params& p
 VibrationTest::VibrationTest(Simulation& sim, const Params& p) : p_(p) {
   ParticleStore& ps = sim.particles_mut();
   axis_ = ps.planar() ? 1 : 2;
-  const double inf = std::numeric_limits<double>::infinity();
-  Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-  double r_max = 0.0;
-  for (const PosRad& q : ps.pos_rad) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], q.x[k] - q.r);
-      hi[k] = std::max(hi[k], q.x[k] + q.r);
-    }
-    r_max = std::max(r_max, q.r);
-  }
+  const auto [lo, hi, r_max] = sample_bounds(ps);
   thickness_ = hi[axis_] - lo[axis_];
   bottom0_ = lo[axis_];
   length_ = hi.x - lo.x;

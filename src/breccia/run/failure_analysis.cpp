@@ -372,29 +372,8 @@ void write_indicators(const fs::path& folder, const FailureInputs& in, const Cra
 // Fragments (§9): connected components of the intact bonds, written to fragments.csv; returns
 // their summary.
 json fragments_summary(const fs::path& folder, const FailureInputs& in) {
-  const Simulation& sim = in.sim;
-  const ParticleStore& p = sim.particles();
-  std::vector<double> vol(p.size());
-  std::vector<Vec3> x(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    vol[i] = p.mass[i] / p.density[i];
-    x[i] = p.pos_rad[i].x;
-  }
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> bonds;
-  std::apply(
-      [&](const auto&... set) {
-        (
-            [&](const auto& b) {
-              for (std::size_t k = 0; k < b.size(); ++k)
-                if (b.intact[k]) bonds.emplace_back(b.pairs.first[k], b.pairs.second[k]);
-            }(set),
-            ...);
-      },
-      sim.bonds());
-  // Masses in the grain density (density scaling removed).
-  std::vector<double> mass = p.mass;
-  for (double& m : mass) m /= in.spec.density_scaling;
-  const analysis::FragmentResult f = analysis::find_fragments(mass, vol, x, bonds);
+  const analysis::FragmentResult f = analysis::find_fragments(
+      in.sim.particles(), in.sim.intact_bond_pairs(), in.spec.density_scaling);
   std::string t = "fragment_id,particles,mass_kg,volume_m3,x_m,y_m,z_m,fraction_of_largest,class\n";
   for (std::size_t k = 0; k < f.fragments.size(); ++k) {
     const auto& fr = f.fragments[k];
