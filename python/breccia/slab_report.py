@@ -130,12 +130,12 @@ def vibration_section(folder, summary, hist, cracks, outdir, figures):
 
 
 def abrasion_section(folder, summary, hist, cracks, outdir, figures):
-    """The bulk friction coefficient and the plate's forces against the distance slid."""
+    """The bulk friction coefficient and the abrader's forces against the distance slid."""
     a = summary.get("abrasion", {})
     _two_panels(hist, outdir, figures, "abrasion.png", ("slid_m", 1e3), "distance slid (mm)",
                 [("bulk_friction", 1.0, "bulk friction coefficient", "k")],
-                [("plate_normal_force_n", 1.0, "normal force (N)", "tab:blue"),
-                 ("plate_shear_force_n", 1.0, "shear force (N)", "tab:red")],
+                [("abrader_normal_force_n", 1.0, "normal force (N)", "tab:blue"),
+                 ("abrader_shear_force_n", 1.0, "shear force (N)", "tab:red")],
                 f"Abrasion: bulk friction {R.fmt(a.get('bulk_friction_mean'), '{:.3f}')} over "
                 f"the second half; worn off "
                 f"{R.fmt(1e3 * a.get('worn_mass_kg', float('nan')), '{:.3g}')} g")

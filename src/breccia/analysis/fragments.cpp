@@ -92,15 +92,20 @@ FragmentResult find_fragments(const std::vector<double>& mass, const std::vector
 
 FragmentResult find_fragments(const ParticleStore& p,
                               const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
-                              double density_scaling) {
-  std::vector<double> mass(p.size()), vol(p.size());
-  std::vector<Vec3> x(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) {
+                              double density_scaling, std::size_t count) {
+  const std::size_t n = std::min(count, p.size());
+  std::vector<double> mass(n), vol(n);
+  std::vector<Vec3> x(n);
+  for (std::size_t i = 0; i < n; ++i) {
     vol[i] = p.mass[i] / p.density[i];
     mass[i] = p.mass[i] / density_scaling;
     x[i] = p.pos_rad[i].x;
   }
-  return find_fragments(mass, vol, x, bonds);
+  if (n == p.size()) return find_fragments(mass, vol, x, bonds);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> among;
+  for (const auto& b : bonds)
+    if (b.first < n && b.second < n) among.push_back(b);
+  return find_fragments(mass, vol, x, among);
 }
 
 }  // namespace breccia::analysis

@@ -4,6 +4,7 @@
 // the largest fragment: smallest f < 0.1, biggest f > 0.9, intermediate otherwise.
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -38,10 +39,12 @@ FragmentResult find_fragments(const std::vector<double>& mass, const std::vector
                               const std::vector<Vec3>& position,
                               const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds);
 
-// The fragments of a particle store: volumes from mass and density, masses divided by the run's
-// density scaling (the grains' own density).
+// The fragments of the first `count` particles of a store (the rock; a test's apparatus grains
+// follow them): volumes from mass and density, masses divided by the run's density scaling (the
+// grains' own density). Bonds to particles beyond `count` are left out.
 FragmentResult find_fragments(const ParticleStore& p,
                               const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
-                              double density_scaling);
+                              double density_scaling,
+                              std::size_t count = std::numeric_limits<std::size_t>::max());
 
 }  // namespace breccia::analysis

@@ -43,10 +43,16 @@ struct StressServo {
   void drive_pi(Wall& w, double area, double dt, double min_stiffness,
                 double& integral) const noexcept {
     const double stress = dot(w.force, w.normal) / area;
-    const double p = speed(stress, area, w.contact_stiffness, dt, min_stiffness);
-    integral = std::clamp(integral + kIntegralShare * p, -max_speed, max_speed);
     w.controlled = true;
-    w.velocity = w.normal * std::clamp(p + integral, -max_speed, max_speed);
+    w.velocity =
+        w.normal * speed_pi(stress, area, w.contact_stiffness, dt, min_stiffness, integral);
+  }
+  // The proportional-integral speed itself, for a body that is not a wall (a grit layer).
+  double speed_pi(double measured_stress, double area, double contact_stiffness, double dt,
+                  double min_stiffness, double& integral) const noexcept {
+    const double p = speed(measured_stress, area, contact_stiffness, dt, min_stiffness);
+    integral = std::clamp(integral + kIntegralShare * p, -max_speed, max_speed);
+    return std::clamp(p + integral, -max_speed, max_speed);
   }
 
   // Drives a cylinder wall of length `height` through its radius (positive speed shrinks it);

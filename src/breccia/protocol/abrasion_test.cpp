@@ -7,6 +7,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <variant>
 
 #include "breccia/analysis/fragments.hpp"
 #include "breccia/core/archive.hpp"
@@ -23,10 +24,16 @@ namespace {
 constexpr std::uint64_t kMaxSettleSteps = 200000;
 constexpr double kSettleTolerance = 0.02;
 
-// The mass no longer bonded to the slab: every fragment but the largest (which holds the base).
-double worn_mass(const Simulation& sim, double density_scaling, std::size_t& pieces) {
+// The grit layer's grains stand this far apart and this high above the top face, as fractions
+// of their radius: clear of each other (no grit-grit contact) and of the slab at the start.
+constexpr double kGritSpacing = 2.002, kGritClearance = 1.01;
+
+// The mass no longer bonded to the slab: every fragment but the largest (which holds the base),
+// among the rock's grains.
+double worn_mass(const Simulation& sim, std::size_t rock, double density_scaling,
+                 std::size_t& pieces) {
   const analysis::FragmentResult f =
-      analysis::find_fragments(sim.particles(), sim.intact_bond_pairs(), density_scaling);
+      analysis::find_fragments(sim.particles(), sim.intact_bond_pairs(), density_scaling, rock);
   pieces = f.fragments.empty() ? 0 : f.fragments.size() - 1;
   return f.total_mass - f.largest_mass;
 }
@@ -79,17 +86,88 @@ AbrasionTest::AbrasionTest(Simulation& sim, const Params& p, double density_scal
   if (base_.empty() || base_.size() == ps.size())
     throw InputError("abrasion test", "test.base_depth", num(depth),
                      "the held base must hold some grains and leave the rest free");
-  Vec3 down;
-  down[axis_] = -1.0;
-  plate_ = sim.add_wall(Wall::plane("abrading_plate", hi, down));
+  if (p.flat_plate) {
+    Vec3 down;
+    down[axis_] = -1.0;
+    plate_ = sim.add_wall(Wall::plane("abrading_plate", hi, down));
+  } else {
+    add_grit(sim, {lo, hi, r_max});
+  }
+}
+
+void AbrasionTest::add_grit(Simulation& sim, const SampleBounds& b) {
+  ParticleStore& ps = sim.particles_mut();
+  const double r = p_.grit_radius > 0.0 ? p_.grit_radius : b.r_max;
+  const double s = kGritSpacing * r;
+  // From slide_distance behind the slab's x = min end to its x = max end (plus a grain either
+  // side), so that the layer covers the top face all along the slide. 3D: a hexagonal layer
+  // whose rows run across the sliding direction, each row shifted by half a spacing, so the
+  // grains' tracks lie a radius apart.
+  const double x_lo = b.lo.x - p_.slide_distance - s, x_hi = b.hi.x + s;
+  const double row_pitch = ps.planar() ? s : s * std::sqrt(3.0) / 2.0;
+  std::uint64_t tag = 0;
+  for (std::uint64_t t : ps.tag) tag = std::max(tag, t);
+  ParticleSpec grit;
+  grit.radius = r;
+  grit.density = ps.density.front();  // the rock's (scaled) density: the same time step
+  grit.motion = Motion::Driven;
+  grit.position[axis_] = b.hi[axis_] + kGritClearance * r;
+  for (int row = 0; x_lo + row * row_pitch <= x_hi; ++row) {
+    grit.position.x = x_lo + row * row_pitch;
+    if (ps.planar()) {
+      grit.tag = ++tag;
+      grit_.push_back(static_cast<std::uint32_t>(ps.add(grit)));
+      continue;
+    }
+    for (double y = b.lo.y + (row % 2 == 0 ? 0.0 : 0.5 * s); y <= b.hi.y + 0.5 * s; y += s) {
+      grit.position.y = y;
+      grit.tag = ++tag;
+      grit_.push_back(static_cast<std::uint32_t>(ps.add(grit)));
+    }
+  }
+  // The servo's stiffness bound: one grit-grain contact of a mean-size grain at an overlap of
+  // 1 % of its radius (the law's tangent stiffness there; for Hertz it grows with the overlap).
+  double rsum = 0.0;
+  for (std::size_t i = 0; i < grit_.front(); ++i) rsum += ps.pos_rad[i].r;
+  const double rm = rsum / static_cast<double>(grit_.front());
+  std::visit(
+      [&]<class CL>(const ContactSet<CL>& c) {
+        PairGeometry g = pair_geometry({}, r, {0, 0, r + rm}, rm, {}, {}, {}, {}, 1, 1, ps.planar(),
+                                       ps.thickness());
+        g.delta = 0.01 * rm;
+        double ks = 0.0;
+        CL::timestep_stiffness(c.params, g, grit_contact_stiffness_, ks);
+      },
+      sim.contact_model());
 }
 
 void AbrasionTest::drive(Simulation& sim, double sliding_factor) {
-  Wall& w = sim.walls()[plate_];
-  StressServo servo{p_.normal_stress, p_.servo_relaxation, 10.0 * p_.sliding_speed};
-  // Along its normal the servo alone; the sliding adds its own component.
-  servo.drive(w, area_, sim.time_step(), k_min_);
-  w.velocity.x = p_.sliding_speed * sliding_factor;
+  const StressServo servo{p_.normal_stress, p_.servo_relaxation, 10.0 * p_.sliding_speed};
+  if (grit_.empty()) {
+    Wall& w = sim.walls()[plate_];
+    // Along its normal the servo alone; the sliding adds its own component.
+    servo.drive(w, area_, sim.time_step(), k_min_);
+    w.velocity.x = p_.sliding_speed * sliding_factor;
+    return;
+  }
+  // The grit layer moves as one body: the servo divides by an upper bound of its contacts'
+  // summed stiffness (up to 3 contacts per touching grit grain, each at the bound above), so it
+  // cannot overshoot into instability; its integral part takes out the lag that this low gain
+  // leaves while the layer rides up and down over the grains (2.2 % of the normal force at
+  // 0.2 m/s on the tiny slab of tests/test_protocols.cpp without it).
+  ParticleStore& ps = sim.particles_mut();
+  std::size_t touching = 0;
+  for (std::uint32_t i : grit_) touching += ps.force[i][axis_] != 0.0 ? 1 : 0;
+  const double k =
+      3.0 * static_cast<double>(std::max<std::size_t>(touching, 1)) * grit_contact_stiffness_;
+  Vec3 v;
+  v[axis_] = -servo.speed_pi(normal_force(sim) / area_, area_, k, sim.time_step(), k_min_,
+                             servo_integral_);
+  v.x = p_.sliding_speed * sliding_factor;
+  for (std::uint32_t i : grit_) {
+    ps.drive_vel[i] = v;
+    ps.drive_angvel[i] = {};
+  }
 }
 
 std::uint64_t AbrasionTest::start(Simulation& sim, double bar_wave_speed) {
@@ -115,10 +193,10 @@ std::uint64_t AbrasionTest::start(Simulation& sim, double bar_wave_speed) {
   consolidated_ = held >= 20;
   // Grains a sample leaves without bonds are not wear.
   std::size_t pieces = 0;
-  unbonded0_ = worn_mass(sim, density_scaling_, pieces);
+  unbonded0_ = worn_mass(sim, rock_particles(sim), density_scaling_, pieces);
   pieces0_ = pieces;
   t0_ = sim.time();
-  x0_ = sim.walls()[plate_].point.x;
+  x0_ = position_x(sim);
   ramp_ = p_.ramp_time > 0.0 ? p_.ramp_time
                              : std::max(10.0 * length_ / bar_wave_speed, 1000.0 * sim.time_step());
   return sim.step_count() - step0;
@@ -129,17 +207,31 @@ void AbrasionTest::control(Simulation& sim) {
   drive(sim, ramp.factor(sim.time() + 0.5 * sim.time_step()));
 }
 
+// A wall's force is the force it exerts on the grains; a grain's force is what the slab exerts
+// on it, so the grit's push and drag on the slab are minus its grains' summed forces.
 double AbrasionTest::normal_force(const Simulation& sim) const {
-  const Wall& w = sim.walls()[plate_];
-  return dot(w.force, w.normal);
+  if (grit_.empty()) {
+    const Wall& w = sim.walls()[plate_];
+    return dot(w.force, w.normal);
+  }
+  double f = 0.0;
+  for (std::uint32_t i : grit_) f += sim.particles().force[i][axis_];
+  return f;
 }
 
 double AbrasionTest::shear_force(const Simulation& sim) const {
-  return sim.walls()[plate_].force.x;
+  if (grit_.empty()) return sim.walls()[plate_].force.x;
+  double f = 0.0;
+  for (std::uint32_t i : grit_) f -= sim.particles().force[i].x;
+  return f;
+}
+
+double AbrasionTest::position_x(const Simulation& sim) const {
+  return grit_.empty() ? sim.walls()[plate_].point.x : sim.particles().pos_rad[grit_.front()].x.x;
 }
 
 double AbrasionTest::slid(const Simulation& sim) const {
-  return sim.walls()[plate_].point.x - x0_;
+  return position_x(sim) - x0_;
 }
 
 AxialState AbrasionTest::measure(const Simulation& sim) const {
@@ -158,12 +250,12 @@ bool AbrasionTest::finished(const AxialState& s, std::size_t) {
                                   : std::numeric_limits<double>::quiet_NaN());
   slid_.push_back(s.strain * length_);
   if (s.strain * length_ < p_.slide_distance) return false;
-  stop_reason_ = fmt::format("the plate slid {:.4g} m", p_.slide_distance);
+  stop_reason_ = fmt::format("the abrader slid {:.4g} m", p_.slide_distance);
   return true;
 }
 
 std::vector<std::string> AbrasionTest::history_columns() const {
-  return {"slid_m", "plate_normal_force_n", "plate_shear_force_n", "bulk_friction"};
+  return {"slid_m", "abrader_normal_force_n", "abrader_shear_force_n", "bulk_friction"};
 }
 
 void AbrasionTest::history_values(const Simulation& sim, std::vector<double>& out) const {
@@ -186,18 +278,20 @@ void AbrasionTest::summarise(const Simulation& sim, nlohmann::json& out) const {
   const double sd =
       n > 1 ? std::sqrt(std::max(0.0, sum2 / static_cast<double>(n) - mean * mean)) : std::nan("");
   std::size_t pieces = 0;
-  const double worn = std::max(0.0, worn_mass(sim, density_scaling_, pieces) - unbonded0_);
+  const std::size_t rock = rock_particles(sim);
+  const double worn = std::max(0.0, worn_mass(sim, rock, density_scaling_, pieces) - unbonded0_);
   pieces = pieces > pieces0_ ? pieces - pieces0_ : 0;
   double mass = 0.0;
-  for (double m : sim.particles().mass) mass += m / density_scaling_;
+  for (std::size_t i = 0; i < rock; ++i) mass += sim.particles().mass[i] / density_scaling_;
   const auto num_or_null = [](double v) {
     return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
   };
   out = {
       {"headline",
-       {fmt::format("plate at {:.3g} MPa normal stress slid {:.3g} mm at {:.3g} m/s: bulk friction "
+       {fmt::format("{} at {:.3g} MPa normal stress slid {:.3g} mm at {:.3g} m/s: bulk friction "
                     "coefficient {:.3f} +/- {:.3f} over the second half",
-                    1e-6 * p_.normal_stress, 1e3 * total, p_.sliding_speed, mean, sd),
+                    grit_.empty() ? "plate" : "grit layer", 1e-6 * p_.normal_stress, 1e3 * total,
+                    p_.sliding_speed, mean, sd),
         fmt::format("{} cracks; worn off: {:.4g} g in {} pieces ({:.2f} % of the slab's mass)",
                     sim.cracks().size(), 1e3 * worn, pieces,
                     mass > 0.0 ? 100.0 * worn / mass : 0.0)}},
@@ -206,8 +300,13 @@ void AbrasionTest::summarise(const Simulation& sim, nlohmann::json& out) const {
       {"bulk_friction_mean", num_or_null(mean)},
       {"bulk_friction_sd", num_or_null(sd)},
       {"bulk_friction_method",
-       "shear force on the plate over its normal force (seed 001), mean and spread over the rows "
-       "of the second half of the distance slid; every row is in history.csv"},
+       "shear force on the abrader over its normal force (seed 001), mean and spread over the "
+       "rows of the second half of the distance slid; every row is in history.csv"},
+      {"abrader", grit_.empty() ? "flat plate" : "grit layer"},
+      {"abrader_friction", grit_.empty() ? "contact.wall_friction" : "contact.friction"},
+      {"grit_grains", grit_.size()},
+      {"grit_radius_m", grit_.empty() ? nlohmann::json(nullptr)
+                                      : nlohmann::json(sim.particles().pos_rad[grit_.front()].r)},
       {"normal_stress_pa", p_.normal_stress},
       {"normal_force_target_n", p_.normal_stress * area_},
       {"settled", consolidated_},
@@ -229,6 +328,9 @@ void AbrasionTest::transfer(Archive& a) {
   a.value(axis_);
   a.value(plate_);
   a.vector(base_);
+  a.vector(grit_);
+  a.value(grit_contact_stiffness_);
+  a.value(servo_integral_);
   a.value(length_);
   a.value(width_);
   a.value(area_);
@@ -259,8 +361,9 @@ std::unique_ptr<AbrasionTest> AbrasionTest::restore(ArchiveReader& a) {
 
 void AbrasionTest::check_restored(const Simulation& sim, const std::string& where) const {
   const std::size_t n = sim.particles().size();
-  bool ok = plate_ < sim.walls().size();
+  bool ok = grit_.empty() ? plate_ < sim.walls().size() : !p_.flat_plate;
   for (std::uint32_t i : base_) ok = ok && i < n;
+  for (std::uint32_t i : grit_) ok = ok && i < n;
   if (!ok)
     throw InputError(
         where, "abrasion test", "wall or particle index",

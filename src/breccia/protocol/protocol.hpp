@@ -157,6 +157,12 @@ class Protocol {
   virtual void history_values(const Simulation&, std::vector<double>&) const {}
   // The test's own results, written under its kind in summary.json when it ends.
   virtual void summarise(const Simulation&, nlohmann::json&) const {}
+  // The grains that are rock: the first rock_particles() of the store. A test may append
+  // grains of its own apparatus after them (the abrasion test's grit), which fragments, wear and
+  // porosity leave out.
+  virtual std::size_t rock_particles(const Simulation& sim) const noexcept {
+    return sim.particles().size();
+  }
 
   // Checkpoints: the test's own state (its walls live in the simulation's state).
   virtual void save_state(ArchiveWriter& a) const = 0;

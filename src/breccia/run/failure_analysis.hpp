@@ -6,6 +6,7 @@
 // fragments (fragments.csv) and the energy budget at the test's landmarks. Returns the summary
 // blocks for summary.json.
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "breccia/analysis/compression.hpp"
@@ -28,6 +29,8 @@ struct FailureInputs {
   // false for tests not read as a stress-strain curve (impact, ...): no deformation stages, and
   // the energy budget at the end only.
   bool stress_strain = true;
+  // The rock's grains: the first this many of the store (a test's apparatus grains follow).
+  std::size_t rock_particles = std::numeric_limits<std::size_t>::max();
 };
 
 nlohmann::json write_failure_analysis(const std::filesystem::path& folder, const FailureInputs& in);

@@ -533,9 +533,9 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   json summary = run_summary(spec, ss, result, an, q, warnings, manifest);
   // Failure analysis: events, indicators, stages, fragments, energy budget (analysis.md §2-§9).
   const json failure = write_failure_analysis(
-      folder,
-      FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0, ss.loop.porosity0,
-                    ss.loop.length_min, ss.loop.wave_speed_method, ss.test->stress_strain_test()});
+      folder, FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0,
+                            ss.loop.porosity0, ss.loop.length_min, ss.loop.wave_speed_method,
+                            ss.test->stress_strain_test(), ss.test->rock_particles(sim)});
   for (const auto& [key, value] : failure.items()) summary[key] = value;
   write_json(folder / "summary.json", summary);
   list_run_files(spec, folder, end, manifest, log);
@@ -669,7 +669,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   {
     const ParticleStore& p = sim.particles();
     double solid = 0.0, r_max = 0.0;
-    for (std::size_t i = 0; i < p.size(); ++i) {
+    for (std::size_t i = 0; i < test.rock_particles(sim); ++i) {
       solid += p.mass[i] / p.density[i];
       r_max = std::max(r_max, p.pos_rad[i].r);
     }

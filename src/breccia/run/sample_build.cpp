@@ -367,12 +367,15 @@ Built build(const ExperimentSpec& s, const std::function<void(const std::string&
   sim.initialise();
   // Bar-wave speed for the ramp (§2.3, §6.1): E estimated by the bond modulus, bulk density from
   // the (scaled) particle mass in the sample's bounding box.
+  // The rock's grains only: a test's apparatus grains (abrasion grit) follow them.
+  const std::size_t rock = protocol->rock_particles(sim);
   double mass = 0.0;
-  for (double m : sim.particles().mass) mass += m;
+  for (std::size_t i = 0; i < rock; ++i) mass += sim.particles().mass[i];
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   const int axis = s.dimension == 2 ? 1 : 2;
   double footprint_lo[2] = {lo, lo}, footprint_hi[2] = {hi, hi};
-  for (const PosRad& q : sim.particles().pos_rad) {
+  for (std::size_t i = 0; i < rock; ++i) {
+    const PosRad& q = sim.particles().pos_rad[i];
     lo = std::min(lo, q.x[axis] - q.r);
     hi = std::max(hi, q.x[axis] + q.r);
     for (int k = 0; k < 2; ++k) {
