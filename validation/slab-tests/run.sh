@@ -1,16 +1,35 @@
 #!/usr/bin/env bash
-# Seed 001's slab tests with the four calibrated sandstones (brenna, mucharz, radkow, tumlin):
-# one sweep over the slab thickness per rock and test. Run by hand (not CI): about 70 min on one
-# core for the impact sweeps at two thicknesses. Usage: validation/slab-tests/run.sh [OUT]
-# then: /usr/bin/python3 validation/slab-tests/table.py OUT
+# Seed 001's slab tests with the four calibrated sandstones (brenna, mucharz, radkow, tumlin): one
+# sweep per rock and test, at the examples' settings. Run by hand (not CI). On one core each:
+# impact at 5 and 10 mm about 80 min per rock, cantilever at 6 and 10 mm 30-50 min per rock,
+# vibration at 5 mm about 30 min per rock, abrasion at 2, 30 and 60 MPa about 6 min per rock.
+# Usage: validation/slab-tests/run.sh [OUT [TEST...]]   (TEST: impact cantilever vibration abrasion)
+# then:  /usr/bin/python3 validation/slab-tests/table.py OUT
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 out="${1:-$root/build/validation-slab-tests}"
+shift || true
+tests=("${@:-impact cantilever vibration abrasion}")
 breccia="${BRECCIA:-$root/build/breccia}"
 mkdir -p "$out"
-for rock in brenna mucharz radkow tumlin; do
-  "$breccia" sweep "$root/examples/impact.toml" --set material.preset="\"$rock\"" \
-    --set name="\"impact-$rock\"" --set engine.threads=1 --jobs 1 --output "$out/impact" \
-    --over sample.slab_thickness 5e-3 10e-3
+
+sweep() {  # test rock key values...
+  local test=$1 rock=$2 key=$3
+  shift 3
+  "$breccia" sweep "$root/examples/$test.toml" --set material.preset="\"$rock\"" \
+    --set name="\"$test-$rock\"" --set engine.threads=1 --jobs 1 --output "$out/$test" \
+    --over "$key" "$@"
+}
+
+for test in ${tests[*]}; do
+  for rock in brenna mucharz radkow tumlin; do
+    case $test in
+      impact) sweep impact $rock sample.slab_thickness 5e-3 10e-3 ;;
+      cantilever) sweep cantilever $rock sample.slab_thickness 6e-3 10e-3 ;;
+      vibration) sweep vibration $rock sample.slab_thickness 5e-3 ;;
+      abrasion) sweep abrasion $rock test.normal_stress 2e6 30e6 60e6 ;;
+      *) echo "unknown test '$test': impact, cantilever, vibration or abrasion" >&2; exit 2 ;;
+    esac
+  done
 done

@@ -21,11 +21,16 @@ import sys
 
 
 def runs_of(out, test):
-    """(rock, sweep run, summary) for every run of every sweep of `test` in OUT."""
+    """(rock, sweep run, summary) for every complete run of every sweep of `test` in OUT; the
+    others (interrupted, failed) are named on standard error and left out."""
     for sweep_file in sorted(glob.glob(os.path.join(out, test, "*-sweep", "sweep.json"))):
         sweep = json.load(open(sweep_file))
         rock = sweep["experiment"].replace(test + "-", "")
         for r in sweep["runs"]:
+            if r.get("status") != "complete":
+                print(f"left out: {test} {rock} {r.get('value')}: {r.get('status')}",
+                      file=sys.stderr)
+                continue
             path = os.path.join(os.path.dirname(sweep_file), r["folder"], "summary.json")
             yield rock, r, (json.load(open(path)) if os.path.exists(path) else {})
 
