@@ -8,8 +8,10 @@
 // The abrader is a rough particle surface by default: one hexagonal layer of rigid grit grains
 // (grit_radius, default the sample's largest grain radius; 2D: a row of disks) carried as one
 // body, long enough to cover the top face over the whole slide. The grit touches the slab's
-// grains through the grain contact law, with the grains' friction, so its bulk friction is set
-// by interlocking as well as by friction. With flat_plate = true it is a smooth plane wall whose
+// grains through the grain contact law, with the grains' friction. Riding over the grains makes
+// the shear force swing, but on an unworn elastic slab that part does no net work, so the mean
+// coefficient is the grains' friction (tests/test_protocols.cpp); broken bonds and worn grains
+// rolling under the grit change it. With flat_plate = true it is a smooth plane wall whose
 // only roughness is its Coulomb friction, contact.wall_friction: on an unbreakable slab whose
 // contacts all slide, the bulk coefficient is then that friction exactly
 // (tests/test_protocols.cpp). Either way a servo holds the normal stress (physics.md §6.2):
