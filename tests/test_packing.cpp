@@ -147,6 +147,67 @@ TEST(Structure, ProfileOfAKnownLatticeAndTheSlabVolumes) {
   EXPECT_EQ(s.floaters, 0u);
 }
 
+TEST(Packing, ASlabIsProfiledAlongItsLongestSide) {
+  // The profile runs along the loading axis unless a box is longer across it: eighths of a 5 mm
+  // slab's thickness would be thinner than its grains.
+  Region slab;
+  slab.lx = slab.ly = 0.030;
+  slab.lz = 0.005;
+  EXPECT_EQ(slab.profile_axis(), 0);
+  EXPECT_DOUBLE_EQ(slab.profile_length(), 0.030);
+  Region narrow = slab;
+  narrow.lx = 0.010;
+  EXPECT_EQ(narrow.profile_axis(), 1);
+  Region column = slab;
+  column.lz = 0.060;
+  EXPECT_EQ(column.profile_axis(), 2);
+  Region cube = slab;
+  cube.lz = 0.030;
+  EXPECT_EQ(cube.profile_axis(), 2) << "a tie keeps the loading axis";
+  Region wide{SampleShape::Rectangle, 0.030, 0.005, 0.0, 0.0, 1e-3};
+  EXPECT_EQ(wide.profile_axis(), 0);
+  Region cylinder{SampleShape::Cylinder, 0.0, 0.0, 0.010, 0.020, 1.0};
+  EXPECT_EQ(cylinder.profile_axis(), 2) << "round vessels keep their axis";
+  EXPECT_NEAR(slab.slab_volume(0.0, 0.030), slab.volume(), 1e-18);
+  EXPECT_NEAR(slab.slab_volume(0.0, 0.003), 0.003 * 0.030 * 0.005, 1e-18);
+
+  // A simple cubic slab of touching spheres, 8 x 4 x 2 grains, bonded to its 6 neighbours: each
+  // eighth along x is one layer of 8 grains with 10 bonds inside it (2.5 per grain) and 2 bonds
+  // per grain along x (1 in the end layers): 4.5 bonds per grain inside, 3.5 at the ends.
+  const double r = 1e-3;
+  Region box;
+  box.lx = 8 * 2 * r;
+  box.ly = 4 * 2 * r;
+  box.lz = 2 * 2 * r;
+  std::vector<PosRad> p;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 8; ++i)
+        p.push_back({{(2 * i + 1) * r, (2 * j + 1) * r, (2 * k + 1) * r}, r});
+  auto at = [](int i, int j, int k) { return static_cast<std::uint32_t>((k * 4 + j) * 8 + i); };
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> bonds;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 8; ++i) {
+        if (i < 7) bonds.emplace_back(at(i, j, k), at(i + 1, j, k));
+        if (j < 3) bonds.emplace_back(at(i, j, k), at(i, j + 1, k));
+        if (k < 1) bonds.emplace_back(at(i, j, k), at(i, j, k + 1));
+      }
+  const SampleStructure s = describe_structure(p, bonds, box, 1e-9, 3);
+  EXPECT_EQ(s.profile_axis, 0);
+  ASSERT_EQ(s.profile.size(), 8u);
+  EXPECT_DOUBLE_EQ(s.profile[0].lo, 0.0);
+  EXPECT_DOUBLE_EQ(s.profile[7].hi, 16 * r);
+  for (const ProfileSlice& sl : s.profile) {
+    EXPECT_EQ(sl.grains, 8u);
+    EXPECT_NEAR(sl.solid_fraction, std::numbers::pi / 6, 1e-12);
+  }
+  EXPECT_DOUBLE_EQ(s.profile[0].bonds_per_grain, 3.5);
+  EXPECT_DOUBLE_EQ(s.profile[4].bonds_per_grain, 4.5);
+  EXPECT_DOUBLE_EQ(s.profile[7].bonds_per_grain, 3.5);
+  EXPECT_NEAR(s.homogeneity.end_bonds_deficit, 1.0 / 4.5, 1e-12);
+}
+
 TEST(Packing, ExpansionMeetsTheSampleBars) {
   const PackingSettings s = bar_prism();
   const PackedSample p = pack_sample(s);

@@ -71,6 +71,7 @@ json packing_json(const PackingReport& r) {
        {{"contact_law", r.contact_law},
         {"mean_pa", r.locked_in_mean_stress},
         {"diagonal_pa", {r.locked_in_xx, r.locked_in_yy, r.locked_in_zz}}}},
+      {"profile_axis", std::string(1, "xyz"[ss.profile_axis])},
       {"profile_along_axis", profile},
       {"homogeneity",
        {{"passes", h.passes()},

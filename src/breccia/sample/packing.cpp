@@ -359,11 +359,11 @@ PackedSample pack_sample(const PackingSettings& s,
   log(fmt::format(
       "packing ({}): {} particles, {} steps, porosity {:.4f}, locked-in mean stress {:.4g} MPa "
       "({}), contact coordination {:.2f}, {} bonds ({:.2f} per interior grain), {} floaters "
-      "({:.2f} %), homogeneity {}, {:.1f} s",
+      "({:.2f} %), homogeneity {} (eighths along {}), {:.1f} s",
       rep.method, ss.particles, rep.steps, ss.porosity, rep.locked_in_mean_stress * 1e-6,
       rep.contact_law, ss.contact_coordination, ss.bonds, ss.bonds_per_interior_particle,
       ss.floaters, 100.0 * static_cast<double>(ss.floaters) / static_cast<double>(ss.particles),
-      ss.homogeneity.passes() ? "passes" : "FAILS", rep.wall_seconds));
+      ss.homogeneity.passes() ? "passes" : "FAILS", "xyz"[ss.profile_axis], rep.wall_seconds));
   for (const std::string& w : rep.warnings) log("warning: " + w);
   out.report = std::move(rep);
   return out;

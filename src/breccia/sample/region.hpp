@@ -1,7 +1,7 @@
 #pragma once
 // The vessel a sample is packed in: a prism or a cylinder (3D, axis z), a rectangle or a disk (2D,
 // in the x-y plane). Lowest corner (prism, rectangle) or axis foot (cylinder) or centre (disk) at
-// the origin. The profile axis is the last one: z in 3D, y in 2D.
+// the origin. The loading axis is the last one: z in 3D, y in 2D.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -52,9 +52,23 @@ struct Region {
     return shape == SampleShape::Disk ? std::numbers::pi * radius * radius * thickness
                                       : cross_section() * height();
   }
-  // Volume of the vessel between a <= axial coordinate <= b.
+  // The axis the homogeneity profile runs along: the loading axis, unless a box vessel is longer
+  // across it (a slab: eighths of its thickness would be thinner than its grains), then its
+  // longest side (x before y on a tie).
+  int profile_axis() const noexcept {
+    if (round()) return axis();
+    const double along = planar() ? ly : lz;
+    if (lx > along && (planar() || lx >= ly)) return 0;
+    if (!planar() && ly > along) return 1;
+    return axis();
+  }
+  // The vessel's length along the profile axis.
+  double profile_length() const noexcept {
+    return round() ? height() : upper()[profile_axis()] - lower()[profile_axis()];
+  }
+  // Volume of the vessel between a <= coordinate along the profile axis <= b.
   double slab_volume(double a, double b) const noexcept {
-    if (shape != SampleShape::Disk) return cross_section() * (b - a);
+    if (shape != SampleShape::Disk) return volume() / profile_length() * (b - a);
     auto f = [&](double u) {
       const double s = std::clamp(u / radius, -1.0, 1.0);
       return u * std::sqrt(std::max(0.0, radius * radius - u * u)) + radius * radius * std::asin(s);

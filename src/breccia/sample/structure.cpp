@@ -34,7 +34,7 @@ SampleStructure describe_structure(
   SampleStructure s;
   const bool planar = region.planar();
   const double t = region.thickness;
-  const int axis = region.axis();
+  const int axis = region.profile_axis();
   const std::size_t n = p.size();
   s.particles = n;
   s.bonds = bonds.size();
@@ -84,8 +84,9 @@ SampleStructure describe_structure(
   s.bonds_per_interior_particle =
       interior ? interior_bonds / static_cast<double>(interior) : s.bond_coordination;
 
-  // Profile along the loading axis: equal slices of the vessel height.
-  const double h = region.height(), dz = h / slices, z0 = region.lower()[axis];
+  // Profile along the profile axis: equal slices of the vessel's length along it.
+  s.profile_axis = axis;
+  const double h = region.profile_length(), dz = h / slices, z0 = region.lower()[axis];
   s.profile.resize(static_cast<std::size_t>(slices));
   std::vector<double> degree_sum(s.profile.size(), 0.0), slab_solid(s.profile.size(), 0.0);
   for (int k = 0; k < slices; ++k) {

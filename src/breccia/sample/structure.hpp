@@ -1,7 +1,8 @@
 #pragma once
 // What a packed and bonded sample looks like: porosity with overlap corrections (physics.md §7.7),
-// contact and bond coordination, floaters, and the profile along the loading axis in slices
-// (bonds per grain and solid fraction per eighth), with the homogeneity check the sample bars use.
+// contact and bond coordination, floaters, and the profile in slices along the vessel's profile
+// axis (Region::profile_axis: the loading axis, or a slab's longest side), bonds per grain and
+// solid fraction per eighth, with the homogeneity check the sample bars use.
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -12,7 +13,7 @@
 namespace breccia {
 
 struct ProfileSlice {
-  double lo = 0.0, hi = 0.0;  // m, along the loading axis
+  double lo = 0.0, hi = 0.0;  // m, along the profile axis
   std::size_t grains = 0;     // centres within the slice
   double bonds_per_grain = 0.0;
   double solid_fraction = 0.0;  // solid volume inside the slice (spheres cut exactly) / slab volume
@@ -49,6 +50,7 @@ struct SampleStructure {
   std::size_t floaters = 0;
   std::size_t few_bonds = 0;
   std::size_t unbonded = 0;  // particles with no bond at all
+  int profile_axis = 2;      // 0, 1, 2: x, y, z
   std::vector<ProfileSlice> profile;
   HomogeneityCheck homogeneity;
 };
