@@ -197,6 +197,40 @@ def test_step_level_access_sees_the_engine_state():
     sim.step(10)
 
 
+def test_added_balls_and_rods_move_as_told():
+    """A free projectile clear of the sample flies at its start velocity (no gravity, no
+    contact); a prescribed rod moves at its velocity; bad shapes are refused by key."""
+    sim = breccia.Simulation(breccia.Experiment(overrides=SMALL))
+    x = sim.positions
+    top = float((x[:, 2] + sim.radii).max())
+    centre = (0.0, 0.0, top + 0.01)
+    sim.add_sphere("ball", centre=centre, radius=1e-3, velocity=(0, 0, -2.0), mass=1e-4)
+    sim.add_rod("nose", point=(0, 0, top + 0.02), axis=(0, 2, 0), radius=5e-4,
+                velocity=(0.5, 0, 0))
+    walls = sim.walls.set_index("name")
+    assert walls.loc["ball", "shape"] == "sphere" and walls.loc["ball", "mass_kg"] == 1e-4
+    assert walls.loc["nose", "shape"] == "rod"
+    n = 200
+    sim.step(n)
+    walls = sim.walls.set_index("name")
+    travel = n * sim.time_step
+    assert walls.loc["ball", "point_m"][2] == pytest.approx(centre[2] - 2.0 * travel, rel=1e-12)
+    assert walls.loc["ball", "contacts"] == 0 and walls.loc["nose", "contacts"] == 0
+    assert walls.loc["nose", "point_m"][0] == pytest.approx(0.5 * travel, rel=1e-12)
+    with pytest.raises(breccia.InputError, match="free projectile"):
+        sim.set_wall_velocity("ball", (0, 0, 1))
+    with pytest.raises(breccia.InputError, match="radius"):
+        sim.add_sphere("b2", centre=(0, 0, 1), radius=0.0)
+    with pytest.raises(breccia.InputError, match="mass"):
+        sim.add_sphere("b2", centre=(0, 0, 1), radius=1e-3, mass=-1.0)
+    with pytest.raises(breccia.InputError, match="axis"):
+        sim.add_rod("r2", point=(0, 0, 1), axis=(0, 0, 0), radius=1e-3)
+    with pytest.raises(breccia.InputError, match="centre"):
+        sim.add_sphere("b2", centre=(0, float("nan"), 1), radius=1e-3)
+    with pytest.raises(breccia.InputError, match="a name no other wall has"):
+        sim.add_rod("ball", point=(0, 0, 1), axis=(0, 1, 0), radius=1e-3)
+
+
 def test_ctrl_c_stops_a_python_run_with_a_checkpoint_and_raises_keyboard_interrupt():
     """SIGINT in the middle of breccia.run: the run stops between two steps, its folder is
     marked interrupted with a checkpoint, and the script gets KeyboardInterrupt naming it."""

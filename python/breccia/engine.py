@@ -192,6 +192,21 @@ class Simulation:
         return self._sim.add_wall(name, tuple(point), tuple(normal), tuple(velocity),
                                   float(ramp_s))
 
+    def add_sphere(self, name, centre, radius, velocity=(0.0, 0.0, 0.0), mass=0.0, ramp_s=0.0):
+        """A rigid ball of `radius` (m) centred at `centre` (m). With mass 0 it moves at
+        `velocity` (m/s) reached over `ramp_s` seconds; with a mass (kg; 2D: per unit of the
+        run's thickness, like the grains) it is a free projectile that starts at `velocity` and
+        is then moved by its contact forces and gravity (it does not rotate)."""
+        return self._sim.add_sphere(name, tuple(centre), float(radius), tuple(velocity),
+                                    float(mass), float(ramp_s))
+
+    def add_rod(self, name, point, axis, radius, velocity=(0.0, 0.0, 0.0), ramp_s=0.0):
+        """A rigid rod (a loading nose or roller; 2D: a circle) of `radius` (m) whose axis runs
+        through `point` (m) along `axis`, moving at `velocity` (m/s) reached over `ramp_s`
+        seconds; the particles stay outside it."""
+        return self._sim.add_rod(name, tuple(point), tuple(axis), float(radius),
+                                 tuple(velocity), float(ramp_s))
+
     def set_wall_velocity(self, name, velocity):
         self._sim.set_wall_velocity(name, tuple(velocity))
 

@@ -2,10 +2,12 @@
 // by hand, its particle arrays read as numpy views of the engine's own memory (zero copy,
 // read-only: the particle arrays never grow after the build, so a view stays valid while the
 // simulation lives), walls added and parameters changed between stages.
+#include <fmt/format.h>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
 #include <array>
+#include <cmath>
 #include <memory>
 
 #include "breccia/core/parallel.hpp"
@@ -143,18 +145,81 @@ Vec3 vec(const std::array<double, 3>& a) {
   return {a[0], a[1], a[2]};
 }
 
+// The checks of an added wall's inputs, each naming the call, the key and what is allowed.
+void check_new_name(const Scripted& s, const std::string& where, const std::string& name) {
+  for (const Wall& w : s.sim().walls())
+    if (w.name == name) throw InputError(where, "name", name, "a name no other wall has");
+}
+
+Vec3 unit_direction(const std::string& where, const char* key, const std::array<double, 3>& d) {
+  const double length = norm(vec(d));
+  if (!(length > 0.0) || !std::isfinite(length))
+    throw InputError(where, key, fmt::format("({}, {}, {})", d[0], d[1], d[2]),
+                     "a finite non-zero vector");
+  return vec(d) / length;
+}
+
+Vec3 finite_vec(const std::string& where, const char* key, const std::array<double, 3>& a) {
+  if (!std::isfinite(a[0]) || !std::isfinite(a[1]) || !std::isfinite(a[2]))
+    throw InputError(where, key, fmt::format("({}, {}, {})", a[0], a[1], a[2]),
+                     "three finite numbers");
+  return vec(a);
+}
+
+void check_positive(const std::string& where, const char* key, double v, const char* allowed) {
+  if (!(v > 0.0) || !std::isfinite(v)) throw InputError(where, key, fmt::format("{}", v), allowed);
+}
+
+void check_ramp(const std::string& where, double ramp_s) {
+  if (!(ramp_s >= 0.0) || !std::isfinite(ramp_s))
+    throw InputError(where, "ramp_s", fmt::format("{}", ramp_s), "a time >= 0 s");
+}
+
 std::size_t add_wall(Scripted& s, const std::string& name, const std::array<double, 3>& point,
                      const std::array<double, 3>& normal, const std::array<double, 3>& velocity,
                      double ramp_s) {
-  const Vec3 n = vec(normal);
-  const double length = norm(n);
-  if (!(length > 0.0))
-    throw InputError("add_wall('" + name + "')", "normal", "(0, 0, 0)", "a non-zero vector");
-  for (const Wall& w : s.sim().walls())
-    if (w.name == name)
-      throw InputError("add_wall('" + name + "')", "name", name, "a name no other wall has");
-  Wall w = Wall::plane(name, vec(point), n / length);
-  w.target_velocity = vec(velocity);
+  const std::string where = "add_wall('" + name + "')";
+  check_new_name(s, where, name);
+  check_ramp(where, ramp_s);
+  Wall w =
+      Wall::plane(name, finite_vec(where, "point", point), unit_direction(where, "normal", normal));
+  w.target_velocity = finite_vec(where, "velocity", velocity);
+  w.ramp = {s.sim().time(), ramp_s};
+  return s.sim().add_wall(std::move(w));
+}
+
+// A rigid ball: prescribed (mass 0: moves at `velocity`, reached over ramp_s) or a free
+// projectile (mass > 0 kg: starts at `velocity`, then moved by its contact forces and gravity).
+std::size_t add_sphere(Scripted& s, const std::string& name, const std::array<double, 3>& centre,
+                       double radius, const std::array<double, 3>& velocity, double mass,
+                       double ramp_s) {
+  const std::string where = "add_sphere('" + name + "')";
+  check_new_name(s, where, name);
+  check_positive(where, "radius", radius, "a length > 0 m");
+  check_ramp(where, ramp_s);
+  if (!(mass >= 0.0) || !std::isfinite(mass))
+    throw InputError(where, "mass", fmt::format("{}", mass),
+                     "0 (a ball moved at its velocity) or a mass > 0 kg (a free projectile)");
+  Wall w = Wall::sphere(name, finite_vec(where, "centre", centre), radius, mass,
+                        finite_vec(where, "velocity", velocity));
+  if (mass == 0.0) {
+    w.velocity = {};
+    w.ramp = {s.sim().time(), ramp_s};
+  }
+  return s.sim().add_wall(std::move(w));
+}
+
+// A rigid rod (a loading nose or roller; 2D: a circle) along `axis`, moving at `velocity`.
+std::size_t add_rod(Scripted& s, const std::string& name, const std::array<double, 3>& point,
+                    const std::array<double, 3>& axis, double radius,
+                    const std::array<double, 3>& velocity, double ramp_s) {
+  const std::string where = "add_rod('" + name + "')";
+  check_new_name(s, where, name);
+  check_positive(where, "radius", radius, "a length > 0 m");
+  check_ramp(where, ramp_s);
+  Wall w = Wall::rod(name, finite_vec(where, "point", point), unit_direction(where, "axis", axis),
+                     radius);
+  w.target_velocity = finite_vec(where, "velocity", velocity);
   w.ramp = {s.sim().time(), ramp_s};
   return s.sim().add_wall(std::move(w));
 }
@@ -173,6 +238,10 @@ void set_wall_velocity(Scripted& s, const std::string& name, const std::array<do
   if (w.controlled)
     throw InputError("simulation", "wall", name,
                      "a wall the test steers (servo); set the velocity of a wall you added");
+  if (w.free_body())
+    throw InputError("simulation", "wall", name,
+                     "a free projectile moves under its contact forces; set the velocity of a "
+                     "prescribed wall");
   w.target_velocity = vec(v);
   w.ramp = {};
 }
@@ -186,6 +255,12 @@ void bind_simulation(py::module_& m) {
       .def("measure", &measure)
       .def("add_wall", &add_wall, py::arg("name"), py::arg("point"), py::arg("normal"),
            py::arg("velocity") = std::array<double, 3>{0, 0, 0}, py::arg("ramp_s") = 0.0)
+      .def("add_sphere", &add_sphere, py::arg("name"), py::arg("centre"), py::arg("radius"),
+           py::arg("velocity") = std::array<double, 3>{0, 0, 0}, py::arg("mass") = 0.0,
+           py::arg("ramp_s") = 0.0)
+      .def("add_rod", &add_rod, py::arg("name"), py::arg("point"), py::arg("axis"),
+           py::arg("radius"), py::arg("velocity") = std::array<double, 3>{0, 0, 0},
+           py::arg("ramp_s") = 0.0)
       .def("set_wall_velocity", &set_wall_velocity, py::arg("name"), py::arg("velocity"))
       .def("set_contact_friction",
            [](Scripted& s, double mu) {
