@@ -141,22 +141,43 @@ Command add_run(CLI::App& app, const std::string& command_line) {
           }};
 }
 
+// The executable's own path, for a sweep's child processes.
+std::string own_executable() {
+  std::error_code ec;
+  return std::filesystem::read_symlink("/proc/self/exe", ec).string();
+}
+
+// Prints the outcome of a sweep; the exit status of the command.
+int finish_sweep(const breccia::SweepResult& r) {
+  std::cerr << breccia::summarise_folder(r.folder);
+  std::cout << r.folder << std::endl;
+  return r.status == "complete" ? 0 : 130;
+}
+
 Command add_resume(CLI::App& app, const std::string& command_line) {
   struct Options {
     std::string folder;
-    int threads = -1;
+    int threads = -1, jobs = 0;
     bool quiet = false;
     std::int64_t stop_at_step = 0;
   };
   auto o = std::make_shared<Options>();
-  auto* c = app.add_subcommand(
-      "resume", "continue an interrupted run from its checkpoint, in the same run folder");
-  c->add_option("folder", o->folder, "run folder with a checkpoint.bin")->required();
+  auto* c = app.add_subcommand("resume",
+                               "continue an interrupted run from its checkpoint, in the same run "
+                               "folder, or finish an interrupted sweep in its sweep folder");
+  c->add_option("folder", o->folder,
+                "run folder with a checkpoint.bin, or sweep folder with a sweep-plan.json")
+      ->required();
   c->add_option("--threads", o->threads, "OpenMP threads (the result does not change)")
       ->check(CLI::Range(0, 1024));
   c->add_flag("--quiet", o->quiet, "no progress bar or messages");
-  c->add_option("--stop-at-step", o->stop_at_step, "stop again, with a checkpoint, at this step")
+  c->add_option("--stop-at-step", o->stop_at_step,
+                "stop again, with a checkpoint, at this step (a sweep: each run)")
       ->check(CLI::Range(std::int64_t{1}, std::numeric_limits<std::int64_t>::max()));
+  c->add_option("--jobs", o->jobs,
+                "a sweep: runs at once, as separate processes (0: as many as the cores allow, "
+                "1: one after another)")
+      ->check(CLI::Range(0, 1024));
   return {c, [o, command_line] {
             catch_signals();
             breccia::RunOptions opt;
@@ -165,6 +186,15 @@ Command add_resume(CLI::App& app, const std::string& command_line) {
             opt.stop_at_step = static_cast<std::uint64_t>(o->stop_at_step);
             opt.show_progress = !o->quiet && isatty(fileno(stderr));
             if (!o->quiet) opt.log = log_to_stderr;
+            if (std::filesystem::exists(std::filesystem::path(o->folder) / "sweep-plan.json")) {
+              if (o->threads >= 0)
+                throw breccia::InputError(
+                    "resume", "--threads", std::to_string(o->threads),
+                    "a sweep's runs keep the threads of their experiment; give --jobs instead");
+              opt.jobs = o->jobs;
+              opt.executable = own_executable();
+              return finish_sweep(breccia::resume_sweep(o->folder, opt));
+            }
             return finish_run(
                 breccia::resume_run(o->folder, breccia::ResumeOptions{o->threads}, opt), o->quiet);
           }};
@@ -197,6 +227,7 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
     std::vector<double> confining_mpa, strain_rates;
     std::vector<std::string> over;
     int jobs = 0;
+    std::int64_t stop_at_step = 0;
   };
   auto o = std::make_shared<Options>();
   auto* c = app.add_subcommand(
@@ -224,6 +255,10 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
                 "runs at once, as separate processes sharing the cores (0: as many as the cores "
                 "allow, 1: one after another)")
       ->check(CLI::Range(0, 1024));
+  c->add_option("--stop-at-step", o->stop_at_step,
+                "stop each run with a checkpoint once it has taken this many steps; finish the "
+                "sweep with `breccia resume SWEEP_FOLDER`")
+      ->check(CLI::Range(std::int64_t{1}, std::numeric_limits<std::int64_t>::max()));
   return {c, [o, command_line] {
             if (!o->output.empty())
               o->overrides.push_back("output.directory=\"" + o->output + "\"");
@@ -235,8 +270,8 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
             opt.show_progress = spec.progress && isatty(fileno(stderr));
             opt.log = log_to_stderr;
             opt.jobs = o->jobs;
-            std::error_code ec;
-            opt.executable = std::filesystem::read_symlink("/proc/self/exe", ec).string();
+            opt.stop_at_step = static_cast<std::uint64_t>(o->stop_at_step);
+            opt.executable = own_executable();
             if (o->confining_mpa.empty() && o->strain_rates.empty() && o->over.empty())
               throw breccia::InputError("sweep", "--confining-mpa / --strain-rates / --over",
                                         "(none)",
@@ -251,9 +286,7 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
                           std::vector<std::string>(o->over.begin() + 1, o->over.end()), opt)
                 : o->strain_rates.empty() ? breccia::run_sweep(spec, pa, opt)
                                           : breccia::run_rate_sweep(spec, o->strain_rates, opt);
-            std::cerr << breccia::summarise_folder(r.folder);
-            std::cout << r.folder << std::endl;
-            return r.status == "complete" ? 0 : 130;
+            return finish_sweep(r);
           }};
 }
 

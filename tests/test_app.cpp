@@ -446,6 +446,75 @@ TEST(App, ResumeIsExactForAcousticEmissionWhereverTheRunStops) {
   fs::remove_all(out);
 }
 
+// A sweep stopped part-way (every run at a given step, in this process or in child processes) is
+// finished by `breccia resume SWEEP_FOLDER`: the stopped runs continue from their checkpoints, the
+// ones never started run, in this process or in children, and every run's tables and the sweep's
+// results are those of the uninterrupted sweep. A finished sweep resumes to itself.
+TEST(App, AStoppedSweepResumesToTheUninterruptedSweep) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_resume_sweep";
+  fs::remove_all(out);
+  const std::string opts = kSmallSample +
+                           " --set loading.platen_speed=0.2 --set loading.max_strain=0.008"
+                           " --set engine.threads=1 --over bond.tensile_strength 25e6 30e6";
+  auto sweep = [&](const std::string& where, const std::string& extra) {
+    return run("sweep --output " + (out / where).string() + extra + opts);
+  };
+  const Result whole = sweep("whole", " --jobs 1");
+  ASSERT_EQ(whole.code, 0) << whole.out;
+  const fs::path a = last_line(whole.out);
+  const auto ja = nlohmann::json::parse(read(a / "sweep.json"));
+  ASSERT_EQ(ja["runs"].size(), 2u);
+  ASSERT_GT(ja["runs"][1]["cracks"].get<int>(), 10) << "the runs must break bonds";
+  const auto expect_same = [&](const fs::path& b, const std::string& how) {
+    const auto jb = nlohmann::json::parse(read(b / "sweep.json"));
+    EXPECT_EQ(jb["status"], "complete") << how;
+    ASSERT_EQ(jb["runs"].size(), 2u) << how;
+    for (std::size_t i = 0; i < 2; ++i) {
+      for (const char* key : {"status", "value", "cracks", "fragments", "metrics"})
+        EXPECT_EQ(ja["runs"][i][key], jb["runs"][i][key]) << how << ": run " << i << " " << key;
+      const fs::path ra = a / ja["runs"][i]["folder"].get<std::string>();
+      const fs::path rb = b / jb["runs"][i]["folder"].get<std::string>();
+      for (const char* f : {"history.csv", "cracks.csv", "events.csv"})
+        EXPECT_EQ(read(ra / f), read(rb / f)) << how << ": run " << i << " " << f;
+    }
+  };
+  // Stopped in this process: the first run stops, the second never starts; resumed in children.
+  const Result cut = sweep("cut", " --jobs 1 --stop-at-step 1500");
+  EXPECT_EQ(cut.code, 130) << cut.out;
+  const fs::path b = last_line(cut.out);
+  EXPECT_EQ(nlohmann::json::parse(read(b / "sweep.json"))["status"], "interrupted");
+  ASSERT_TRUE(fs::exists(b / "sweep-plan.json"));
+  const std::string first = nlohmann::json::parse(read(b / "sweep.json"))["runs"][0]["folder"];
+  ASSERT_TRUE(fs::exists(b / first / "checkpoint.bin")) << cut.out;
+  const Result resumed = run("resume --jobs 2 " + b.string());
+  ASSERT_EQ(resumed.code, 0) << resumed.out;
+  expect_same(b, "resumed in child processes");
+  EXPECT_EQ(nlohmann::json::parse(read(b / "sweep.json"))["runs"][0]["folder"], first)
+      << "the stopped run continues in its own folder";
+  // Stopped in child processes (both runs); resumed in this process.
+  const Result cut2 = sweep("cut2", " --jobs 2 --stop-at-step 1500");
+  EXPECT_EQ(cut2.code, 130) << cut2.out;
+  const fs::path c = last_line(cut2.out);
+  const Result resumed2 = run("resume --jobs 1 " + c.string());
+  ASSERT_EQ(resumed2.code, 0) << resumed2.out;
+  expect_same(c, "resumed in this process");
+  // A finished sweep: nothing runs again.
+  const auto folders = [](const fs::path& p) {
+    return std::distance(fs::directory_iterator(p), fs::directory_iterator{});
+  };
+  const auto before = folders(c);
+  const Result again = run("resume " + c.string());
+  ASSERT_EQ(again.code, 0) << again.out;
+  EXPECT_EQ(folders(c), before);
+  expect_same(c, "resumed when finished");
+  EXPECT_EQ(nlohmann::json::parse(read(c / "sweep.json"))["resumed"].size(), 2u);
+  // A folder that is neither a run nor a sweep is refused by name.
+  const Result neither = run("resume " + out.string());
+  EXPECT_EQ(neither.code, 2);
+  EXPECT_NE(neither.out.find("sweep-plan.json"), std::string::npos) << neither.out;
+  fs::remove_all(out);
+}
+
 TEST(App, BadGeometryFileFailsBeforeWritingAnything) {
   const fs::path dir = fs::temp_directory_path() / "breccia_app_badgeo";
   fs::remove_all(dir);

@@ -291,6 +291,28 @@ def test_a_sweep_from_python_in_this_process_and_in_child_processes_agree():
         breccia.sweep(breccia.Experiment(overrides=SMALL))
 
 
+def test_resume_finishes_a_stopped_sweep():
+    """A sweep stopped by the command (--stop-at-step) is finished by breccia.resume, which
+    returns its SweepFolder; its one run continued in its own folder."""
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [CLI, "sweep", "--jobs", "1", "--stop-at-step", "1000", "--output", out,
+               "--confining-mpa", "0"]
+        for o in SMALL:
+            cmd += ["--set", o]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        assert r.returncode == 130, r.stderr
+        folder = r.stdout.strip().splitlines()[-1]
+        stopped = breccia.read(folder)
+        assert stopped.status == "interrupted"
+        names = [os.path.basename(r.path) for r in stopped.runs]
+        with pytest.raises(breccia.InputError, match="jobs instead of threads"):
+            breccia.resume(folder, threads=1)
+        done = breccia.resume(folder, progress=False)
+        assert isinstance(done, breccia.SweepFolder) and done.status == "complete"
+        assert [os.path.basename(r.path) for r in done.runs] == names
+        assert done.runs[0].complete and done.results["sigma1_at_peak_pa"][0] > 0
+
+
 def test_a_sample_generated_from_python_is_the_commands_and_reads_back():
     tiny = ['sample.width=3e-3', 'sample.depth=3e-3', 'sample.height=6e-3']
     with tempfile.TemporaryDirectory() as out:

@@ -66,8 +66,7 @@ def _checked(result, what):
     if result["interrupted_by_signal"]:
         e = KeyboardInterrupt()
         e.add_note(f"breccia.{what}: interrupted; what was recorded is kept in "
-                   f"{result['folder']}" + (f", continue with breccia.resume('{result['folder']}')"
-                                            if what != "sweep" else ""))
+                   f"{result['folder']}, continue with breccia.resume('{result['folder']}')")
         raise e
     return result
 
@@ -89,9 +88,20 @@ def run(experiment=None, *, output=None, threads=None, progress=None, log=None, 
     return RunFolder(result["folder"])
 
 
-def resume(folder, *, threads=None, progress=None, log=None, stop_at_step=0):
+def resume(folder, *, threads=None, progress=None, log=None, stop_at_step=0, jobs=1):
     """Continues an interrupted run from its checkpoint, in its folder (the result is the one
-    the uninterrupted run gives). Returns the RunFolder."""
+    the uninterrupted run gives), and returns the RunFolder; or finishes an interrupted sweep
+    in its folder (runs that completed are kept, those with a checkpoint continue, the others
+    start; `jobs` as for sweep) and returns the SweepFolder."""
+    if os.path.exists(os.path.join(os.fspath(folder), "sweep-plan.json")):
+        if threads is not None:
+            raise InputError("resume: a sweep's runs keep the threads of their experiment; "
+                             "give jobs instead of threads")
+        bar, _ = _progress(progress)
+        result = _core.resume_sweep(os.fspath(folder), int(jobs), bar, _printer(log),
+                                    int(stop_at_step), _command("resume"))
+        _checked(result, "resume")
+        return SweepFolder(result["folder"])
     bar, callback = _progress(progress)
     result = _core.resume(os.fspath(folder), -1 if threads is None else int(threads), bar,
                           callback, _printer(log), int(stop_at_step), _command("resume"))

@@ -141,11 +141,10 @@ py::dict resume(const std::string& folder, int threads, bool progress_bar,
   });
 }
 
-py::dict sweep(const ExperimentSpec& spec, const std::vector<double>& confining_pa,
-               const std::vector<double>& strain_rates, int jobs, bool progress_bar,
-               std::optional<py::function> log, const std::string& command) {
+// Runs a sweep (new or resumed) with the GIL released; its folder, status and runs.
+template <class Body>
+py::dict guarded_sweep(std::optional<py::function> log, RunOptions& opt, int jobs, Body&& body) {
   Callbacks callbacks{std::nullopt, std::move(log), nullptr};
-  RunOptions opt = options(progress_bar, 0, command);
   opt.jobs = jobs;
   opt.executable = BRECCIA_CLI;
   InterruptScope scope;
@@ -153,14 +152,31 @@ py::dict sweep(const ExperimentSpec& spec, const std::vector<double>& confining_
   SweepResult result;
   {
     py::gil_scoped_release release;
-    result = strain_rates.empty() ? run_sweep(spec, confining_pa, opt)
-                                  : run_rate_sweep(spec, strain_rates, opt);
+    result = body(opt);
   }
   callbacks.rethrow();
   py::list runs;
   for (const RunResult& r : result.runs) runs.append(to_dict(r));
   return py::dict(py::arg("folder") = result.folder, py::arg("status") = result.status,
                   py::arg("runs") = runs, py::arg("interrupted_by_signal") = scope.interrupted());
+}
+
+py::dict sweep(const ExperimentSpec& spec, const std::vector<double>& confining_pa,
+               const std::vector<double>& strain_rates, int jobs, bool progress_bar,
+               std::optional<py::function> log, const std::string& command) {
+  RunOptions opt = options(progress_bar, 0, command);
+  return guarded_sweep(std::move(log), opt, jobs, [&](const RunOptions& o) {
+    return strain_rates.empty() ? run_sweep(spec, confining_pa, o)
+                                : run_rate_sweep(spec, strain_rates, o);
+  });
+}
+
+py::dict resume_a_sweep(const std::string& folder, int jobs, bool progress_bar,
+                        std::optional<py::function> log, std::uint64_t stop_at_step,
+                        const std::string& command) {
+  RunOptions opt = options(progress_bar, stop_at_step, command);
+  return guarded_sweep(std::move(log), opt, jobs,
+                       [&](const RunOptions& o) { return resume_sweep(folder, o); });
 }
 
 }  // namespace
@@ -170,6 +186,8 @@ void bind_run(py::module_& m) {
         py::arg("stop_at_step"), py::arg("command"));
   m.def("resume", &resume, py::arg("folder"), py::arg("threads"), py::arg("progress_bar"),
         py::arg("progress"), py::arg("log"), py::arg("stop_at_step"), py::arg("command"));
+  m.def("resume_sweep", &resume_a_sweep, py::arg("folder"), py::arg("jobs"),
+        py::arg("progress_bar"), py::arg("log"), py::arg("stop_at_step"), py::arg("command"));
   m.def("sweep", &sweep, py::arg("spec"), py::arg("confining_pa"), py::arg("strain_rates"),
         py::arg("jobs"), py::arg("progress_bar"), py::arg("log"), py::arg("command"));
 }

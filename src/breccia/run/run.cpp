@@ -714,7 +714,8 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   const fs::path folder(folder_name);
   const fs::path mpath = folder / "manifest.json", cpath = folder / kCheckpointFile;
   if (!fs::exists(mpath))
-    throw InputError(folder_name, "manifest.json", "(missing)", "not a Breccia run folder");
+    throw InputError(folder_name, "manifest.json", "(missing)",
+                     "a run folder (with manifest.json) or a sweep folder (with sweep-plan.json)");
   json manifest = read_json_object(mpath.string());
   const std::string status = JsonView(manifest, mpath.string()).text("status", "unknown");
   if (status == "complete")

@@ -4,7 +4,8 @@
 // analysis. The manifest is written first with status "running" and rewritten at the end, so a
 // run killed on the way is visibly incomplete; an interrupted run (Ctrl-C, SIGTERM) keeps its
 // tables, says "interrupted" and leaves a checkpoint (checkpoint.bin) that `resume_run`
-// continues exactly. A sweep runs one experiment at several confining stresses.
+// continues exactly. A sweep runs one experiment at several confining stresses, strain rates or
+// values of a key, and resume_sweep finishes one that stopped.
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -88,5 +89,12 @@ SweepResult run_rate_sweep(const ExperimentSpec& spec, const std::vector<double>
 // test's own sweep metrics. Every value is checked like an override before any run starts.
 SweepResult run_parameter_sweep(const ExperimentSpec& spec, const std::string& key,
                                 const std::vector<std::string>& values, const RunOptions& options);
+
+// Finishes a sweep that stopped (Ctrl-C, SIGTERM, a time limit, --stop-at-step), from the plan
+// every sweep writes first (sweep-plan.json: the resolved experiment and what varies over which
+// values): runs that completed are kept, those with a checkpoint continue from it (the result is
+// that of the uninterrupted run), the others start anew; then sweep.json, fits and report are
+// written again. options.jobs and options.stop_at_step apply as for a new sweep.
+SweepResult resume_sweep(const std::string& folder, const RunOptions& options);
 
 }  // namespace breccia

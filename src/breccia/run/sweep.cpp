@@ -1,4 +1,5 @@
 #include <fcntl.h>
+#include <fmt/chrono.h>
 #include <fmt/format.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -84,14 +85,14 @@ RunResult result_of_folder(const fs::path& folder) {
   return r;
 }
 
-// Starts `exe run file` with stdout to `out` and stderr to `err`; the child's pid.
-pid_t spawn_run(const std::string& exe, const fs::path& file, const fs::path& out,
-                const fs::path& err) {
+// Starts `exe args...` with stdout to `out` and stderr to `err`; the child's pid.
+pid_t spawn_child(const std::string& exe, std::vector<std::string> args, const fs::path& out,
+                  const fs::path& err) {
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
   posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<std::string> args{exe, "run", file.string()};
+  args.insert(args.begin(), exe);
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -112,10 +113,39 @@ fs::path printed_folder(const fs::path& out) {
   return last;
 }
 
+// Where a run of a sweep being resumed stands: its newest folder in the sweep folder (named
+// <stamp>-<run name>, see make_folder), if any.
+struct EarlierRun {
+  fs::path folder;  // empty: never started
+  RunResult result;
+  bool complete() const { return result.status == "complete"; }
+  bool resumable() const {
+    return !folder.empty() && !complete() && fs::exists(folder / "checkpoint.bin");
+  }
+};
+
+EarlierRun earlier_run(const fs::path& sweep_folder, const std::string& name) {
+  std::string safe;
+  for (char c : name) safe += (std::isalnum(static_cast<unsigned char>(c)) || c == '-') ? c : '_';
+  constexpr std::size_t kStamp = 16;  // "YYYYmmdd-HHMMSS-"
+  EarlierRun e;
+  for (const fs::directory_entry& d : fs::directory_iterator(sweep_folder)) {
+    const std::string f = d.path().filename().string();
+    if (!d.is_directory() || f.size() <= kStamp ||
+        f.compare(kStamp, std::string::npos, safe) != 0 || !fs::exists(d.path() / "manifest.json"))
+      continue;
+    if (e.folder.empty() || f > e.folder.filename().string()) e.folder = d.path();
+  }
+  if (!e.folder.empty()) e.result = result_of_folder(e.folder);
+  return e;
+}
+
 // The sweep's runs as child processes, `jobs` at a time, each with `threads` OpenMP threads. A
-// generated sample is packed first, once, into the cache the children read.
+// generated sample is packed first, once, into the cache the children read. Resuming, a run
+// that completed is kept, one with a checkpoint continues from it, and the others start anew.
 std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int jobs, int threads,
-                                          const fs::path& folder, const RunOptions& opt) {
+                                          const fs::path& folder, const RunOptions& opt,
+                                          bool resuming) {
   const ExperimentSpec& first = specs.front();
   if (first.sample_source == "generate" && first.cache) {
     json report;
@@ -150,6 +180,8 @@ std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int
       return;
     }
   };
+  std::vector<std::string> stop;
+  if (opt.stop_at_step > 0) stop = {"--stop-at-step", std::to_string(opt.stop_at_step)};
   while (next < specs.size() || !running.empty()) {
     const bool stopping = opt.interrupt && opt.interrupt->load();
     if (!stopping && next < specs.size() && running.size() < static_cast<std::size_t>(jobs)) {
@@ -157,12 +189,24 @@ std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int
       one.threads = threads;
       one.progress = false;
       const fs::path stem = dir / one.name;
-      { std::ofstream(stem.string() + ".toml") << to_toml(one); }
+      const EarlierRun earlier = resuming ? earlier_run(folder, one.name) : EarlierRun{};
+      if (earlier.complete()) {
+        results[next++] = earlier.result;
+        continue;
+      }
+      std::vector<std::string> args{"resume", earlier.folder.string(), "--threads",
+                                    std::to_string(threads)};
+      if (!earlier.resumable()) {
+        std::ofstream(stem.string() + ".toml") << to_toml(one);
+        args = {"run", stem.string() + ".toml"};
+      }
+      args.insert(args.end(), stop.begin(), stop.end());
       if (opt.log)
-        opt.log(fmt::format("sweep: started {} ({} thread{})", one.name, threads,
+        opt.log(fmt::format("sweep: {} {} ({} thread{})",
+                            earlier.resumable() ? "resumed" : "started", one.name, threads,
                             threads == 1 ? "" : "s"));
-      running.emplace_back(spawn_run(opt.executable, stem.string() + ".toml",
-                                     stem.string() + ".out", stem.string() + ".log"),
+      running.emplace_back(spawn_child(opt.executable, std::move(args), stem.string() + ".out",
+                                       stem.string() + ".log"),
                            next);
       ++next;
       continue;
@@ -193,7 +237,8 @@ fs::path make_sweep_folder(const ExperimentSpec& spec) {
 // stopping at the first that does not complete. `describe` names a run in the log.
 std::vector<RunResult> run_all(const ExperimentSpec& spec, const std::vector<ExperimentSpec>& specs,
                                const fs::path& folder, const RunOptions& opt,
-                               const std::function<std::string(const ExperimentSpec&)>& describe) {
+                               const std::function<std::string(const ExperimentSpec&)>& describe,
+                               bool resuming) {
   const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   const int per_run = spec.threads > 0 ? static_cast<int>(spec.threads) : 1;
   const int jobs = opt.jobs > 0
@@ -204,13 +249,21 @@ std::vector<RunResult> run_all(const ExperimentSpec& spec, const std::vector<Exp
     if (opt.log)
       opt.log(fmt::format("sweep: {} runs, {} at a time ({} thread{} each)", specs.size(), jobs,
                           threads, threads == 1 ? "" : "s"));
-    return sweep_in_processes(specs, jobs, threads, folder, opt);
+    return sweep_in_processes(specs, jobs, threads, folder, opt, resuming);
   }
   // Copies of one sample: a generated sample is packed once and cached in the sweep folder.
   std::vector<RunResult> runs;
   for (const ExperimentSpec& one : specs) {
-    if (opt.log) opt.log("sweep: " + describe(one));
-    runs.push_back(run_experiment(one, opt));
+    const EarlierRun earlier = resuming ? earlier_run(folder, one.name) : EarlierRun{};
+    if (earlier.complete()) {
+      runs.push_back(earlier.result);
+      continue;
+    }
+    if (opt.log) opt.log("sweep: " + describe(one) + (earlier.resumable() ? " (resumed)" : ""));
+    runs.push_back(earlier.resumable()
+                       ? resume_run(earlier.folder.string(),
+                                    ResumeOptions{static_cast<int>(spec.threads)}, opt)
+                       : run_experiment(one, opt));
     if (runs.back().status != "complete") break;
   }
   return runs;
@@ -292,124 +345,6 @@ double sample_length(const ExperimentSpec& spec, const RunOptions& opt) {
   return hi - lo;
 }
 
-}  // namespace
-
-SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining,
-                      const RunOptions& opt) {
-  if (confining.empty())
-    throw InputError("sweep", "--confining", "(none)", "give at least one confining stress");
-  for (double c : confining)
-    if (!(c >= 0.0))
-      throw InputError("sweep", "--confining", num(c), "each confining stress must be >= 0 Pa");
-  {
-    ExperimentSpec probe = spec;  // a test that cannot be swept fails before any folder exists
-    set_confining_stress(probe, confining.front(), "sweep");
-  }
-  SweepResult out;
-  out.folder = make_sweep_folder(spec).string();
-  ExperimentSpec base = spec;
-  base.output_directory = out.folder;
-  std::vector<ExperimentSpec> specs;
-  for (double c : confining) {
-    ExperimentSpec one = base;
-    set_confining_stress(one, c, "sweep");
-    one.name = fmt::format("{}-confining-{}MPa", spec.name, c * 1e-6);
-    specs.push_back(one);
-  }
-  out.runs = run_all(spec, specs, out.folder, opt, [](const ExperimentSpec& one) {
-    return fmt::format("confining stress {} MPa", confining_stress(one) * 1e-6);
-  });
-  out.status = sweep_status(out.runs, specs.size());
-  json runs = json::array();
-  std::vector<double> s3, s1;
-  for (std::size_t i = 0; i < out.runs.size(); ++i) {
-    const RunResult& r = out.runs[i];
-    runs.push_back(sweep_entry(confining[i], r));
-    if (r.status != "complete") continue;
-    s3.push_back(confining[i]);
-    s1.push_back(r.sigma1_at_peak);
-  }
-  json sweep{{"status", out.status},
-             {"experiment", spec.name},
-             {"variable", "confining_stress"},
-             {"runs", runs},
-             {"mohr_coulomb", mohr_coulomb_json(analysis::fit_mohr_coulomb(s3, s1))},
-             {"hoek_brown", hoek_brown_json(analysis::fit_hoek_brown(s3, s1))}};
-  finish_sweep(spec, out, sweep, opt);
-  return out;
-}
-
-SweepResult run_rate_sweep(const ExperimentSpec& spec, const std::vector<double>& rates,
-                           const RunOptions& opt) {
-  if (rates.empty())
-    throw InputError("sweep", "--strain-rates", "(none)", "give at least one strain rate");
-  for (double r : rates)
-    if (!(r > 0.0) || !std::isfinite(r))
-      throw InputError("sweep", "--strain-rates", num(r), "each strain rate must be > 0 1/s");
-  if (spec.density_scaling != 1.0)
-    throw InputError(spec.source, "engine.density_scaling", num(spec.density_scaling),
-                     "a strain-rate study measures the sample's inertia, which density scaling "
-                     "multiplies: set engine.density_scaling = 1");
-  {
-    ExperimentSpec probe = spec;
-    set_platen_speed(probe, 1.0, "sweep");
-  }
-  SweepResult out;
-  out.folder = make_sweep_folder(spec).string();
-  ExperimentSpec base = spec;
-  base.output_directory = out.folder;
-  // The platens close at 2 v: v = rate L / 2 for the sample's length L.
-  const double length = sample_length(base, opt);
-  std::vector<ExperimentSpec> specs;
-  for (double rate : rates) {
-    ExperimentSpec one = base;
-    set_platen_speed(one, 0.5 * rate * length, "sweep");
-    one.name = fmt::format("{}-rate-{}-per-s", spec.name, rate);
-    specs.push_back(one);
-  }
-  out.runs = run_all(spec, specs, out.folder, opt, [length](const ExperimentSpec& one) {
-    double v = 0.0;
-    std::visit(
-        [&](const auto& p) {
-          if constexpr (requires { p.platen_speed; }) v = p.platen_speed;
-        },
-        one.test);
-    return fmt::format("strain rate {:.3g} /s (platens at {:.4g} m/s)", 2.0 * v / length, v);
-  });
-  out.status = sweep_status(out.runs, specs.size());
-  json runs = json::array();
-  std::vector<double> measured, ucs;
-  for (std::size_t i = 0; i < out.runs.size(); ++i) {
-    const RunResult& r = out.runs[i];
-    json e = sweep_entry(confining_stress(spec), r);
-    e["strain_rate_target_per_s"] = rates[i];
-    e["platen_speed_m_per_s"] = 0.5 * rates[i] * length;
-    e["damage_ratio_percent"] =
-        r.bonds > 0 ? 100.0 * static_cast<double>(r.cracks) / static_cast<double>(r.bonds) : 0.0;
-    if (r.status == "complete") {
-      const json summary = read_json_object((fs::path(r.folder) / "summary.json").string());
-      const double rate = summary.value("strain_rate_per_s", rates[i]);
-      e["strain_rate_per_s"] = rate;
-      e["failure_plane"] =
-          summary.value("crack_pattern", json::object()).value("failure_plane", json::object());
-      e["quasi_static"] = summary.value("quasi_static", json::object()).value("ok", false);
-      measured.push_back(rate);
-      ucs.push_back(r.peak_stress);
-    }
-    runs.push_back(e);
-  }
-  json sweep{{"status", out.status},
-             {"experiment", spec.name},
-             {"variable", "strain_rate"},
-             {"sample_length_m", length},
-             {"runs", runs},
-             {"rate_dependence", rate_fit_json(analysis::fit_rate_dependence(measured, ucs))}};
-  finish_sweep(spec, out, sweep, opt);
-  return out;
-}
-
-namespace {
-
 // One run of a parameter sweep in sweep.json: what every test reports, then the test's own
 // sweep metrics (summary.<kind>.sweep_metrics) or, for stress-strain tests, the usual entry.
 json parameter_entry(const std::string& value, const RunResult& r) {
@@ -432,14 +367,135 @@ json parameter_entry(const std::string& value, const RunResult& r) {
   return e;
 }
 
-}  // namespace
+// One sweep's experiments, how the log names each, and sweep.json's body from their results.
+struct SweepJob {
+  std::vector<ExperimentSpec> specs;
+  std::function<std::string(const ExperimentSpec&)> describe;
+  std::function<json(const std::vector<RunResult>&)> assemble;
+};
 
-SweepResult run_parameter_sweep(const ExperimentSpec& spec, const std::string& key,
-                                const std::vector<std::string>& values, const RunOptions& opt) {
+void check_confining(const std::vector<double>& confining, const ExperimentSpec& spec) {
+  if (confining.empty())
+    throw InputError("sweep", "--confining", "(none)", "give at least one confining stress");
+  for (double c : confining)
+    if (!(c >= 0.0))
+      throw InputError("sweep", "--confining", num(c), "each confining stress must be >= 0 Pa");
+  ExperimentSpec probe = spec;  // a test that cannot be swept fails before any folder exists
+  set_confining_stress(probe, confining.front(), "sweep");
+}
+
+SweepJob confining_job(const ExperimentSpec& spec, const std::vector<double>& confining,
+                       const fs::path& folder) {
+  SweepJob job;
+  for (double c : confining) {
+    ExperimentSpec one = spec;
+    one.output_directory = folder.string();
+    set_confining_stress(one, c, "sweep");
+    one.name = fmt::format("{}-confining-{}MPa", spec.name, c * 1e-6);
+    job.specs.push_back(one);
+  }
+  job.describe = [](const ExperimentSpec& one) {
+    return fmt::format("confining stress {} MPa", confining_stress(one) * 1e-6);
+  };
+  job.assemble = [spec, confining](const std::vector<RunResult>& done) {
+    json runs = json::array();
+    std::vector<double> s3, s1;
+    for (std::size_t i = 0; i < done.size(); ++i) {
+      const RunResult& r = done[i];
+      runs.push_back(sweep_entry(confining[i], r));
+      if (r.status != "complete") continue;
+      s3.push_back(confining[i]);
+      s1.push_back(r.sigma1_at_peak);
+    }
+    return json{{"experiment", spec.name},
+                {"variable", "confining_stress"},
+                {"runs", runs},
+                {"mohr_coulomb", mohr_coulomb_json(analysis::fit_mohr_coulomb(s3, s1))},
+                {"hoek_brown", hoek_brown_json(analysis::fit_hoek_brown(s3, s1))}};
+  };
+  return job;
+}
+
+void check_rates(const std::vector<double>& rates, const ExperimentSpec& spec) {
+  if (rates.empty())
+    throw InputError("sweep", "--strain-rates", "(none)", "give at least one strain rate");
+  for (double r : rates)
+    if (!(r > 0.0) || !std::isfinite(r))
+      throw InputError("sweep", "--strain-rates", num(r), "each strain rate must be > 0 1/s");
+  if (spec.density_scaling != 1.0)
+    throw InputError(spec.source, "engine.density_scaling", num(spec.density_scaling),
+                     "a strain-rate study measures the sample's inertia, which density scaling "
+                     "multiplies: set engine.density_scaling = 1");
+  ExperimentSpec probe = spec;
+  set_platen_speed(probe, 1.0, "sweep");
+}
+
+// One run of a strain-rate sweep in sweep.json: the usual entry, the rate asked for and measured,
+// the damage ratio, the failure plane and the quasi-static check.
+json rate_entry(const ExperimentSpec& spec, double rate, double length, const RunResult& r) {
+  json e = sweep_entry(confining_stress(spec), r);
+  e["strain_rate_target_per_s"] = rate;
+  e["platen_speed_m_per_s"] = 0.5 * rate * length;
+  e["damage_ratio_percent"] =
+      r.bonds > 0 ? 100.0 * static_cast<double>(r.cracks) / static_cast<double>(r.bonds) : 0.0;
+  if (r.status == "complete") {
+    const json summary = read_json_object((fs::path(r.folder) / "summary.json").string());
+    e["strain_rate_per_s"] = summary.value("strain_rate_per_s", rate);
+    e["failure_plane"] =
+        summary.value("crack_pattern", json::object()).value("failure_plane", json::object());
+    e["quasi_static"] = summary.value("quasi_static", json::object()).value("ok", false);
+  }
+  return e;
+}
+
+SweepJob rate_job(const ExperimentSpec& spec, const std::vector<double>& rates,
+                  const fs::path& folder, const RunOptions& opt) {
+  ExperimentSpec base = spec;
+  base.output_directory = folder.string();
+  // The platens close at 2 v: v = rate L / 2 for the sample's length L.
+  const double length = sample_length(base, opt);
+  SweepJob job;
+  for (double rate : rates) {
+    ExperimentSpec one = base;
+    set_platen_speed(one, 0.5 * rate * length, "sweep");
+    one.name = fmt::format("{}-rate-{}-per-s", spec.name, rate);
+    job.specs.push_back(one);
+  }
+  job.describe = [length](const ExperimentSpec& one) {
+    double v = 0.0;
+    std::visit(
+        [&](const auto& p) {
+          if constexpr (requires { p.platen_speed; }) v = p.platen_speed;
+        },
+        one.test);
+    return fmt::format("strain rate {:.3g} /s (platens at {:.4g} m/s)", 2.0 * v / length, v);
+  };
+  job.assemble = [spec, rates, length](const std::vector<RunResult>& done) {
+    json runs = json::array();
+    std::vector<double> measured, ucs;
+    for (std::size_t i = 0; i < done.size(); ++i) {
+      json e = rate_entry(spec, rates[i], length, done[i]);
+      if (done[i].status == "complete") {
+        measured.push_back(e["strain_rate_per_s"].get<double>());
+        ucs.push_back(done[i].peak_stress);
+      }
+      runs.push_back(e);
+    }
+    return json{{"experiment", spec.name},
+                {"variable", "strain_rate"},
+                {"sample_length_m", length},
+                {"runs", runs},
+                {"rate_dependence", rate_fit_json(analysis::fit_rate_dependence(measured, ucs))}};
+  };
+  return job;
+}
+
+// Each value read as an override of the resolved experiment: a bad key or value fails here, with
+// the message the experiment file would give.
+std::vector<ExperimentSpec> parameter_specs(const ExperimentSpec& spec, const std::string& key,
+                                            const std::vector<std::string>& values) {
   if (values.empty())
     throw InputError("sweep", "--over " + key, "(no values)", "give the key, then its values");
-  // Each value is read as an override of the resolved experiment: a bad key or value fails
-  // here, before any folder exists, with the message the experiment file would give.
   const std::string text = to_toml(spec);
   std::vector<ExperimentSpec> specs;
   for (const std::string& v : values) {
@@ -447,32 +503,136 @@ SweepResult run_parameter_sweep(const ExperimentSpec& spec, const std::string& k
     one.name = fmt::format("{}-{}-{}", spec.name, key.substr(key.find('.') + 1), v);
     specs.push_back(std::move(one));
   }
+  return specs;
+}
+
+SweepJob parameter_job(const ExperimentSpec& spec, const std::string& key,
+                       const std::vector<std::string>& values, const fs::path& folder) {
+  SweepJob job;
+  job.specs = parameter_specs(spec, key, values);
+  for (ExperimentSpec& one : job.specs) one.output_directory = folder.string();
+  job.describe = [key](const ExperimentSpec& one) { return fmt::format("{} ({})", one.name, key); };
+  job.assemble = [spec, key, values](const std::vector<RunResult>& done) {
+    json runs = json::array();
+    std::size_t most = 0;
+    for (const RunResult& r : done) most = std::max(most, r.cracks);
+    for (std::size_t i = 0; i < done.size(); ++i) {
+      json e = parameter_entry(values[i], done[i]);
+      e["cracks_scaled"] =
+          most > 0 ? static_cast<double>(done[i].cracks) / static_cast<double>(most) : 0.0;
+      runs.push_back(e);
+    }
+    return json{{"experiment", spec.name},
+                {"variable", key},
+                {"test_kind", spec.test_kind},
+                {"cracks_scaled_note",
+                 "cracks over the most any run of the sweep had (seed 001, "
+                 "figure 16: N_frac / N_frac,max)"},
+                {"runs", runs}};
+  };
+  return job;
+}
+
+constexpr const char* kPlanFile = "sweep-plan.json";
+constexpr const char* kPlanFormat = "breccia-sweep-plan 1";
+
+std::vector<double> plan_numbers(const std::vector<std::string>& values) {
+  std::vector<double> v;
+  for (const std::string& s : values) v.push_back(std::stod(s));
+  return v;
+}
+
+// The job a plan describes, its runs writing into `folder`.
+SweepJob job_of_plan(const ExperimentSpec& spec, const json& plan, const fs::path& folder,
+                     const RunOptions& opt) {
+  const std::string kind = plan.at("kind").get<std::string>();
+  const auto values = plan.at("values").get<std::vector<std::string>>();
+  if (kind == "confining_stress") return confining_job(spec, plan_numbers(values), folder);
+  if (kind == "strain_rate") return rate_job(spec, plan_numbers(values), folder, opt);
+  return parameter_job(spec, plan.at("key").get<std::string>(), values, folder);
+}
+
+// Runs a plan's experiments (resuming: what an earlier pass left) and writes sweep.json.
+SweepResult execute_plan(const ExperimentSpec& spec, json plan, const fs::path& folder,
+                         const RunOptions& opt, bool resuming) {
+  const SweepJob job = job_of_plan(spec, plan, folder, opt);
   SweepResult out;
-  out.folder = make_sweep_folder(spec).string();
-  for (ExperimentSpec& one : specs) one.output_directory = out.folder;
-  out.runs = run_all(spec, specs, out.folder, opt, [&](const ExperimentSpec& one) {
-    return fmt::format("{} ({})", one.name, key);
-  });
-  out.status = sweep_status(out.runs, specs.size());
-  json runs = json::array();
-  std::size_t most = 0;
-  for (const RunResult& r : out.runs) most = std::max(most, r.cracks);
-  for (std::size_t i = 0; i < out.runs.size(); ++i) {
-    json e = parameter_entry(values[i], out.runs[i]);
-    e["cracks_scaled"] =
-        most > 0 ? static_cast<double>(out.runs[i].cracks) / static_cast<double>(most) : 0.0;
-    runs.push_back(e);
-  }
-  json sweep{{"status", out.status},
-             {"experiment", spec.name},
-             {"variable", key},
-             {"test_kind", spec.test_kind},
-             {"cracks_scaled_note",
-              "cracks over the most any run of the sweep had (seed 001, "
-              "figure 16: N_frac / N_frac,max)"},
-             {"runs", runs}};
+  out.folder = folder.string();
+  out.runs = run_all(spec, job.specs, folder, opt, job.describe, resuming);
+  out.status = sweep_status(out.runs, job.specs.size());
+  json sweep = job.assemble(out.runs);
+  sweep["status"] = out.status;
+  if (plan.contains("resumed")) sweep["resumed"] = plan["resumed"];
   finish_sweep(spec, out, sweep, opt);
   return out;
+}
+
+// A new sweep: its folder, its plan (the resolved experiment and what varies over which values,
+// so that resume_sweep can finish it), then its runs.
+SweepResult start_sweep(const ExperimentSpec& spec, const std::string& kind, const std::string& key,
+                        const std::vector<std::string>& values, const RunOptions& opt) {
+  const fs::path folder = make_sweep_folder(spec);
+  const json plan{{"format", kPlanFormat},
+                  {"kind", kind},
+                  {"key", key},
+                  {"values", values},
+                  {"experiment_source", spec.source},
+                  {"experiment", to_toml(spec)},
+                  {"program", fmt::format("breccia {} ({})", kVersion, kCommit)}};
+  write_json(folder / kPlanFile, plan);
+  return execute_plan(spec, plan, folder, opt, false);
+}
+
+std::vector<std::string> exact_text(const std::vector<double>& values) {
+  std::vector<std::string> out;
+  for (double v : values) out.push_back(fmt::format("{}", v));  // shortest exact form
+  return out;
+}
+
+}  // namespace
+
+SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining,
+                      const RunOptions& opt) {
+  check_confining(confining, spec);
+  return start_sweep(spec, "confining_stress", "", exact_text(confining), opt);
+}
+
+SweepResult run_rate_sweep(const ExperimentSpec& spec, const std::vector<double>& rates,
+                           const RunOptions& opt) {
+  check_rates(rates, spec);
+  return start_sweep(spec, "strain_rate", "", exact_text(rates), opt);
+}
+
+SweepResult run_parameter_sweep(const ExperimentSpec& spec, const std::string& key,
+                                const std::vector<std::string>& values, const RunOptions& opt) {
+  parameter_specs(spec, key, values);  // every value checked before any folder exists
+  return start_sweep(spec, "parameter", key, values, opt);
+}
+
+SweepResult resume_sweep(const std::string& folder_name, const RunOptions& opt) {
+  const fs::path folder(folder_name), path = folder / kPlanFile;
+  if (!fs::exists(path))
+    throw InputError(folder_name, kPlanFile, "(missing)",
+                     "a sweep folder written by `breccia sweep` (sweeps from before version "
+                     "0.1.0's sweep plans cannot be resumed: resume their runs one by one)");
+  json plan = read_json_object(path.string());
+  const JsonView v(plan, path.string());
+  if (v.text("format", "") != kPlanFormat)
+    throw InputError(path.string(), "format", v.text("format", "(missing)"),
+                     std::string("\"") + kPlanFormat + "\"");
+  const std::string kind = v.text("kind", "");
+  if (kind != "confining_stress" && kind != "strain_rate" && kind != "parameter")
+    throw InputError(path.string(), "kind", kind, "confining_stress, strain_rate or parameter");
+  const ExperimentSpec spec =
+      parse_experiment(v.text("experiment", ""), v.text("experiment_source", path.string()), {});
+  if (!plan.contains("resumed")) plan["resumed"] = json::array();
+  plan["resumed"].push_back(
+      json{{"when", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
+           {"program", fmt::format("breccia {} ({})", kVersion, kCommit)},
+           {"command", opt.command_line}});
+  write_json(path, plan);
+  if (opt.log) opt.log("resuming the sweep in " + folder_name);
+  return execute_plan(spec, plan, folder, opt, true);
 }
 
 }  // namespace breccia
