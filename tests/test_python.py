@@ -287,8 +287,25 @@ def test_a_sweep_from_python_in_this_process_and_in_child_processes_agree():
         assert list(a["sigma1_at_peak_pa"]) == list(b["sigma1_at_peak_pa"])
         assert a["sigma1_at_peak_pa"][1] > a["sigma1_at_peak_pa"][0]
         assert [r.complete for r in here.runs] == [True, True]
-    with pytest.raises(breccia.InputError, match="confining_mpa or strain_rates"):
+    with pytest.raises(breccia.InputError, match="confining_mpa, strain_rates or over"):
         breccia.sweep(breccia.Experiment(overrides=SMALL))
+    with pytest.raises(breccia.InputError, match="allowed: \\(key, \\[values\\]\\)"):
+        breccia.sweep(breccia.Experiment(overrides=SMALL), over=["bond.tensile_strength"])
+    with pytest.raises(breccia.InputError, match="bond.tensile_strength"):
+        breccia.sweep(breccia.Experiment(overrides=SMALL), over=("bond.tensile_strength", [-1.0]))
+
+
+def test_a_sweep_over_any_key_from_python():
+    """over=(key, values) runs once per value, each value checked as an override; the sweep
+    reads back with the values as the command writes them."""
+    with tempfile.TemporaryDirectory() as out:
+        done = breccia.sweep(breccia.Experiment(overrides=SMALL),
+                             over=("bond.tensile_strength", [25e6, 30e6]), output=out,
+                             progress=False)
+        assert done.status == "complete" and done.variable == "bond.tensile_strength"
+        assert [r["value"] for r in done.sweep["runs"]] == ["25000000.0", "30000000.0"]
+        cracks = [r["cracks"] for r in done.sweep["runs"]]
+        assert cracks[0] > cracks[1] > 0, "weaker bonds break more"
 
 
 def test_resume_finishes_a_stopped_sweep():

@@ -7,7 +7,7 @@ import sys
 import pandas as pd
 
 from . import _core
-from .experiment import Experiment
+from .experiment import Experiment, toml_value
 from .folders import RunFolder, SweepFolder
 
 InputError = _core.InputError
@@ -109,20 +109,28 @@ def resume(folder, *, threads=None, progress=None, log=None, stop_at_step=0, job
     return RunFolder(result["folder"])
 
 
-def sweep(experiment=None, *, confining_mpa=None, strain_rates=None, output=None, jobs=1,
-          threads=None, progress=None, log=None):
-    """Runs the experiment's compression test once per confining stress (MPa) or per strain
-    rate (1/s), on copies of one sample, with the fits and trends; returns the SweepFolder.
-    jobs: runs at once as child processes of the breccia command (0: as many as the cores
-    allow; 1: one after another in this process)."""
-    if (confining_mpa is None) == (strain_rates is None):
-        raise InputError("sweep: give confining_mpa or strain_rates (one of them)")
+def sweep(experiment=None, *, confining_mpa=None, strain_rates=None, over=None, output=None,
+          jobs=1, threads=None, progress=None, log=None):
+    """Runs the experiment once per confining stress (MPa) or per strain rate (1/s) of its
+    compression test, or once per value of any key (over=("sample.slab_thickness", [5e-3,
+    1e-2]): any test), with the fits and trends; returns the SweepFolder. jobs: runs at once
+    as child processes of the breccia command (0: as many as the cores allow; 1: one after
+    another in this process). An interrupted sweep is finished by resume(folder)."""
+    if sum(x is not None for x in (confining_mpa, strain_rates, over)) != 1:
+        raise InputError("sweep: give confining_mpa, strain_rates or over (one of them)")
+    key, values = "", []
+    if over is not None:
+        if (not isinstance(over, (tuple, list)) or len(over) != 2 or
+                not isinstance(over[0], str)):
+            raise InputError(f"sweep: over = {over!r}: allowed: (key, [values]), e.g. "
+                             "(\"sample.slab_thickness\", [5e-3, 1e-2])")
+        key, values = over[0], [toml_value(v) for v in over[1]]
     exp = _experiment(experiment, output, threads)
     bar, _ = _progress(progress, exp["output.progress"])
     confining = [1e6 * float(s) for s in confining_mpa] if confining_mpa is not None else []
     rates = [float(r) for r in strain_rates] if strain_rates is not None else []
-    result = _core.sweep(exp._spec, confining, rates, int(jobs), bar, _printer(log),
-                         _command("sweep"))
+    result = _core.sweep(exp._spec, confining, rates, key, values, int(jobs), bar,
+                         _printer(log), _command("sweep"))
     _checked(result, "sweep")
     return SweepFolder(result["folder"])
 

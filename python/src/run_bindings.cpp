@@ -162,10 +162,12 @@ py::dict guarded_sweep(std::optional<py::function> log, RunOptions& opt, int job
 }
 
 py::dict sweep(const ExperimentSpec& spec, const std::vector<double>& confining_pa,
-               const std::vector<double>& strain_rates, int jobs, bool progress_bar,
+               const std::vector<double>& strain_rates, const std::string& key,
+               const std::vector<std::string>& values, int jobs, bool progress_bar,
                std::optional<py::function> log, const std::string& command) {
   RunOptions opt = options(progress_bar, 0, command);
   return guarded_sweep(std::move(log), opt, jobs, [&](const RunOptions& o) {
+    if (!key.empty()) return run_parameter_sweep(spec, key, values, o);
     return strain_rates.empty() ? run_sweep(spec, confining_pa, o)
                                 : run_rate_sweep(spec, strain_rates, o);
   });
@@ -189,7 +191,8 @@ void bind_run(py::module_& m) {
   m.def("resume_sweep", &resume_a_sweep, py::arg("folder"), py::arg("jobs"),
         py::arg("progress_bar"), py::arg("log"), py::arg("stop_at_step"), py::arg("command"));
   m.def("sweep", &sweep, py::arg("spec"), py::arg("confining_pa"), py::arg("strain_rates"),
-        py::arg("jobs"), py::arg("progress_bar"), py::arg("log"), py::arg("command"));
+        py::arg("key"), py::arg("values"), py::arg("jobs"), py::arg("progress_bar"), py::arg("log"),
+        py::arg("command"));
 }
 
 }  // namespace breccia::python
