@@ -62,7 +62,11 @@ struct Wall {
   double radial_force = 0.0;  // cylinder: sum of F . n over its contacts (positive pushes inward)
   Vec3 force_prev;            // previous step's force (and radial force), for the trapezoidal
   double radial_force_prev = 0.0;  // work rule that matches the leapfrog kinetic energy
-  double moved = 0.0;              // distance moved since the last neighbour rebuild
+  // The motion of the last advance: the wall's last displacement, over which that rule books
+  // the work (a servo sets `velocity` for the next step before the forces are computed).
+  Vec3 advanced_velocity;
+  double advanced_radial_speed = 0.0;
+  double moved = 0.0;  // distance moved since the last neighbour rebuild
 
   static Wall plane(std::string name, Vec3 point, Vec3 inward_normal) {
     Wall w;
@@ -151,6 +155,8 @@ struct Wall {
   }
 
   void advance(double dt) noexcept {
+    advanced_velocity = velocity;
+    advanced_radial_speed = radial_speed;
     if (shape != WallShape::Cylinder) {
       point += velocity * dt;
       moved += norm(velocity) * dt;

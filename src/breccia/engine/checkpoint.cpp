@@ -45,7 +45,7 @@ void transfer_set(Archive& a, BondSet<Law>& b) {
 
 // Walls hold a name (not plain data): transferred field by field. The size check fails to
 // compile when a field is added, as a reminder to add it here.
-static_assert(sizeof(Wall) == 312, "Wall changed: update the checkpoint (engine/checkpoint.cpp)");
+static_assert(sizeof(Wall) == 344, "Wall changed: update the checkpoint (engine/checkpoint.cpp)");
 
 template <class Archive>
 void transfer_wall(Archive& a, Wall& w) {
@@ -69,6 +69,8 @@ void transfer_wall(Archive& a, Wall& w) {
   a.value(w.radial_force);
   a.value(w.force_prev);
   a.value(w.radial_force_prev);
+  a.value(w.advanced_velocity);
+  a.value(w.advanced_radial_speed);
   a.value(w.moved);
 }
 

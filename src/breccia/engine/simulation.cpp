@@ -158,6 +158,8 @@ std::size_t Simulation::add_wall(Wall w) {
     added.update_motion(time_ - 0.5 * dt_);
     added.force_prev = {};
     added.radial_force_prev = 0.0;
+    added.advanced_velocity = added.velocity;
+    added.advanced_radial_speed = added.radial_speed;
     std::visit([&](auto& c) { rebuild(c); }, contact_);
   }
   return walls_.size() - 1;
@@ -355,6 +357,8 @@ void Simulation::initialise() {
     w.update_motion(-0.5 * dt_);
     w.force_prev = {};
     w.radial_force_prev = 0.0;
+    w.advanced_velocity = w.velocity;
+    w.advanced_radial_speed = w.radial_speed;
   }
   initialised_ = true;
   sample_requested_ = true;  // the first step's sample is the energy baseline
@@ -742,10 +746,11 @@ void Simulation::compute_walls(ContactSet<CL>& c) {
       touching += wc.normal_force[k] != 0.0 ? 1 : 0;
       stiffness += wc.stiffness[k];
     }
-    // Trapezoidal work over the wall's last displacement (matches the leapfrog kinetic energy).
+    // Trapezoidal work over the wall's last displacement (matches the leapfrog kinetic energy):
+    // the motion that made it, not the one a servo has set for the next step.
     const double dw = w.shape != WallShape::Cylinder
-                          ? 0.5 * dot(w.force_prev + total, w.velocity) * dt
-                          : 0.5 * (w.radial_force_prev + radial) * w.radial_speed * dt;
+                          ? 0.5 * dot(w.force_prev + total, w.advanced_velocity) * dt
+                          : 0.5 * (w.radial_force_prev + radial) * w.advanced_radial_speed * dt;
     w.work += dw;
     w_walls_ += dw;
     w.force = total;

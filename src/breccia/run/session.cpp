@@ -20,7 +20,7 @@ using json = nlohmann::json;
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // 2: commit and trailing hash; 3: strain gauges; 4, 5: brittle-beam and quaternion bond sets;
 // 6: smooth joints; 7: the 2D side-wall servo's integral terms; 8: RICEBAL bond set
-constexpr std::uint32_t kCheckpointFormat = 11;
+constexpr std::uint32_t kCheckpointFormat = 12;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
