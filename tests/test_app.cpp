@@ -491,10 +491,17 @@ TEST(App, AStoppedSweepResumesToTheUninterruptedSweep) {
   expect_same(b, "resumed in child processes");
   EXPECT_EQ(nlohmann::json::parse(read(b / "sweep.json"))["runs"][0]["folder"], first)
       << "the stopped run continues in its own folder";
-  // Stopped in child processes (both runs); resumed in this process.
+  // Stopped in child processes (both runs); resumed in this process. Without sweep.json (a
+  // sweep killed outright) `summarise` reads the plan and where each run stands.
   const Result cut2 = sweep("cut2", " --jobs 2 --stop-at-step 1500");
   EXPECT_EQ(cut2.code, 130) << cut2.out;
   const fs::path c = last_line(cut2.out);
+  fs::remove(c / "sweep.json");
+  const Result where = run("summarise " + c.string());
+  EXPECT_EQ(where.code, 0) << where.out;
+  for (const char* part : {"unfinished", "bond.tensile_strength over 25e6 30e6", "2 runs planned",
+                           "interrupted", "checkpoint at step 1500", "step 1401", "breccia resume"})
+    EXPECT_NE(where.out.find(part), std::string::npos) << part << " in:\n" << where.out;
   const Result resumed2 = run("resume --jobs 1 " + c.string());
   ASSERT_EQ(resumed2.code, 0) << resumed2.out;
   expect_same(c, "resumed in this process");
@@ -512,6 +519,34 @@ TEST(App, AStoppedSweepResumesToTheUninterruptedSweep) {
   const Result neither = run("resume " + out.string());
   EXPECT_EQ(neither.code, 2);
   EXPECT_NE(neither.out.find("sweep-plan.json"), std::string::npos) << neither.out;
+  fs::remove_all(out);
+}
+
+// SIGTERM to a sweep's own process (a job scheduler's stop; not the terminal's Ctrl-C, which
+// reaches every process of the group) is passed on to the runs in child processes: they stop
+// with checkpoints instead of running on as orphans, and the sweep says interrupted.
+TEST(App, ASignalToASweepStopsItsChildRuns) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_sweep_signal";
+  fs::remove_all(out);
+  // Each run takes about 28,000 steps (10-30 s): the signal comes 3 s after the start.
+  const Result r =
+      run_with_prefix("timeout --foreground --preserve-status -s TERM 3 ",
+                      "sweep --jobs 2 --output " + out.string() + kSmallSample +
+                          " --set loading.platen_speed=0.02 --set loading.max_strain=0.008"
+                          " --set engine.threads=1 --over bond.tensile_strength 25e6 30e6");
+  EXPECT_EQ(r.code, 130) << r.out;
+  const fs::path sweep = last_line(r.out);
+  ASSERT_TRUE(fs::exists(sweep / "sweep.json")) << r.out;
+  const auto j = nlohmann::json::parse(read(sweep / "sweep.json"));
+  EXPECT_EQ(j["status"], "interrupted");
+  int stopped = 0;
+  for (const auto& e : fs::directory_iterator(sweep)) {
+    if (!fs::exists(e.path() / "manifest.json")) continue;
+    const auto m = nlohmann::json::parse(read(e.path() / "manifest.json"));
+    EXPECT_NE(m["status"], "running") << e.path() << ": a run outlived its sweep";
+    if (m["status"] == "interrupted" && fs::exists(e.path() / "checkpoint.bin")) ++stopped;
+  }
+  EXPECT_EQ(stopped, 2) << r.out;
   fs::remove_all(out);
 }
 

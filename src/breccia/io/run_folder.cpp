@@ -5,12 +5,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <thread>
 
 #include "breccia/core/error.hpp"
@@ -275,20 +277,87 @@ bool write_report(const std::string& folder) {
   return run_module("report", folder, "report.log");
 }
 
+namespace {
+
+// The last complete row of a CSV table as column -> text; empty when it has no row.
+std::vector<std::pair<std::string, std::string>> last_row(const fs::path& csv) {
+  std::ifstream in(csv, std::ios::binary);
+  std::string header;
+  if (!std::getline(in, header)) return {};
+  // Only the tail is read: a long run's history has many rows.
+  const auto size = static_cast<std::streamoff>(fs::file_size(csv));
+  const std::streamoff start =
+      std::max<std::streamoff>(static_cast<std::streamoff>(header.size()) + 1, size - 65536);
+  in.seekg(start);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty() && !in.eof()) last = line;  // a row without its newline is being written
+  std::vector<std::pair<std::string, std::string>> row;
+  std::stringstream hs(header), ls(last);
+  for (std::string name, value; std::getline(hs, name, ',') && std::getline(ls, value, ',');)
+    row.emplace_back(name, value);
+  return last.empty() ? decltype(row){} : row;
+}
+
+// Where an unfinished run stands: its manifest's status and its history's last row.
+std::string summarise_unfinished_run(const fs::path& f) {
+  const fs::path mpath = f / "manifest.json";
+  const json m = read_json_object(mpath.string());
+  const JsonView v(m, mpath.string());
+  std::string s = fmt::format("{}: {}", f.filename().string(), v.text("status", "unknown"));
+  if (v.has("stop_reason")) s += " (" + v.text("stop_reason", "") + ")";
+  std::string at;
+  for (const auto& [name, value] : last_row(f / "history.csv"))
+    if (name == "step" || name == "time_s" || name == "axial_strain" ||
+        name == "deviatoric_stress_pa" || name == "broken_bonds")
+      at += fmt::format("{}{} {}", at.empty() ? "" : ", ", name, value);
+  s += at.empty() ? "; no row recorded yet" : "; last row: " + at;
+  if (const auto cp = v.find("checkpoint"))
+    s += fmt::format("; checkpoint at step {}", plain(*cp, "step", "{:.0f}"));
+  return s + "\n";
+}
+
+// A sweep without sweep.json (still running, or killed): its plan and its runs so far.
+std::string summarise_unfinished_sweep(const fs::path& f) {
+  const fs::path ppath = f / "sweep-plan.json";
+  const json p = read_json_object(ppath.string());
+  const JsonView v(p, ppath.string());
+  std::string values;
+  for (const JsonView& x : v.elements("values")) values += " " + x.as_text();
+  const std::string kind = v.text("kind", "");
+  std::string s =
+      fmt::format("sweep {} (unfinished: no sweep.json yet)\n  {} over{} ({} runs planned)\n",
+                  f.filename().string(), kind == "parameter" ? v.text("key", "") : kind, values,
+                  v.elements("values").size());
+  std::vector<fs::path> runs;
+  for (const fs::directory_entry& d : fs::directory_iterator(f))
+    if (d.is_directory() && fs::exists(d.path() / "manifest.json")) runs.push_back(d.path());
+  std::sort(runs.begin(), runs.end());
+  for (const fs::path& r : runs) {
+    const json m = read_json_object((r / "manifest.json").string());
+    const bool complete =
+        JsonView(m, (r / "manifest.json").string()).text("status", "") == "complete";
+    s += "  " + (complete ? r.filename().string() + ": complete\n" : summarise_unfinished_run(r));
+  }
+  s += fmt::format(
+      "  {} of {} runs started; once it has stopped, `breccia resume {}` finishes "
+      "it\n",
+      runs.size(), v.elements("values").size(), f.string());
+  return s;
+}
+
+}  // namespace
+
 std::string summarise_folder(const std::string& folder) {
   const fs::path f(folder);
   if (!fs::is_directory(f)) throw InputError(folder, "", "", "not a folder");
   if (fs::exists(f / "sweep.json")) return summarise_sweep(f / "sweep.json");
-  if (!fs::exists(f / "summary.json")) {
-    std::string status = "unknown";
-    if (fs::exists(f / "manifest.json")) {
-      const json m = read_json_object((f / "manifest.json").string());
-      status = JsonView(m, (f / "manifest.json").string()).text("status", "unknown");
-    }
-    throw InputError(folder, "summary.json", "(missing)",
-                     "not a finished run folder (manifest status: " + status + ")");
-  }
-  return summarise_run(f / "summary.json");
+  if (fs::exists(f / "sweep-plan.json")) return summarise_unfinished_sweep(f);
+  if (fs::exists(f / "summary.json")) return summarise_run(f / "summary.json");
+  if (fs::exists(f / "manifest.json")) return summarise_unfinished_run(f);
+  throw InputError(folder, "summary.json", "(missing)",
+                   "a run folder (summary.json or manifest.json) or a sweep folder (sweep.json "
+                   "or sweep-plan.json)");
 }
 
 }  // namespace breccia

@@ -1,6 +1,7 @@
 #include <fcntl.h>
 #include <fmt/chrono.h>
 #include <fmt/format.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -157,10 +158,21 @@ std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int
   std::vector<RunResult> results(specs.size());
   std::vector<std::pair<pid_t, std::size_t>> running;
   std::size_t next = 0;
+  bool passed_on = false;
   auto reap_one = [&] {
     int status = 0;
-    const pid_t pid = waitpid(-1, &status, 0);
-    if (pid <= 0) return;
+    pid_t pid = 0;
+    while ((pid = waitpid(-1, &status, WNOHANG)) == 0) {
+      // A stop asked of the sweep alone (SIGTERM from a job scheduler, kill from another
+      // terminal) is passed on to its runs, which stop with a checkpoint: the sweep can then be
+      // resumed. Ctrl-C in the terminal reaches them already; a second signal changes nothing.
+      if (!passed_on && opt.interrupt && opt.interrupt->load()) {
+        for (const auto& [child, index] : running) kill(child, SIGINT);
+        passed_on = true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    if (pid < 0) return;
     for (std::size_t k = 0; k < running.size(); ++k) {
       if (running[k].first != pid) continue;
       const std::size_t i = running[k].second;
