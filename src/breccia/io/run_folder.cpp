@@ -51,14 +51,17 @@ void write_json(const fs::path& p, const json& j) {
   fs::rename(tmp, p);  // atomic: a reader never sees half a manifest
 }
 
+std::string folder_safe_name(const std::string& name) {
+  std::string safe;
+  for (char c : name) safe += (std::isalnum(static_cast<unsigned char>(c)) || c == '-') ? c : '_';
+  return safe;
+}
+
 fs::path make_folder(const ExperimentSpec& spec) {
   const auto now = std::chrono::system_clock::now();
   const std::string stamp =
       fmt::format("{:%Y%m%d-%H%M%S}", fmt::localtime(std::chrono::system_clock::to_time_t(now)));
-  std::string safe;
-  for (char c : spec.name)
-    safe += (std::isalnum(static_cast<unsigned char>(c)) || c == '-') ? c : '_';
-  fs::path base = fs::path(spec.output_directory) / (stamp + "-" + safe);
+  fs::path base = fs::path(spec.output_directory) / (stamp + "-" + folder_safe_name(spec.name));
   fs::path p = base;
   for (int k = 2; fs::exists(p); ++k) p = base.string() + "-" + std::to_string(k);
   std::error_code ec;

@@ -16,6 +16,9 @@ namespace breccia {
 void write_json(const std::filesystem::path& path, const nlohmann::json& j);
 // Creates <output.directory>/<timestamp>-<name>[-k], a new folder for one run or sweep.
 std::filesystem::path make_folder(const ExperimentSpec& spec);
+// A run's name as its folder spells it (after the time stamp): letters, digits and '-' kept,
+// anything else '_'.
+std::string folder_safe_name(const std::string& name);
 // stress_strain.png and report.html of a run folder; a warning through `log` if either fails.
 void make_plot(const std::filesystem::path& folder,
                const std::function<void(const std::string&)>& log);

@@ -126,8 +126,7 @@ struct EarlierRun {
 };
 
 EarlierRun earlier_run(const fs::path& sweep_folder, const std::string& name) {
-  std::string safe;
-  for (char c : name) safe += (std::isalnum(static_cast<unsigned char>(c)) || c == '-') ? c : '_';
+  const std::string safe = folder_safe_name(name);
   constexpr std::size_t kStamp = 16;  // "YYYYmmdd-HHMMSS-"
   EarlierRun e;
   for (const fs::directory_entry& d : fs::directory_iterator(sweep_folder)) {
