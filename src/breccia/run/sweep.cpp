@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -140,6 +141,50 @@ EarlierRun earlier_run(const fs::path& sweep_folder, const std::string& name) {
   return e;
 }
 
+using Children = std::vector<std::pair<pid_t, std::size_t>>;  // pid, index of the run
+
+// Waits for one of the running children to end and returns its pid (-1: none left). A stop asked
+// of the sweep alone (SIGTERM from a job scheduler, kill from another terminal) is passed on to
+// its runs, which stop with a checkpoint, so that the sweep can be resumed; Ctrl-C in the
+// terminal reaches them already, and a second signal changes nothing.
+pid_t wait_for_a_child(const Children& running, const RunOptions& opt, bool& passed_on) {
+  int status = 0;
+  pid_t pid = 0;
+  while ((pid = waitpid(-1, &status, WNOHANG)) == 0) {
+    if (!passed_on && opt.interrupt && opt.interrupt->load()) {
+      for (const auto& [child, index] : running) kill(child, SIGINT);
+      passed_on = true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return pid;
+}
+
+// What a child wrote: its run folder's results, or a failure pointing at its log.
+RunResult result_of_child(const fs::path& stem) {
+  const fs::path run = printed_folder(stem.string() + ".out");
+  if (!run.empty() && fs::exists(run)) return result_of_folder(run);
+  RunResult r;
+  r.status = "failed";
+  r.stop_reason = "no run folder: see " + stem.string() + ".log";
+  return r;
+}
+
+// The command line of a child: `resume` of a run with a checkpoint, else `run` of the
+// experiment written beside `stem`.
+std::vector<std::string> child_arguments(const ExperimentSpec& one, const EarlierRun& earlier,
+                                         int threads, const fs::path& stem,
+                                         std::uint64_t stop_at_step) {
+  std::vector<std::string> args{"resume", earlier.folder.string(), "--threads",
+                                std::to_string(threads)};
+  if (!earlier.resumable()) {
+    std::ofstream(stem.string() + ".toml") << to_toml(one);
+    args = {"run", stem.string() + ".toml"};
+  }
+  if (stop_at_step > 0) args.insert(args.end(), {"--stop-at-step", std::to_string(stop_at_step)});
+  return args;
+}
+
 // The sweep's runs as child processes, `jobs` at a time, each with `threads` OpenMP threads. A
 // generated sample is packed first, once, into the cache the children read. Resuming, a run
 // that completed is kept, one with a checkpoint continues from it, and the others start anew.
@@ -155,44 +200,23 @@ std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int
   const fs::path dir = folder / "experiments";
   fs::create_directories(dir);
   std::vector<RunResult> results(specs.size());
-  std::vector<std::pair<pid_t, std::size_t>> running;
+  Children running;
   std::size_t next = 0;
   bool passed_on = false;
   auto reap_one = [&] {
-    int status = 0;
-    pid_t pid = 0;
-    while ((pid = waitpid(-1, &status, WNOHANG)) == 0) {
-      // A stop asked of the sweep alone (SIGTERM from a job scheduler, kill from another
-      // terminal) is passed on to its runs, which stop with a checkpoint: the sweep can then be
-      // resumed. Ctrl-C in the terminal reaches them already; a second signal changes nothing.
-      if (!passed_on && opt.interrupt && opt.interrupt->load()) {
-        for (const auto& [child, index] : running) kill(child, SIGINT);
-        passed_on = true;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    if (pid < 0) return;
-    for (std::size_t k = 0; k < running.size(); ++k) {
-      if (running[k].first != pid) continue;
-      const std::size_t i = running[k].second;
-      const fs::path stem = dir / specs[i].name;
-      const fs::path run = printed_folder(stem.string() + ".out");
-      results[i] = run.empty() || !fs::exists(run) ? RunResult{} : result_of_folder(run);
-      if (run.empty() || !fs::exists(run)) {
-        results[i].status = "failed";
-        results[i].stop_reason = "no run folder: see " + stem.string() + ".log";
-      }
-      if (opt.log)
-        opt.log(fmt::format("sweep: {} {} ({})", specs[i].name, results[i].status,
-                            results[i].status == "complete"
-                                ? fmt::format("peak q {:.2f} MPa", results[i].peak_stress * 1e-6)
-                                : results[i].stop_reason));
-      running.erase(running.begin() + static_cast<std::ptrdiff_t>(k));
-      return;
-    }
+    const pid_t pid = wait_for_a_child(running, opt, passed_on);
+    const auto done = std::find_if(running.begin(), running.end(),
+                                   [pid](const auto& c) { return c.first == pid; });
+    if (done == running.end()) return;
+    const std::size_t i = done->second;
+    results[i] = result_of_child(dir / specs[i].name);
+    if (opt.log)
+      opt.log(fmt::format("sweep: {} {} ({})", specs[i].name, results[i].status,
+                          results[i].status == "complete"
+                              ? fmt::format("peak q {:.2f} MPa", results[i].peak_stress * 1e-6)
+                              : results[i].stop_reason));
+    running.erase(done);
   };
-  std::vector<std::string> stop;
-  if (opt.stop_at_step > 0) stop = {"--stop-at-step", std::to_string(opt.stop_at_step)};
   while (next < specs.size() || !running.empty()) {
     const bool stopping = opt.interrupt && opt.interrupt->load();
     if (!stopping && next < specs.size() && running.size() < static_cast<std::size_t>(jobs)) {
@@ -205,20 +229,15 @@ std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int
         results[next++] = earlier.result;
         continue;
       }
-      std::vector<std::string> args{"resume", earlier.folder.string(), "--threads",
-                                    std::to_string(threads)};
-      if (!earlier.resumable()) {
-        std::ofstream(stem.string() + ".toml") << to_toml(one);
-        args = {"run", stem.string() + ".toml"};
-      }
-      args.insert(args.end(), stop.begin(), stop.end());
       if (opt.log)
         opt.log(fmt::format("sweep: {} {} ({} thread{})",
                             earlier.resumable() ? "resumed" : "started", one.name, threads,
                             threads == 1 ? "" : "s"));
-      running.emplace_back(spawn_child(opt.executable, std::move(args), stem.string() + ".out",
-                                       stem.string() + ".log"),
-                           next);
+      running.emplace_back(
+          spawn_child(opt.executable,
+                      child_arguments(one, earlier, threads, stem, opt.stop_at_step),
+                      stem.string() + ".out", stem.string() + ".log"),
+          next);
       ++next;
       continue;
     }
