@@ -655,6 +655,24 @@ SweepResult resume_sweep(const std::string& folder_name, const RunOptions& opt) 
     throw InputError(path.string(), "kind", kind, "confining_stress, strain_rate or parameter");
   const ExperimentSpec spec =
       parse_experiment(v.text("experiment", ""), v.text("experiment_source", path.string()), {});
+  // The values are checked as a new sweep checks them, each error naming the plan file.
+  std::vector<std::string> values;
+  for (const JsonView& x : v.elements("values")) values.push_back(x.as_text());
+  if (values.empty()) throw InputError(path.string(), "values", "[]", "one value or more");
+  if (kind == "parameter") {
+    if (v.text("key", "").empty())
+      throw InputError(path.string(), "key", "\"\"", "the key the sweep varies");
+    parameter_specs(spec, v.text("key", ""), values);
+  } else {
+    std::vector<double> numbers;
+    for (const std::string& t : values) {
+      char* end = nullptr;
+      numbers.push_back(std::strtod(t.c_str(), &end));
+      if (t.empty() || *end != '\0') throw InputError(path.string(), "values", t, "numbers");
+    }
+    if (kind == "confining_stress") check_confining(numbers, spec);
+    if (kind == "strain_rate") check_rates(numbers, spec);
+  }
   if (!plan.contains("resumed")) plan["resumed"] = json::array();
   plan["resumed"].push_back(
       json{{"when", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
