@@ -633,6 +633,11 @@ TEST(Sweep, StrainRatesSetThePlatenSpeedFromTheSampleLength) {
                         "report/failure_plane.png", "rates.csv", "report.html"})
     EXPECT_TRUE(fs::exists(folder / f)) << f;
   EXPECT_NE(r.out.find("damage ratio"), std::string::npos) << r.out;
+  // Resumed quietly, a finished sweep runs nothing and keeps its results. (Without a logger,
+  // measuring the generated sample's length once threw std::bad_function_call.)
+  const Result quiet = run("resume --quiet " + folder.string());
+  EXPECT_EQ(quiet.code, 0) << quiet.out;
+  EXPECT_EQ(nlohmann::json::parse(read(folder / "sweep.json"))["runs"], sweep["runs"]);
   fs::remove_all(dir);
 }
 

@@ -178,7 +178,11 @@ GeneratedSample generate_sample(const ExperimentSpec& s, const std::string& path
 }
 
 GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info,
-                         const std::function<void(const std::string&)>& log) {
+                         const std::function<void(const std::string&)>& log_fn) {
+  // A quiet caller passes no logger.
+  auto log = [&](const std::string& m) {
+    if (log_fn) log_fn(m);
+  };
   const Dimension want = s.dimension == 2 ? Dimension::Two : Dimension::Three;
   info = sample_info(s);
   const auto max_n = static_cast<std::uint64_t>(s.max_particles);
