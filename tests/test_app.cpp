@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "breccia/analysis/stress_strain.hpp"
+#include "breccia/calibrate/calibration_file.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/io/experiment.hpp"
 #include "cli_harness.hpp"
@@ -286,12 +287,23 @@ TEST(StressStrain, TangentModulusOfASyntheticCurve) {
 }
 
 TEST(App, ExamplesAreValid) {
-  for (const char* name :
-       {"hex-2d.toml", "triangle-from-file.toml", "brazilian.toml", "preconsolidated-2d.toml",
-        "triaxial-smooth-joint.toml", "ucs-brittle-beam.toml", "ucs-quaternion-bond.toml"}) {
-    const std::string path = std::string(BRECCIA_SOURCE_DIR) + "/examples/" + name;
-    EXPECT_NO_THROW(load_experiment(path, {})) << path;
+  // Every file in examples/: the calibration files (calibrate-*.toml) as calibrations, the
+  // others as experiments. A new example is checked without being listed here.
+  int experiments = 0, calibrations = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(BRECCIA_SOURCE_DIR) / "examples")) {
+    const fs::path path = entry.path();
+    if (path.extension() != ".toml") continue;
+    if (path.filename().string().starts_with("calibrate-")) {
+      EXPECT_NO_THROW(load_calibration(path.string())) << path;
+      ++calibrations;
+    } else {
+      EXPECT_NO_THROW(load_experiment(path.string(), {})) << path;
+      ++experiments;
+    }
   }
+  // The slab tests', the strain-rate study's and the seeds' examples at least.
+  EXPECT_GE(experiments, 13);
+  EXPECT_GE(calibrations, 10);
 }
 
 TEST(App, ExperimentReferenceIsUpToDate) {
