@@ -566,9 +566,14 @@ SweepJob parameter_job(const ExperimentSpec& spec, const std::string& key,
 constexpr const char* kPlanFile = "sweep-plan.json";
 constexpr const char* kPlanFormat = "breccia-sweep-plan 1";
 
-std::vector<double> plan_numbers(const std::vector<std::string>& values) {
+// A plan's values as numbers; an error names the plan file `where`.
+std::vector<double> plan_numbers(const std::vector<std::string>& values, const std::string& where) {
   std::vector<double> v;
-  for (const std::string& s : values) v.push_back(std::stod(s));
+  for (const std::string& t : values) {
+    char* end = nullptr;
+    v.push_back(std::strtod(t.c_str(), &end));
+    if (t.empty() || *end != '\0') throw InputError(where, "values", t, "numbers");
+  }
   return v;
 }
 
@@ -577,8 +582,9 @@ SweepJob job_of_plan(const ExperimentSpec& spec, const json& plan, const fs::pat
                      const RunOptions& opt) {
   const std::string kind = plan.at("kind").get<std::string>();
   const auto values = plan.at("values").get<std::vector<std::string>>();
-  if (kind == "confining_stress") return confining_job(spec, plan_numbers(values), folder);
-  if (kind == "strain_rate") return rate_job(spec, plan_numbers(values), folder, opt);
+  const std::string where = (folder / kPlanFile).string();
+  if (kind == "confining_stress") return confining_job(spec, plan_numbers(values, where), folder);
+  if (kind == "strain_rate") return rate_job(spec, plan_numbers(values, where), folder, opt);
   return parameter_job(spec, plan.at("key").get<std::string>(), values, folder);
 }
 
@@ -664,12 +670,7 @@ SweepResult resume_sweep(const std::string& folder_name, const RunOptions& opt) 
       throw InputError(path.string(), "key", "\"\"", "the key the sweep varies");
     parameter_specs(spec, v.text("key", ""), values);
   } else {
-    std::vector<double> numbers;
-    for (const std::string& t : values) {
-      char* end = nullptr;
-      numbers.push_back(std::strtod(t.c_str(), &end));
-      if (t.empty() || *end != '\0') throw InputError(path.string(), "values", t, "numbers");
-    }
+    const std::vector<double> numbers = plan_numbers(values, path.string());
     if (kind == "confining_stress") check_confining(numbers, spec);
     if (kind == "strain_rate") check_rates(numbers, spec);
   }
