@@ -53,6 +53,30 @@ bool has_whole_looking_run(const fs::path& root) {
 
 const char* kGeomHead = "breccia-geometry 1\ndimension 3\n";
 
+// A calibration of a tiny generated prism (about 330 grains): a case that must be refused before
+// the first trial gets there in a second or two, packing included.
+const std::string kCalibrationHead =
+    "[calibration]\nname = \"t\"\ntrials_per_stage = 1\npasses = 1\nverify_seeds = []\n";
+const std::string kCalibrationExperiment =
+    "[experiment]\n[experiment.engine]\nthreads = 1\ndensity_scaling = 10.0\n"
+    "[experiment.material]\npreset = \"custom\"\n[experiment.sample]\nwidth = 3e-3\n"
+    "depth = 3e-3\nheight = 6e-3\nradius_min = 0.22e-3\nradius_max = 0.36e-3\n"
+    "[experiment.contact]\nlaw = \"hertz_mindlin\"\nshear_modulus = 29e9\n"
+    "poisson_ratio = 0.33\nfriction = 0.4\n[experiment.bond]\nmodulus = 8e9\n"
+    "tensile_strength = 30e6\ncohesion = 60e6\n";
+const std::string kModulusOnly =
+    "[targets]\nyoungs_modulus = 8e9\n[free]\n\"bond.modulus\" = [2e9, 60e9]\n";
+
+// The plan a confining sweep of the tiny lattice writes (sweep-plan.json), with `edit` applied.
+std::string lattice_plan(const std::string& kind, const std::string& values,
+                         const std::string& experiment, const std::string& extra = "") {
+  return "{\"format\": \"breccia-sweep-plan 1\", \"kind\": \"" + kind +
+         "\", \"values\": " + values +
+         (experiment.empty() ? "" : ", \"experiment\": \"" + experiment + "\"") + extra + "}";
+}
+const std::string kPlanLattice =
+    "[sample]\\nsource = \\\"lattice\\\"\\ncells = [2, 2, 4]\\n[output]\\nplot = false\\n";
+
 std::vector<BadCase> cases() {
   const std::string run = "run --quiet --output {d}/runs ";
   const std::string geom = " --set sample.source=\"file\" --set sample.file=\"{d}/s.geom\"";
@@ -432,6 +456,167 @@ std::vector<BadCase> cases() {
        "resume {d}",
        2,
        {"nothing to resume"}},
+      // --- calibration files: refused by `calibrate --check` and before the first trial ---
+      {"calibration_tie_negative_factor",
+       {{"c.toml",
+         txt(kCalibrationHead + kModulusOnly +
+             "[tied]\n\"bond.cohesion\" = { follows = \"bond.modulus\", factor = -1.0 }\n" +
+             kCalibrationExperiment)}},
+       "calibrate --check {d}/c.toml",
+       2,
+       {"c.toml:", "tied.\"bond.cohesion\".factor", "-1", "above 0"}},
+      {"calibration_tie_integer_key",
+       {{"c.toml", txt(kCalibrationHead + kModulusOnly +
+                       "[tied]\n\"engine.seed\" = { follows = \"bond.modulus\", factor = 1e-9 }\n" +
+                       kCalibrationExperiment)}},
+       "calibrate --check {d}/c.toml",
+       2,
+       {"c.toml:", "tied.\"engine.seed\"", "integer"}},
+      {"calibration_tie_out_of_range_at_a_bound",
+       {{"c.toml", txt(kCalibrationHead + kModulusOnly +
+                       "[tied]\n\"contact.poisson_ratio\" = { follows = \"bond.modulus\", factor = "
+                       "1e-11 }\n" +
+                       kCalibrationExperiment)}},
+       "calibrate --check {d}/c.toml",
+       2,
+       {"c.toml:", "tied.\"contact.poisson_ratio\"", "bound 60000000000", "contact.poisson_ratio"}},
+      {"calibration_disc_too_small",
+       {{"c.toml", txt(kCalibrationHead +
+                       "[targets]\nyoungs_modulus = 8e9\ntensile_strength = 5e6\n[free]\n"
+                       "\"bond.modulus\" = [2e9, 60e9]\n\"bond.tensile_strength\" = [1e6, 1e9]\n" +
+                       kCalibrationExperiment)}},
+       "calibrate --check {d}/c.toml",
+       2,
+       {"c.toml", "brazilian test", "too small for its grains", "calibration.brazilian_diameter"}},
+      {"calibration_disc_too_small_run",
+       {{"c.toml", txt(kCalibrationHead +
+                       "[targets]\nyoungs_modulus = 8e9\ntensile_strength = 5e6\n[free]\n"
+                       "\"bond.modulus\" = [2e9, 60e9]\n\"bond.tensile_strength\" = [1e6, 1e9]\n" +
+                       kCalibrationExperiment)}},
+       "calibrate {d}/c.toml --output {d}/runs",
+       2,
+       {"c.toml", "too small for its grains"}},
+      {"calibration_negative_disc",
+       {{"c.toml", txt(kCalibrationHead + "brazilian_diameter = -1e-3\n" + kModulusOnly +
+                       kCalibrationExperiment)}},
+       "calibrate --check {d}/c.toml",
+       2,
+       {"c.toml:6", "calibration.brazilian_diameter", "-0.001", "above 0"}},
+      {"calibration_without_experiment",
+       {{"c.toml", txt(kCalibrationHead + kModulusOnly)}},
+       "calibrate --check {d}/c.toml",
+       2,
+       {"c.toml", "[experiment]", "missing"}},
+      {"calibration_absurd_tolerance",
+       {{"c.toml", txt(replace_all(kCalibrationHead + kModulusOnly + kCalibrationExperiment,
+                                   "youngs_modulus = 8e9\n",
+                                   "youngs_modulus = 8e9\npoisson_ratio = { value = 0.25, "
+                                   "tolerance = 100 }\n"))}},
+       "calibrate --check {d}/c.toml",
+       2,
+       {"c.toml:", "targets.poisson_ratio.tolerance", "100", "at most 0.2"}},
+      {"calibration_lattice_source",
+       {{"c.toml", txt(replace_all(kCalibrationHead + kModulusOnly + kCalibrationExperiment,
+                                   "width = 3e-3", "source = \"lattice\"\nwidth = 3e-3"))}},
+       "calibrate --check {d}/c.toml",
+       2,
+       {"c.toml", "experiment.sample.source", "lattice", "generate"}},
+      {"calibration_folder_as_its_file",
+       {{"c.toml", txt(kCalibrationHead + kModulusOnly + kCalibrationExperiment)},
+        {"runs/t/calibration.toml/x", ""}},
+       "calibrate {d}/c.toml --output {d}/runs",
+       2,
+       {"runs/t/calibration.toml", "is not a file"}},
+      {"calibration_damaged_trial_record",
+       {{"c.toml", txt(kCalibrationHead + kModulusOnly + kCalibrationExperiment)},
+        {"runs/t/calibration.toml", txt(kCalibrationHead + kModulusOnly + kCalibrationExperiment)},
+        {"runs/t/trials.jsonl", "{\"key\": 5, \"run\": 1}\n"}},
+       "calibrate {d}/c.toml --output {d}/runs",
+       2,
+       {"trials.jsonl:1", "'key'", "5", "string"}},
+      {"calibration_trial_record_not_json",
+       {{"c.toml", txt(kCalibrationHead + kModulusOnly + kCalibrationExperiment)},
+        {"runs/t/calibration.toml", txt(kCalibrationHead + kModulusOnly + kCalibrationExperiment)},
+        {"runs/t/trials.jsonl", "{{{\n{\"key\": \"x\"}\n"}},
+       "calibrate {d}/c.toml --output {d}/runs",
+       2,
+       {"trials.jsonl:1", "not valid JSON"}},
+      // --- sweeps: every value checked before a folder is made ---
+      {"sweep_duplicate_over",
+       {},
+       "sweep --output {d}/runs --over test.max_strain 0.01 1e-2" + kLattice,
+       2,
+       {"--over", "test.max_strain 1e-2", "same experiment"}},
+      {"sweep_duplicate_confining",
+       {},
+       "sweep --output {d}/runs --confining-mpa 5 5" + kLattice,
+       2,
+       {"--confining-mpa", "5 MPa", "given twice"}},
+      {"sweep_infinite_confining",
+       {},
+       "sweep --output {d}/runs --confining-mpa 5 inf" + kLattice,
+       2,
+       {"--confining-mpa", "inf", "finite"}},
+      {"sweep_huge_confining",
+       {},
+       "sweep --output {d}/runs --confining-mpa 5 1e300" + kLattice,
+       2,
+       {"--confining-mpa", "1e+300 MPa", "<= 10000000000 Pa"}},
+      {"sweep_duplicate_rates",
+       {},
+       "sweep --output {d}/runs --strain-rates 5 5 --set engine.density_scaling=1" + kLattice,
+       2,
+       {"--strain-rates", "5", "given twice"}},
+      {"sweep_over_bad_value",
+       {},
+       "sweep --output {d}/runs --over engine.threads x" + kLattice,
+       2,
+       {"--over", "engine.threads x", "integer"}},
+      {"sweep_over_old_loading_key",
+       {{"e.toml", "[test]\nkind = \"ucs\"\n"}},
+       "sweep {d}/e.toml --output {d}/runs --over loading.max_strain 0.01 0.02" + kLattice,
+       2,
+       {"loading.max_strain", "test.<key>"}},
+      // --- sweep plans of a sweep being resumed: every error names the plan ---
+      {"plan_without_experiment",
+       {{"sweep-plan.json", txt(lattice_plan("confining_stress", "[\"0\"]", ""))}},
+       "resume {d}",
+       2,
+       {"sweep-plan.json", "'experiment'", "missing"}},
+      {"plan_experiment_bad",
+       {{"sweep-plan.json",
+         txt(lattice_plan("confining_stress", "[\"0\"]", "[engine]\\nthreads = \\\"x\\\"\\n"))}},
+       "resume {d}",
+       2,
+       {"sweep-plan.json", "experiment.engine.threads", "integer", "plan's experiment"}},
+      {"plan_duplicate_values",
+       {{"sweep-plan.json", txt(lattice_plan("confining_stress", "[\"0\", \"0\"]", kPlanLattice))}},
+       "resume {d}",
+       2,
+       {"sweep-plan.json", "'values'", "given twice"}},
+      {"plan_huge_stress",
+       {{"sweep-plan.json", txt(lattice_plan("confining_stress", "[\"1e30\"]", kPlanLattice))}},
+       "resume {d}",
+       2,
+       {"sweep-plan.json", "'values'", "1e+30"}},
+      {"plan_bad_parameter",
+       {{"sweep-plan.json",
+         txt(lattice_plan("parameter", "[\"x\"]", kPlanLattice, ", \"key\": \"engine.threads\""))}},
+       "resume {d}",
+       2,
+       {"sweep-plan.json", "'values'", "engine.threads x", "integer"}},
+      {"plan_experiment_from_a_missing_file",
+       {{"sweep-plan.json",
+         txt(lattice_plan("confining_stress", "[\"0\"]", "[sample]\\nsource = \\\"file\\\"\\n"))}},
+       "resume {d}",
+       2,
+       {"sweep-plan.json", "experiment.sample.file"}},
+      // --- the experiment file and --set ---
+      {"set_unknown_table_on_a_file",
+       exp("[engine]\nthreads = 1\n"),
+       e + " --set nosuch.key=1",
+       2,
+       {"--set nosuch.key=1", "[nosuch]", "unknown table"}},
   };
   return c;
 }
@@ -447,7 +632,10 @@ TEST_P(BadInput, FailsClearlyAndLeavesNoWholeLookingRun) {
   const fs::path dir = fs::temp_directory_path() / (std::string("breccia_bad_") + k.name);
   fs::remove_all(dir);
   fs::create_directories(dir);
-  for (const auto& [name, text] : k.files) std::ofstream(dir / name) << text;
+  for (const auto& [name, text] : k.files) {
+    fs::create_directories((dir / name).parent_path());
+    std::ofstream(dir / name) << text;
+  }
   const Result r = run(replace_all(k.args, "{d}", dir.string()));
   ASSERT_NE(r.code, -1) << "killed by a signal\n" << r.out;
   if (k.code == kAnyError)

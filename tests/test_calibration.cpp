@@ -195,7 +195,7 @@ std::vector<BadCalibration> bad_calibrations() {
        {"bad.toml:6", "must name a free parameter"}},
       {"ZeroTolerance",
        with_experiment("[targets]\nyoungs_modulus = { value = 8e9, tolerance = 0 }\n" + free_e),
-       {"bad.toml:2", "tolerance", "must be above 0"}},
+       {"bad.toml:2", "tolerance", "above 0"}},
       {"FrictionAngleOutOfRange",
        with_experiment("[targets]\nfriction_angle_deg = 95\n[calibration]\nconfining_stresses = "
                        "[5e6]\n[free]\n\"contact.friction\" = { lower = 0.1, upper = 1, scale = "

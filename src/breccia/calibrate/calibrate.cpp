@@ -2,6 +2,7 @@
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -106,6 +107,19 @@ std::string now_text() {
   return fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(t));
 }
 
+// The parameter sets the preflight builds every test at: the start, and the free parameters all
+// at their lower and all at their upper bounds (the stiffest and softest, strongest and weakest
+// trials the optimiser may ask for).
+std::vector<std::vector<double>> check_points(const CalibrationSpec& c) {
+  std::vector<double> start, lower, upper;
+  for (const auto& f : c.free) {
+    start.push_back(f.start);
+    lower.push_back(f.lower);
+    upper.push_back(f.upper);
+  }
+  return {start, lower, upper};
+}
+
 class Calibrator {
  public:
   Calibrator(const CalibrationSpec& c, const CalibrationOptions& o, fs::path folder)
@@ -124,7 +138,7 @@ class Calibrator {
   void report_progress(const Evaluation& e) const;
   void write_outputs(const CalibrationResult& r) const;
   void write_convergence() const;
-  void write_manifest(const std::string& status) const;
+  void write_manifest(const std::string& status, const std::string& error = "") const;
 
   std::vector<std::size_t> stage_parameters(CalibrationStage s) const {
     std::vector<std::size_t> idx;
@@ -440,7 +454,7 @@ void Calibrator::write_convergence() const {
   write_text(folder_ / "convergence.csv", csv);
 }
 
-void Calibrator::write_manifest(const std::string& status) const {
+void Calibrator::write_manifest(const std::string& status, const std::string& error) const {
   json m{{"kind", "calibration"},
          {"name", c_.name},
          {"status", status},
@@ -450,6 +464,7 @@ void Calibrator::write_manifest(const std::string& status) const {
          {"calibration_file", c_.path},
          {"machine", machine_description()},
          {"updated", now_text()}};
+  if (!error.empty()) m["error"] = error;
   write_text(folder_ / "manifest.json", m.dump(2) + "\n");
 }
 
@@ -458,6 +473,7 @@ CalibrationResult Calibrator::run() {
   CalibrationResult r;
   r.folder = folder_.string();
   try {
+    lab_.preflight(check_points(c_));
     Evaluation final_eval;
     for (int pass = 1; pass <= c_.passes; ++pass) {
       for (auto s :
@@ -474,6 +490,11 @@ CalibrationResult Calibrator::run() {
     r.status = "complete";
   } catch (const Interrupted&) {
     r.status = "interrupted";
+  } catch (const std::exception& e) {
+    // The trials finished so far stay in trials.jsonl; the manifest says why it stopped.
+    write_convergence();
+    write_manifest("failed", e.what());
+    throw;
   }
   r.values = values_;
   r.verdicts = verdicts_;
@@ -592,6 +613,13 @@ void Calibrator::write_outputs(const CalibrationResult& r) const {
 CalibrationResult run_calibration(const CalibrationSpec& c, const CalibrationOptions& o) {
   const fs::path folder = fs::path(o.output_directory) / c.name;
   const fs::path copy = folder / "calibration.toml";
+  if (fs::exists(folder) && !fs::is_directory(folder))
+    throw InputError(folder.string(), "--output", o.output_directory,
+                     "is a file; the calibration needs a folder there: choose another --output");
+  if (fs::exists(copy) && !fs::is_regular_file(copy))
+    throw InputError(copy.string(), "", "",
+                     "is not a file: a calibration folder keeps its calibration file there; move "
+                     "the folder away or choose another --output");
   if (fs::exists(copy)) {
     // The recorded tests stay valid while the samples and the laws are the same: targets,
     // tolerances, bounds, trial budgets and passes may change (to add a pass, say), and the
@@ -617,6 +645,23 @@ CalibrationResult run_calibration(const CalibrationSpec& c, const CalibrationOpt
   }
   Calibrator cal(c, o, folder);
   return cal.run();
+}
+
+void check_calibration(const CalibrationSpec& c,
+                       const std::function<void(const std::string&)>& log) {
+  // The samples are packed into a folder of their own, removed afterwards.
+  const fs::path scratch =
+      fs::temp_directory_path() / fmt::format("breccia-check-{}-{}", c.name, ::getpid());
+  fs::remove_all(scratch);
+  struct Remove {
+    fs::path p;
+    ~Remove() {
+      std::error_code ec;
+      fs::remove_all(p, ec);
+    }
+  } remove{scratch};
+  Laboratory lab(c, scratch, log);
+  lab.preflight(check_points(c));
 }
 
 }  // namespace breccia

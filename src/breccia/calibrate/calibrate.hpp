@@ -38,6 +38,12 @@ struct CalibrationResult {
 
 CalibrationResult run_calibration(const CalibrationSpec& spec, const CalibrationOptions& options);
 
+// Every check a calibration can fail before its first trial (what `calibrate --check` runs):
+// the samples of every set are packed in a scratch folder and each test is built on them at the
+// start and at the corners of the free parameters' box. Throws InputError.
+void check_calibration(const CalibrationSpec& spec,
+                       const std::function<void(const std::string&)>& log);
+
 // The calibration record's verdict table as text (for the command's output).
 std::string verdict_table(const CalibrationResult& r);
 

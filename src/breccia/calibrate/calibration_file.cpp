@@ -32,22 +32,23 @@ const std::vector<PropertyInfo>& property_table() {
       {Property::YoungsModulus, "youngs_modulus", "Pa",
        "Young's modulus E_t50 of the UCS test (ISRM tangent at 50 % of the peak, read with the "
        "sample gauge)",
-       S::Elastic, true, 0.05},
+       S::Elastic, true, 0.05, 0.5},
       {Property::PoissonRatio, "poisson_ratio", "-",
        "Poisson's ratio of the UCS test (lateral over axial strain at 50 % of the peak)",
-       S::Elastic, false, 0.03},
+       S::Elastic, false, 0.03, 0.2},
       {Property::UniaxialStrength, "uniaxial_strength", "Pa", "UCS: peak axial stress, sigma_3 = 0",
-       S::Strength, true, 0.05},
+       S::Strength, true, 0.05, 0.5},
       {Property::TensileStrength, "tensile_strength", "Pa",
-       "Brazilian tensile strength 2 F / (pi D t)", S::Strength, true, 0.10},
+       "Brazilian tensile strength 2 F / (pi D t)", S::Strength, true, 0.10, 0.5},
       {Property::CrackInitiationRatio, "crack_initiation_ratio", "-",
-       "crack-initiation stress over the UCS", S::Strength, false, 0.05},
+       "crack-initiation stress over the UCS", S::Strength, false, 0.05, 0.3},
       {Property::StrainAtPeak, "strain_at_peak", "-",
-       "axial strain at the UCS peak (critical strain)", S::Strength, true, 0.10},
+       "axial strain at the UCS peak (critical strain)", S::Strength, true, 0.10, 0.5},
       {Property::Cohesion, "cohesion", "Pa",
-       "Mohr-Coulomb cohesion from the UCS and the triaxial peaks", S::Friction, true, 0.10},
+       "Mohr-Coulomb cohesion from the UCS and the triaxial peaks", S::Friction, true, 0.10, 0.5},
       {Property::FrictionAngle, "friction_angle_deg", "deg",
-       "Mohr-Coulomb friction angle from the UCS and the triaxial peaks", S::Friction, false, 2.0},
+       "Mohr-Coulomb friction angle from the UCS and the triaxial peaks", S::Friction, false, 2.0,
+       15.0},
   };
   return table;
 }
@@ -133,8 +134,7 @@ std::vector<double> reals_of(const toml::node& n, const std::string& where,
 // The value of an experiment key ("section.name") in the resolved spec, if it is a number.
 std::optional<double> resolved_number(const ExperimentSpec& spec, const std::string& key) {
   const toml::table t = toml::parse(to_toml(spec), std::string_view("resolved"));
-  const auto dot = key.find('.');
-  if (dot == std::string::npos) return std::nullopt;
+  if (key.find('.') == std::string::npos) return std::nullopt;
   const auto* node = t.at_path(key).node();
   if (!node || !(node->is_floating_point() || node->is_integer())) return std::nullopt;
   return node->value<double>();
@@ -171,9 +171,11 @@ Target read_target(const std::string& name, const toml::node& n, const std::stri
   }
   const std::string unit = t.relative ? "a fraction of the target, e.g. 0.05"
                                       : fmt::format("in {}, e.g. {}", pi->unit, pi->tolerance);
-  if (!(t.tolerance > 0.0) || (t.relative && t.tolerance >= 1.0))
+  if (!(t.tolerance > 0.0 && t.tolerance <= pi->max_tolerance))
     throw InputError(where, key + ".tolerance", fmt::format("{}", t.tolerance),
-                     "must be above 0 (" + unit + (t.relative ? ", below 1)" : ")"));
+                     fmt::format("allowed: above 0 and at most {} ({}); a looser tolerance "
+                                 "would count every trial as met",
+                                 pi->max_tolerance, unit));
   const bool ok = pi->property == Property::PoissonRatio           ? t.value > -1 && t.value < 0.5
                   : pi->property == Property::FrictionAngle        ? t.value > 0 && t.value < 90
                   : pi->property == Property::CrackInitiationRatio ? t.value > 0 && t.value < 1
@@ -257,12 +259,16 @@ TiedParameter read_tied(const std::string& name, const toml::node& n, const std:
   if (!tbl) throw InputError(where, key, show(n), "expected { follows = \"...\", factor = ... }");
   for (const auto& [k, v] : *tbl) {
     const std::string item(k.str()), w = where_of(source, v);
-    if (item == "follows")
+    if (item == "follows") {
       t.follows = string_of(v, w, key + ".follows");
-    else if (item == "factor")
+    } else if (item == "factor") {
       t.factor = real_of(v, w, key + ".factor");
-    else
+      // A tie is a proportion between two micro-parameters of one sign (moduli, strengths,
+      // frictions): a factor of 0 or below would send the tied key out of its range.
+      if (!(t.factor > 0.0)) throw InputError(w, key + ".factor", show(v), "must be above 0");
+    } else {
       throw InputError(w, key + "." + item, show(v), "unknown key; allowed: follows, factor");
+    }
   }
   if (t.follows.empty()) throw InputError(where, key, "", "needs follows = \"<free parameter>\"");
   return t;
@@ -315,8 +321,10 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
       for (const auto& s : *a) c.verify_set.push_back(string_of(s, w, key));
     } else if (item == "brazilian_diameter") {
       c.disc_diameter = real_of(v, w, key);
+      if (!(c.disc_diameter > 0.0)) throw InputError(w, key, show(v), "must be above 0 m");
     } else if (item == "brazilian_thickness") {
       c.disc_thickness = real_of(v, w, key);
+      if (!(c.disc_thickness > 0.0)) throw InputError(w, key, show(v), "must be above 0 m");
     } else if (item == "brazilian_platen_speed") {
       c.disc_platen_speed = real_of(v, w, key);
       if (!(c.disc_platen_speed > 0.0)) throw InputError(w, key, show(v), "must be above 0 m/s");
@@ -361,6 +369,17 @@ void check_coverage(const CalibrationSpec& c, const toml::table& root, const std
   }
 }
 
+// The sample and the laws come from [experiment]: without it the calibration would fit the
+// built-in default sample, which the user did not ask for.
+void check_experiment_table(const toml::table& root, const std::string& source) {
+  const auto* e = root["experiment"].as_table();
+  if (!e || e->empty())
+    throw InputError(source, "[experiment]", e ? "(empty)" : "(missing)",
+                     "a calibration needs the experiment it calibrates: the sample and the laws "
+                     "as [experiment.sample], [experiment.contact], [experiment.bond], ... "
+                     "(docs/calibration.md)");
+}
+
 // Bounds must be values the experiment accepts, and the start inside them.
 void check_parameters(CalibrationSpec& c, const toml::table& root, const std::string& source) {
   const auto* free_tbl = root.at_path("free").as_table();
@@ -397,9 +416,28 @@ void check_parameters(CalibrationSpec& c, const toml::table& root, const std::st
                        "must name a free parameter");
     if (std::any_of(c.free.begin(), c.free.end(), [&](const auto& f) { return f.key == t.key; }))
       throw InputError(where, "tied.\"" + t.key + "\"", "", "is also free");
+    if (is_integer_key(t.key))
+      throw InputError(where, "tied.\"" + t.key + "\"", "",
+                       "an integer key cannot follow a free parameter (it would take fractional "
+                       "values); tie a real-valued micro-parameter");
     if (!resolved_number(c.base, t.key))
       throw InputError(where, "tied.\"" + t.key + "\"", "",
                        "not a number of this experiment's laws");
+    // The tied key takes factor x the free value: both ends of the free range must give a value
+    // the experiment accepts.
+    const FreeParameter& f = *std::find_if(c.free.begin(), c.free.end(),
+                                           [&](const auto& x) { return x.key == t.follows; });
+    for (double b : {f.lower, f.upper}) {
+      try {
+        (void)parse_experiment_table(c.text, source, "experiment",
+                                     {fmt::format("{}={:.17g}", t.key, t.factor * b)});
+      } catch (const InputError& e) {
+        throw InputError(where, "tied.\"" + t.key + "\"", fmt::format("{} x {}", t.factor, b),
+                         fmt::format("at the bound {} of {} the tied value is not accepted by the "
+                                     "experiment: {}",
+                                     b, t.follows, e.what()));
+      }
+    }
   }
 }
 
@@ -443,7 +481,12 @@ CalibrationSpec parse_calibration(const std::string& text, const std::string& so
   if (const auto* t = root["tied"].as_table())
     for (const auto& [k, v] : *t) c.tied.push_back(read_tied(std::string(k.str()), v, source));
   check_coverage(c, root, source);
+  check_experiment_table(root, source);
   c.base = parse_experiment_table(text, source, "experiment", {});
+  if (c.base.sample_source != "generate")
+    throw InputError(source, "experiment.sample.source", "\"" + c.base.sample_source + "\"",
+                     "a calibration packs its own samples (the prism, the Brazilian disc and one "
+                     "per verification seed): allowed: \"generate\" (the default)");
   for (const auto& o : c.verify_set) {
     try {
       (void)parse_experiment_table(text, source, "experiment", {o});

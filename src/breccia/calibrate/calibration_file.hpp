@@ -36,6 +36,9 @@ struct PropertyInfo {
   CalibrationStage stage;
   bool relative;     // tolerance as a fraction of the target (else in the property's unit)
   double tolerance;  // default tolerance
+  // The loosest tolerance a target may ask for: beyond it every trial would count as met and
+  // the calibration would fit nothing (a fraction for relative targets).
+  double max_tolerance;
 };
 const std::vector<PropertyInfo>& property_table();
 const PropertyInfo& info(Property p);

@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <sstream>
 
 #include "breccia/analysis/compression.hpp"
 #include "breccia/core/error.hpp"
@@ -32,21 +34,71 @@ Laboratory::Laboratory(const CalibrationSpec& c, fs::path folder,
   if (!log_) log_ = [](const std::string&) {};
   fs::create_directories(folder_ / "samples");
   fs::create_directories(folder_ / "trials");
-  std::ifstream in(folder_ / "trials.jsonl");
+  read_trial_record();
+}
+
+namespace {
+
+// A trial record's fields, checked: a record that does not check out names trials.jsonl, its
+// line and the key, so that no library message reaches the user.
+void check_trial_line(const json& j, const std::string& where) {
+  if (!j.is_object()) throw InputError(where, "", "", "a trial record must be a JSON object");
+  auto need = [&](const char* key, bool ok, const char* what) {
+    if (!j.contains(key))
+      throw InputError(where, key, "(missing)", std::string("expected ") + what);
+    if (!ok) throw InputError(where, key, j[key].dump(), std::string("expected ") + what);
+  };
+  need("key", j.contains("key") && j["key"].is_string(), "a string");
+  need("run",
+       j.contains("run") && j["run"].is_number_integer() && j["run"].get<std::int64_t>() >= 0,
+       "a run number >= 0");
+  need("test", j.contains("test") && j["test"].is_string(), "a string");
+  need("folder", j.contains("folder") && j["folder"].is_string(), "a string");
+  need("properties", j.contains("properties") && j["properties"].is_object(),
+       "an object of numbers");
+  for (const auto& [k, v] : j["properties"].items())
+    if (!v.is_number()) throw InputError(where, "properties." + k, v.dump(), "expected a number");
+  need("problems",
+       j.contains("problems") && j["problems"].is_array() &&
+           std::all_of(j["problems"].begin(), j["problems"].end(),
+                       [](const json& x) { return x.is_string(); }),
+       "an array of strings");
+}
+
+}  // namespace
+
+// Reads the finished tests back. The last line may have been cut by a crash mid-write (it has
+// no newline): it is dropped, and its test runs again. Any other line must check out.
+void Laboratory::read_trial_record() {
+  const fs::path file = folder_ / "trials.jsonl";
+  if (!fs::exists(file)) return;
+  if (!fs::is_regular_file(file))
+    throw InputError(file.string(), "", "",
+                     "is not a file; expected the calibration's trial "
+                     "record (JSON lines)");
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string text = ss.str();
+  if (!text.empty() && text.back() != '\n') {
+    const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+    log_("calibrate: the last line of trials.jsonl was cut short; its test runs again");
+    text.resize(keep);
+    fs::resize_file(file, keep);
+  }
+  std::istringstream lines(text);
   std::string line;
   int lineno = 0;
-  while (std::getline(in, line)) {
+  while (std::getline(lines, line)) {
     ++lineno;
     if (line.empty()) continue;
-    json j = json::parse(line, nullptr, false);
-    // A line cut short by a crash is the last one; it is dropped and its test run again.
-    if (j.is_discarded() || !j.is_object() || !j.contains("key")) {
-      log_(fmt::format("calibrate: trials.jsonl line {} is unreadable; its test runs again",
-                       lineno));
-      continue;
-    }
+    const std::string where = fmt::format("{}:{}", file.string(), lineno);
+    const json j = json::parse(line, nullptr, false);
+    if (j.is_discarded())
+      throw InputError(where, "", "", "not valid JSON; delete the line to run its test again");
+    check_trial_line(j, where);
     book_[j["key"].get<std::string>()] = j;
-    next_run_ = std::max(next_run_, j.value("run", 0) + 1);
+    next_run_ = std::max(next_run_, j["run"].get<int>() + 1);
   }
 }
 
@@ -87,6 +139,76 @@ void Laboratory::prepare_samples(const std::string& set, const std::vector<doubl
     pack(paths.disc, disc, "Brazilian disc");
   }
   samples_[set] = paths;
+}
+
+ExperimentSpec Laboratory::trial_spec(const std::string& set, const std::vector<double>& values,
+                                      const std::string& test, double sigma3) const {
+  std::vector<std::string> o = parameter_overrides(c_, values);
+  for (const auto& s : set_overrides(set)) o.push_back(s);
+  const SamplePaths& sp = samples_.at(set);
+  o.push_back("sample.source=\"file\"");
+  o.push_back(fmt::format("sample.file=\"{}\"",
+                          fs::absolute(test == "brazilian" ? sp.disc : sp.prism).string()));
+  ExperimentSpec spec = parse_experiment_table(c_.text, c_.path, "experiment", o);
+  if (test == "brazilian") {
+    spec.test_kind = "brazilian";
+    BrazilianTest::Params p;
+    p.platen_speed = c_.disc_platen_speed;
+    spec.test = p;
+  } else {
+    set_confining_stress(spec, sigma3, c_.path);
+  }
+  spec.name = fmt::format("{}-{}", set, test);
+  spec.output_directory = (folder_ / "trials").string();
+  spec.plot = false;
+  spec.progress = false;
+  spec.snapshot_strain_interval = 0.0;
+  spec.checkpoint_interval = 0.0;
+  spec.ae_moment_tensors = false;  // not needed for the properties; the mechanics is the same
+  return spec;
+}
+
+void Laboratory::preflight(const std::vector<std::vector<double>>& points) {
+  std::vector<std::string> sets{"calibration"};
+  for (auto seed : c_.verify_seeds) sets.push_back(fmt::format("verify-{}", seed));
+  std::vector<std::pair<std::string, double>> tests{{"ucs", 0.0}};
+  if (c_.needs_brazilian()) tests.emplace_back("brazilian", 0.0);
+  if (c_.needs_envelope())
+    for (double s3 : c_.confining_stresses)
+      tests.emplace_back(fmt::format("triaxial-{:g}MPa", s3 / 1e6), s3);
+  for (const std::string& set : sets) {
+    throw_if_interrupted("checking the calibration");
+    prepare_samples(set, points.front());
+    // A verification sample is packed with the calibrated values when the time comes (the
+    // contact law packs it): the one packed here for the check is not kept.
+    struct Forget {
+      Laboratory* lab;
+      const std::string& set;
+      ~Forget() {
+        if (set == "calibration" || !lab->samples_.count(set)) return;
+        std::error_code ec;
+        for (const std::string& f : {lab->samples_.at(set).prism, lab->samples_.at(set).disc})
+          for (const std::string& g : {f, f + ".json"}) fs::remove(g, ec);
+        lab->samples_.erase(set);
+      }
+    } forget{this, set};
+    for (const auto& [test, sigma3] : tests)
+      for (const std::vector<double>& values : points) {
+        try {
+          check_buildable(trial_spec(set, values, test, sigma3));
+        } catch (const InputError& e) {
+          std::string at;
+          for (const std::string& o : parameter_overrides(c_, values)) at += " " + o;
+          throw InputError(
+              c_.path, "", "",
+              fmt::format("the {} test of sample set \"{}\" cannot run with{}: {}{}", test, set, at,
+                          e.what(),
+                          test == "brazilian" ? " (the disc: calibration.brazilian_diameter and "
+                                                "brazilian_thickness)"
+                                              : ""));
+        }
+      }
+  }
 }
 
 namespace {
@@ -135,34 +257,14 @@ void append_line(const fs::path& file, const json& j) {
 
 json Laboratory::run_test(const std::string& set, const std::vector<double>& values,
                           const std::string& test, double sigma3, Measurement& m) {
-  std::vector<std::string> o = parameter_overrides(c_, values);
   std::string key = set + "|" + test;
-  for (const auto& s : o) key += "|" + s;
+  for (const auto& s : parameter_overrides(c_, values)) key += "|" + s;
   if (auto it = book_.find(key); it != book_.end()) return it->second;
   throw_if_interrupted("calibrating");
 
-  for (const auto& s : set_overrides(set)) o.push_back(s);
-  const SamplePaths& sp = samples_.at(set);
-  o.push_back("sample.source=\"file\"");
-  o.push_back(fmt::format("sample.file=\"{}\"",
-                          fs::absolute(test == "brazilian" ? sp.disc : sp.prism).string()));
-  ExperimentSpec spec = parse_experiment_table(c_.text, c_.path, "experiment", o);
-  if (test == "brazilian") {
-    spec.test_kind = "brazilian";
-    BrazilianTest::Params p;
-    p.platen_speed = c_.disc_platen_speed;
-    spec.test = p;
-  } else {
-    set_confining_stress(spec, sigma3, c_.path);
-  }
+  ExperimentSpec spec = trial_spec(set, values, test, sigma3);
   const int run = next_run_++;
   spec.name = fmt::format("{:03d}-{}-{}", run, set, test);
-  spec.output_directory = (folder_ / "trials").string();
-  spec.plot = false;
-  spec.progress = false;
-  spec.snapshot_strain_interval = 0.0;
-  spec.checkpoint_interval = 0.0;
-  spec.ae_moment_tensors = false;  // not needed for the properties; the mechanics is the same
 
   RunOptions opt;
   opt.interrupt = &interrupt_flag();

@@ -48,6 +48,12 @@ class Laboratory {
   Measurement measure(const std::string& set, const std::vector<double>& values,
                       const TestPlan& plan);
 
+  // Every check a trial can fail, before the first trial: the samples of every set (the
+  // calibration's and each verification seed's) are packed, and each test the calibration will
+  // run is built (not run) on them at each parameter set of `points` (the start and the corners
+  // of the free parameters' box). Throws InputError naming the test, the set and the values.
+  void preflight(const std::vector<std::vector<double>>& points);
+
   std::size_t recorded_tests() const noexcept { return book_.size(); }
   const nlohmann::json& sample_report(const std::string& set) const;
 
@@ -57,6 +63,10 @@ class Laboratory {
     nlohmann::json report;
   };
   std::vector<std::string> set_overrides(const std::string& set) const;
+  // The experiment of one test of one set at `values` (its run folder under trials/).
+  ExperimentSpec trial_spec(const std::string& set, const std::vector<double>& values,
+                            const std::string& test, double sigma3) const;
+  void read_trial_record();
   nlohmann::json run_test(const std::string& set, const std::vector<double>& values,
                           const std::string& test, double sigma3, Measurement& m);
 

@@ -627,11 +627,17 @@ std::string legacy_loading_kind(const toml::table& root, const std::string& sour
   const toml::table* loading = node->as_table();
   if (!loading)
     throw InputError(where_of(source, *node), "loading", show(*node), "must be a table");
-  if (root.contains("test"))
-    throw InputError(where_of(source, *node), "[loading]", "",
+  if (root.contains("test")) {
+    const std::string where = where_of_table(source, *node);
+    if (where.rfind("--set ", 0) == 0)
+      throw InputError(where, "[loading]", "",
+                       "this experiment has a [test] table, and the old [loading] table's keys "
+                       "are its keys now: write test.<key> instead of loading.<key>");
+    throw InputError(where, "[loading]", "",
                      "the old [loading] table and [test] cannot both be given: move its keys "
                      "into [test] (with kind = \"ucs\", \"triaxial\", \"biaxial\" or "
                      "\"brazilian\")");
+  }
   double sigma3 = 0.0;
   if (const auto* c = loading->get("confining_stress"))
     sigma3 = get_real(*c, where_of(source, *c), "loading.confining_stress");
@@ -721,7 +727,7 @@ void apply_table(ExperimentSpec& spec, const toml::table& root, const std::strin
     bool section_known = false;
     for (const Key& key : keys) section_known |= key.section == name;
     if (!section_known)
-      throw InputError(where_of(source, node), "[" + name + "]", "",
+      throw InputError(where_of_table(source, node), "[" + name + "]", "",
                        "unknown table; allowed: [engine], [material], [sample], [contact], "
                        "[bond], [joint], [test], [output], [ae]");
     for (const auto& [kk, value] : tbl) {
@@ -895,6 +901,13 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
 }
 
 }  // namespace
+
+bool is_integer_key(const std::string& key) {
+  for (const Key& k : key_table())
+    if (k.type == "integer" && (k.section.empty() ? k.name : k.section + "." + k.name) == key)
+      return true;
+  return false;
+}
 
 std::vector<std::pair<std::string, std::string>> material_presets() {
   std::vector<std::pair<std::string, std::string>> out{

@@ -152,6 +152,9 @@ ExperimentSpec parse_experiment_table(const std::string& text, const std::string
 
 // The fully resolved spec as TOML text (every key, defaults included), for the run manifest.
 std::string to_toml(const ExperimentSpec& spec);
+// Whether an experiment key ("section.name") takes integers only (the seed, thread and cell
+// counts): such a key cannot take the scaled real values a calibration gives a parameter.
+bool is_integer_key(const std::string& key);
 
 // Reference documentation of every key, generated from the validation tables (Markdown).
 std::string experiment_docs();

@@ -57,19 +57,26 @@ std::string folder_safe_name(const std::string& name) {
   return safe;
 }
 
-fs::path make_folder(const ExperimentSpec& spec) {
+fs::path make_folder(const ExperimentSpec& spec, const std::string& suffix) {
   const auto now = std::chrono::system_clock::now();
   const std::string stamp =
       fmt::format("{:%Y%m%d-%H%M%S}", fmt::localtime(std::chrono::system_clock::to_time_t(now)));
-  fs::path base = fs::path(spec.output_directory) / (stamp + "-" + folder_safe_name(spec.name));
-  fs::path p = base;
-  for (int k = 2; fs::exists(p); ++k) p = base.string() + "-" + std::to_string(k);
+  const std::string base =
+      (fs::path(spec.output_directory) / (stamp + "-" + folder_safe_name(spec.name))).string();
   std::error_code ec;
-  fs::create_directories(p, ec);
+  fs::create_directories(spec.output_directory.empty() ? "." : spec.output_directory, ec);
   if (ec)
-    throw InputError(p.string(), "output.directory", spec.output_directory,
-                     "cannot create the run folder: " + ec.message());
-  return p;
+    throw InputError(spec.output_directory, "output.directory", spec.output_directory,
+                     "cannot create the folder: " + ec.message());
+  // create_directory is atomic: of two runs started in the same second (two sweeps of one
+  // experiment, say), one gets the name and the other the next free one.
+  for (int k = 1;; ++k) {
+    const fs::path p = base + (k == 1 ? "" : "-" + std::to_string(k)) + suffix;
+    if (fs::create_directory(p, ec)) return p;
+    if (ec)
+      throw InputError(p.string(), "output.directory", spec.output_directory,
+                       "cannot create the run folder: " + ec.message());
+  }
 }
 
 void make_plot(const fs::path& folder, const std::function<void(const std::string&)>& log) {
@@ -349,11 +356,56 @@ std::string summarise_unfinished_sweep(const fs::path& f) {
   return s;
 }
 
+// Rows of a CSV table (not counting its header).
+std::size_t csv_rows(const fs::path& csv) {
+  std::ifstream in(csv);
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line);) n += !line.empty();
+  return n > 0 ? n - 1 : 0;
+}
+
+// A calibration folder: its status, its trials and, once complete, the verdict per target.
+std::string summarise_calibration(const fs::path& f, const JsonView& manifest) {
+  std::string s = fmt::format("calibration {} ({})\n", manifest.text("name", f.filename().string()),
+                              manifest.text("status", "unknown"));
+  if (manifest.has("error")) s += "  error: " + manifest.text("error", "") + "\n";
+  s += fmt::format("  {} trials so far (convergence.csv)\n", csv_rows(f / "convergence.csv"));
+  const fs::path rpath = f / "record.json";
+  if (!fs::exists(rpath)) {
+    if (manifest.text("status", "") != "complete")
+      s += "  no verdict yet: run the same `breccia calibrate` command again to continue it\n";
+    return s;
+  }
+  const json record = read_json_object(rpath.string());
+  const JsonView r(record, rpath.string());
+  s += "  target                         lab        achieved (mean +/- sd, n)   error    verdict\n";
+  for (const JsonView& v : r.elements("verdicts")) {
+    const bool relative = v.flag("relative", true);
+    const std::string unit = v.text("unit", "");
+    const auto error = v.maybe_number("error");
+    s += fmt::format("  {:<24} {:>12.4g} {:>13} +/- {:<9} ({})   {:>8}   {}\n",
+                     v.text("target", "?"), v.number("value"), plain(v, "mean", "{:.4g}"),
+                     plain(v, "sd", "{:.2g}"), plain(v, "samples", "{:.0f}"),
+                     !error                        ? std::string("n/a")
+                     : relative                    ? fmt::format("{:+.1f} %", 100 * *error)
+                     : unit == "-" || unit.empty() ? fmt::format("{:+.3f}", *error)
+                                                   : fmt::format("{:+.2f} {}", *error, unit),
+                     v.flag("met", false) ? "met" : "MISSED");
+  }
+  s += fmt::format("  parameters: {}\n", (f / "material.toml").string());
+  return s;
+}
+
 }  // namespace
 
 std::string summarise_folder(const std::string& folder) {
   const fs::path f(folder);
   if (!fs::is_directory(f)) throw InputError(folder, "", "", "not a folder");
+  if (fs::exists(f / "manifest.json") && fs::exists(f / "calibration.toml")) {
+    const json m = read_json_object((f / "manifest.json").string());
+    const JsonView v(m, (f / "manifest.json").string());
+    if (v.text("kind", "") == "calibration") return summarise_calibration(f, v);
+  }
   if (fs::exists(f / "sweep.json")) return summarise_sweep(f / "sweep.json");
   if (fs::exists(f / "sweep-plan.json")) return summarise_unfinished_sweep(f);
   if (fs::exists(f / "summary.json")) return summarise_run(f / "summary.json");

@@ -15,7 +15,7 @@ namespace breccia {
 // Writes JSON atomically (temporary file, then rename): a reader never sees half a manifest.
 void write_json(const std::filesystem::path& path, const nlohmann::json& j);
 // Creates <output.directory>/<timestamp>-<name>[-k], a new folder for one run or sweep.
-std::filesystem::path make_folder(const ExperimentSpec& spec);
+std::filesystem::path make_folder(const ExperimentSpec& spec, const std::string& suffix = "");
 // A run's name as its folder spells it (after the time stamp): letters, digits and '-' kept,
 // anything else '_'.
 std::string folder_safe_name(const std::string& name);

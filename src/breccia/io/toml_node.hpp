@@ -16,6 +16,15 @@ inline std::string where_of(const std::string& source, const toml::node& n) {
   return source;
 }
 
+// Where a table came from: a table that `--set section.key=...` made has no place in the file,
+// so the option that made it is named instead.
+inline std::string where_of_table(const std::string& source, const toml::node& n) {
+  if (n.source().begin.line == 0 && n.is_table())
+    for (auto&& [k, v] : *n.as_table())
+      if (const std::string w = where_of(source, v); w != source) return w;
+  return where_of(source, n);
+}
+
 // The value as the user wrote it (strings quoted).
 inline std::string show(const toml::node& n) {
   std::ostringstream s;

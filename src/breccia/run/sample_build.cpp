@@ -346,7 +346,11 @@ void add_joints(const ExperimentSpec& s, Simulation& sim) {
 
 }  // namespace
 
-Built build(const ExperimentSpec& s, const std::function<void(const std::string&)>& log) {
+namespace {
+
+// Everything of `build` but the consolidation: the sample, its bonds and joints, the test and
+// the checks of the run's size.
+Built assemble(const ExperimentSpec& s, const std::function<void(const std::string&)>& log) {
   json report;
   SampleInfo info;
   GeometryData g = load_sample(s, report, info, log);
@@ -392,8 +396,19 @@ Built build(const ExperimentSpec& s, const std::function<void(const std::string&
                         (s.dimension == 2 ? s.thickness : footprint_hi[1] - footprint_lo[1]);
   const double v_bar = std::sqrt(bond_moduli(s).young / (mass / volume));
   check_run_budget(s, sim, hi - lo, v_bar);
-  const std::uint64_t consolidation = protocol->start(sim, v_bar);
-  return Built{std::move(sim), std::move(protocol), v_bar, report, consolidation};
+  return Built{std::move(sim), std::move(protocol), v_bar, report, 0};
+}
+
+}  // namespace
+
+Built build(const ExperimentSpec& s, const std::function<void(const std::string&)>& log) {
+  Built b = assemble(s, log);
+  b.consolidation_steps = b.protocol->start(b.sim, b.bar_wave_speed);
+  return b;
+}
+
+void check_buildable(const ExperimentSpec& s) {
+  (void)assemble(s, {});
 }
 
 }  // namespace breccia

@@ -43,5 +43,8 @@ struct Built {
   std::uint64_t consolidation_steps = 0;
 };
 Built build(const ExperimentSpec& spec, const std::function<void(const std::string&)>& log);
+// Builds the run as `build` does, without consolidating or loading it, and discards it: every
+// check of the sample, the test and the run's size; throws InputError.
+void check_buildable(const ExperimentSpec& spec);
 
 }  // namespace breccia

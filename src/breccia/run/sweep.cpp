@@ -257,9 +257,7 @@ namespace {
 
 // A new sweep folder, <output.directory>/<stamp>-<name>-sweep.
 fs::path make_sweep_folder(const ExperimentSpec& spec) {
-  const fs::path folder = make_folder(spec);
-  fs::rename(folder, folder.string() + "-sweep");
-  return folder.string() + "-sweep";
+  return make_folder(spec, "-sweep");
 }
 
 // Runs the sweep's experiments: as parallel processes when cores allow (each with its share of
@@ -404,14 +402,45 @@ struct SweepJob {
   std::function<json(const std::vector<RunResult>&)> assemble;
 };
 
-void check_confining(const std::vector<double>& confining, const ExperimentSpec& spec) {
-  if (confining.empty())
-    throw InputError("sweep", "--confining", "(none)", "give at least one confining stress");
+// Where a sweep's values came from, for its errors: the command line's option (with the unit
+// the user gave) or the plan file of a sweep being resumed.
+struct ValuesOrigin {
+  std::string where, key;
+  double scale = 1.0;  // the value as given = value / scale
+  std::string unit;    // of the value as given, when it is not the SI unit
+};
+
+std::string shown(const ValuesOrigin& o, double v) {
+  return num(v / o.scale) + o.unit;
+}
+
+// A sweep runs each value once: a repeated value would run twice and weigh twice in the fits.
+void check_distinct(const std::vector<double>& values, const ValuesOrigin& o) {
+  for (std::size_t i = 0; i < values.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (values[i] == values[j])
+        throw InputError(
+            o.where, o.key, shown(o, values[i]),
+            fmt::format("given twice (values {} and {}): each value once", j + 1, i + 1));
+}
+
+void check_confining(const std::vector<double>& confining, const ExperimentSpec& spec,
+                     const ValuesOrigin& o) {
+  if (confining.empty()) throw InputError(o.where, o.key, "(none)", "give at least one value");
   for (double c : confining)
-    if (!(c >= 0.0))
-      throw InputError("sweep", "--confining", num(c), "each confining stress must be >= 0 Pa");
-  ExperimentSpec probe = spec;  // a test that cannot be swept fails before any folder exists
-  set_confining_stress(probe, confining.front(), "sweep");
+    if (!(c >= 0.0) || !std::isfinite(c))
+      throw InputError(o.where, o.key, shown(o, c),
+                       "each confining stress must be finite and >= 0");
+  check_distinct(confining, o);
+  for (double c : confining) {  // a test that cannot be swept fails before any folder exists
+    ExperimentSpec probe = spec;
+    try {
+      set_confining_stress(probe, c, o.where);
+      (void)parse_experiment(to_toml(probe), spec.source, {});  // the key's own range
+    } catch (const InputError& e) {
+      throw InputError(o.where, o.key, shown(o, c), e.allowed());
+    }
+  }
 }
 
 SweepJob confining_job(const ExperimentSpec& spec, const std::vector<double>& confining,
@@ -446,18 +475,19 @@ SweepJob confining_job(const ExperimentSpec& spec, const std::vector<double>& co
   return job;
 }
 
-void check_rates(const std::vector<double>& rates, const ExperimentSpec& spec) {
-  if (rates.empty())
-    throw InputError("sweep", "--strain-rates", "(none)", "give at least one strain rate");
+void check_rates(const std::vector<double>& rates, const ExperimentSpec& spec,
+                 const ValuesOrigin& o) {
+  if (rates.empty()) throw InputError(o.where, o.key, "(none)", "give at least one strain rate");
   for (double r : rates)
     if (!(r > 0.0) || !std::isfinite(r))
-      throw InputError("sweep", "--strain-rates", num(r), "each strain rate must be > 0 1/s");
+      throw InputError(o.where, o.key, shown(o, r), "each strain rate must be finite and > 0 1/s");
+  check_distinct(rates, o);
   if (spec.density_scaling != 1.0)
     throw InputError(spec.source, "engine.density_scaling", num(spec.density_scaling),
                      "a strain-rate study measures the sample's inertia, which density scaling "
                      "multiplies: set engine.density_scaling = 1");
   ExperimentSpec probe = spec;
-  set_platen_speed(probe, 1.0, "sweep");
+  set_platen_speed(probe, 1.0, o.where);
 }
 
 // One run of a strain-rate sweep in sweep.json: the usual entry, the rate asked for and measured,
@@ -520,17 +550,38 @@ SweepJob rate_job(const ExperimentSpec& spec, const std::vector<double>& rates,
   return job;
 }
 
-// Each value read as an override of the resolved experiment: a bad key or value fails here, with
-// the message the experiment file would give.
+// Each value read as an override of the resolved experiment: a bad key or value fails here,
+// named as the sweep gave it (`--over KEY VALUE`, or the plan file), and two values that make
+// the same experiment are refused.
 std::vector<ExperimentSpec> parameter_specs(const ExperimentSpec& spec, const std::string& key,
-                                            const std::vector<std::string>& values) {
+                                            const std::vector<std::string>& values,
+                                            const ValuesOrigin& o) {
   if (values.empty())
-    throw InputError("sweep", "--over " + key, "(no values)", "give the key, then its values");
+    throw InputError(o.where, o.key, "(no values)", "give the key, then its values");
   const std::string text = to_toml(spec);
   std::vector<ExperimentSpec> specs;
-  for (const std::string& v : values) {
-    ExperimentSpec one = parse_experiment(text, spec.source, {key + "=" + v});
+  std::vector<std::string> resolved;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const std::string& v = values[i];
+    ExperimentSpec one;
+    try {
+      one = parse_experiment(text, spec.source, {key + "=" + v});
+    } catch (const InputError& e) {
+      // The override's own name (--set KEY=VALUE) is not what the user typed.
+      const bool from_value = e.where().rfind("--set ", 0) == 0;
+      throw InputError(o.where, from_value ? o.key : e.key(),
+                       from_value ? key + " " + v : e.value(), from_value ? e.allowed() : e.what());
+    }
     one.name = fmt::format("{}-{}-{}", spec.name, key.substr(key.find('.') + 1), v);
+    ExperimentSpec same = one;
+    same.name = spec.name;
+    resolved.push_back(to_toml(same));
+    for (std::size_t j = 0; j < i; ++j)
+      if (resolved[j] == resolved[i])
+        throw InputError(o.where, o.key, key + " " + v,
+                         fmt::format("values {} ({}) and {} ({}) give the same experiment: each "
+                                     "value once",
+                                     j + 1, values[j], i + 1, v));
     specs.push_back(std::move(one));
   }
   return specs;
@@ -539,7 +590,7 @@ std::vector<ExperimentSpec> parameter_specs(const ExperimentSpec& spec, const st
 SweepJob parameter_job(const ExperimentSpec& spec, const std::string& key,
                        const std::vector<std::string>& values, const fs::path& folder) {
   SweepJob job;
-  job.specs = parameter_specs(spec, key, values);
+  job.specs = parameter_specs(spec, key, values, {"sweep", "--over"});
   for (ExperimentSpec& one : job.specs) one.output_directory = folder.string();
   job.describe = [key](const ExperimentSpec& one) { return fmt::format("{} ({})", one.name, key); };
   job.assemble = [spec, key, values](const std::vector<RunResult>& done) {
@@ -572,7 +623,7 @@ std::vector<double> plan_numbers(const std::vector<std::string>& values, const s
   for (const std::string& t : values) {
     char* end = nullptr;
     v.push_back(std::strtod(t.c_str(), &end));
-    if (t.empty() || *end != '\0') throw InputError(where, "values", t, "numbers");
+    if (t.empty() || *end != '\0') throw InputError(where, "values", t, "finite numbers");
   }
   return v;
 }
@@ -629,21 +680,72 @@ std::vector<std::string> exact_text(const std::vector<double>& values) {
 
 SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& confining,
                       const RunOptions& opt) {
-  check_confining(confining, spec);
+  check_confining(confining, spec, {"sweep", "--confining-mpa", 1e6, " MPa"});
   return start_sweep(spec, "confining_stress", "", exact_text(confining), opt);
 }
 
 SweepResult run_rate_sweep(const ExperimentSpec& spec, const std::vector<double>& rates,
                            const RunOptions& opt) {
-  check_rates(rates, spec);
+  check_rates(rates, spec, {"sweep", "--strain-rates"});
   return start_sweep(spec, "strain_rate", "", exact_text(rates), opt);
 }
 
 SweepResult run_parameter_sweep(const ExperimentSpec& spec, const std::string& key,
                                 const std::vector<std::string>& values, const RunOptions& opt) {
-  parameter_specs(spec, key, values);  // every value checked before any folder exists
+  // Every value checked before any folder exists.
+  parameter_specs(spec, key, values, {"sweep", "--over"});
   return start_sweep(spec, "parameter", key, values, opt);
 }
+
+namespace {
+
+// The experiment of a plan, checked with its values as a new sweep checks them. Every error
+// names the plan file and its key: the plan is what `breccia sweep` resolved, not the user's
+// file or options.
+ExperimentSpec checked_plan(const fs::path& path, const json& plan) {
+  const std::string where = path.string();
+  const JsonView v(plan, where);
+  if (v.text("format", "") != kPlanFormat)
+    throw InputError(where, "format", v.text("format", "(missing)"),
+                     std::string("\"") + kPlanFormat + "\"");
+  const std::string kind = v.text("kind", "");
+  if (kind != "confining_stress" && kind != "strain_rate" && kind != "parameter")
+    throw InputError(where, "kind", kind, "confining_stress, strain_rate or parameter");
+  const std::string text = v.text("experiment", "");
+  if (text.empty())
+    throw InputError(where, "experiment", v.has("experiment") ? "\"\"" : "(missing)",
+                     "the resolved experiment (TOML) that `breccia sweep` wrote; without it the "
+                     "sweep cannot be resumed");
+  ExperimentSpec spec;
+  try {
+    spec = parse_experiment(text, v.text("experiment_source", where), {});
+  } catch (const InputError& e) {
+    throw InputError(where, "experiment" + (e.key().empty() ? "" : "." + e.key()), e.value(),
+                     e.allowed() + " (the plan's experiment does not check out)");
+  }
+  std::vector<std::string> values;
+  for (const JsonView& x : v.elements("values")) values.push_back(x.as_text());
+  if (values.empty()) throw InputError(where, "values", "[]", "one value or more");
+  const ValuesOrigin origin{where, "values"};
+  try {
+    if (kind == "parameter") {
+      if (v.text("key", "").empty())
+        throw InputError(where, "key", "\"\"", "the key the sweep varies");
+      parameter_specs(spec, v.text("key", ""), values, origin);
+    } else {
+      const std::vector<double> numbers = plan_numbers(values, where);
+      if (kind == "confining_stress") check_confining(numbers, spec, origin);
+      if (kind == "strain_rate") check_rates(numbers, spec, origin);
+    }
+  } catch (const InputError& e) {
+    if (e.where() == where) throw;
+    throw InputError(where, "experiment" + (e.key().empty() ? "" : "." + e.key()), e.value(),
+                     e.allowed() + " (the plan's experiment does not check out)");
+  }
+  return spec;
+}
+
+}  // namespace
 
 SweepResult resume_sweep(const std::string& folder_name, const RunOptions& opt) {
   const fs::path folder(folder_name), path = folder / kPlanFile;
@@ -652,28 +754,7 @@ SweepResult resume_sweep(const std::string& folder_name, const RunOptions& opt) 
                      "a sweep folder written by `breccia sweep` (sweeps from before version "
                      "0.1.0's sweep plans cannot be resumed: resume their runs one by one)");
   json plan = read_json_object(path.string());
-  const JsonView v(plan, path.string());
-  if (v.text("format", "") != kPlanFormat)
-    throw InputError(path.string(), "format", v.text("format", "(missing)"),
-                     std::string("\"") + kPlanFormat + "\"");
-  const std::string kind = v.text("kind", "");
-  if (kind != "confining_stress" && kind != "strain_rate" && kind != "parameter")
-    throw InputError(path.string(), "kind", kind, "confining_stress, strain_rate or parameter");
-  const ExperimentSpec spec =
-      parse_experiment(v.text("experiment", ""), v.text("experiment_source", path.string()), {});
-  // The values are checked as a new sweep checks them, each error naming the plan file.
-  std::vector<std::string> values;
-  for (const JsonView& x : v.elements("values")) values.push_back(x.as_text());
-  if (values.empty()) throw InputError(path.string(), "values", "[]", "one value or more");
-  if (kind == "parameter") {
-    if (v.text("key", "").empty())
-      throw InputError(path.string(), "key", "\"\"", "the key the sweep varies");
-    parameter_specs(spec, v.text("key", ""), values);
-  } else {
-    const std::vector<double> numbers = plan_numbers(values, path.string());
-    if (kind == "confining_stress") check_confining(numbers, spec);
-    if (kind == "strain_rate") check_rates(numbers, spec);
-  }
+  const ExperimentSpec spec = checked_plan(path, plan);
   if (!plan.contains("resumed")) plan["resumed"] = json::array();
   plan["resumed"].push_back(
       json{{"when", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
