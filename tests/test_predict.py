@@ -112,7 +112,7 @@ def test_the_networks_forward_pass_is_scikit_learns_and_survives_saving():
     assert again.predict(X) == pytest.approx(net.predict(X), rel=0, abs=0)
 
 
-def small_run(out):
+def small_run(out, extra=()):
     cmd = [CLI, "run", "--quiet", "--output", out, "--set", 'sample.source="file"',
            "--set", f'sample.file="{SOURCE}/tests/data/ucs-small.geom"',
            "--set", "engine.density_scaling=100", "--set", "loading.platen_speed=0.2",
@@ -121,7 +121,7 @@ def small_run(out):
            "--set", 'contact.law="hertz_mindlin"', "--set", "contact.shear_modulus=29e9",
            "--set", "contact.poisson_ratio=0.33", "--set", "contact.friction=0.4",
            "--set", "bond.modulus=8e9", "--set", "bond.tensile_strength=30e6",
-           "--set", "bond.cohesion=300e6"]
+           "--set", "bond.cohesion=300e6", *extra]
     return subprocess.run(cmd, capture_output=True, text=True, check=True).stdout.split()[-1]
 
 
@@ -159,3 +159,75 @@ def test_the_command_refuses_bad_input_with_a_message():
         r = subprocess.run([CLI, "predict", "apply", out, "--model", out],
                            capture_output=True, text=True)
         assert r.returncode == 2 and "no model.json" in r.stderr
+
+
+def _predict(*args):
+    return subprocess.run([CLI, "predict", *args], capture_output=True, text=True)
+
+
+def _model(inputs, hidden=2):
+    net = {"inputs": inputs, "activation": "tanh", "W1": [[0.1] * len(inputs)] * hidden,
+           "b1": [0.0] * hidden, "w2": [0.5] * hidden, "b2": 0.0,
+           "x_min": [0.0] * len(inputs), "x_max": [1.0] * len(inputs), "y_min": 0.0, "y_max": 1.0}
+    return {"targets": {"stress": {"network": {**net, "target": "stress_to_failure_mpa"}},
+                        "strain": {"network": {**net, "target": "strain_to_failure"}}}}
+
+
+@pytest.mark.parametrize("text, needle", [
+    ("", "not valid JSON"),
+    ("{{{", "not valid JSON"),
+    ("[1, 2]", "'targets'"),
+    ('{"targets": {}}', "'targets'"),
+    ('{"targets": {"stress": {"network": {}}}}', "targets.stress.network.inputs: missing"),
+    (json.dumps({"targets": {"stress": {"network": {**_model(["mc_var"])["targets"]["stress"]["network"],
+                                                    "W1": [[1, 2, 3]]}}}}), "W1: shape"),
+    (json.dumps({"targets": {"stress": {"network": {**_model(["mc_var"])["targets"]["stress"]["network"],
+                                                    "b2": "x"}}}}), "must be numbers"),
+])
+def test_a_damaged_model_is_named_not_a_traceback(text, needle):
+    with tempfile.TemporaryDirectory() as d:
+        with open(os.path.join(d, "model.json"), "w") as f:
+            f.write(text)
+        r = _predict("apply", d, "--model", d)
+        assert r.returncode == 2, r.stderr
+        assert needle in r.stderr and "model.json" in r.stderr, r.stderr
+        assert "Traceback" not in r.stderr
+
+
+def test_training_onto_a_file_or_a_foreign_folder_is_refused_before_anything_runs():
+    with tempfile.TemporaryDirectory() as d:
+        target = os.path.join(d, "model")
+        open(target, "w").close()
+        r = _predict("train", d, "--output", target)
+        assert r.returncode == 2 and "is a file" in r.stderr and "Traceback" not in r.stderr
+        os.remove(target)
+        os.makedirs(target)
+        open(os.path.join(target, "notes.txt"), "w").close()
+        r = _predict("train", d, "--output", target)
+        assert r.returncode == 2 and "other files" in r.stderr, r.stderr
+
+
+def test_runs_without_a_peak_train_nothing_and_get_no_actual_values():
+    import breccia
+    with tempfile.TemporaryDirectory() as out:
+        # A test stopped long before its peak: bonds 100 times stronger than the small run's.
+        folder = small_run(out, extra=["--set", "bond.tensile_strength=3e9", "--set",
+                                       "bond.cohesion=30e9", "--set", "loading.max_strain=0.002"])
+        run = breccia.read(folder)
+        assert run.complete and not run.summary["peak_reached"]
+        r = _predict("train", folder, "--output", os.path.join(out, "m"))
+        assert r.returncode == 2 and "reached a peak" in r.stderr, r.stderr
+        assert "never reached a peak" in r.stdout + r.stderr
+        assert not os.path.exists(os.path.join(out, "m", "model.json"))
+        model = os.path.join(out, "model")
+        os.makedirs(model)
+        with open(os.path.join(model, "model.json"), "w") as f:
+            json.dump(_model(["confining_mpa"]), f)
+        r = _predict("apply", folder, "--model", model)
+        assert r.returncode == 0, r.stderr
+        assert "never reached a peak" in r.stdout
+        table = breccia.read(folder).table("failure_predictions")
+        assert len(table) > 0
+        assert table["actual_stress_to_failure_mpa"].isna().all()
+        assert table["actual_strain_to_failure"].isna().all()
+        assert table["predicted_stress_to_failure_mpa"].notna().all()

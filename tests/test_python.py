@@ -188,6 +188,9 @@ def test_step_level_access_sees_the_engine_state():
     assert list(sim.cracks.columns)[:7] == ["step", "time_s", "id1", "id2", "x_m", "y_m", "z_m"]
     with pytest.raises(breccia.InputError, match="local_damping"):
         sim.set_local_damping(1.5)
+    for mu in (float("inf"), float("nan"), -0.1):
+        with pytest.raises(breccia.InputError, match="set_contact_friction.*friction.*finite"):
+            sim.set_contact_friction(mu)
     walls = len(sim.walls)
     top = float((x[:, 2] + sim.radii).max())
     sim.add_wall("lid", point=(0, 0, top + 1e-3), normal=(0, 0, -1))
@@ -293,6 +296,19 @@ def test_a_sweep_from_python_in_this_process_and_in_child_processes_agree():
         breccia.sweep(breccia.Experiment(overrides=SMALL), over=["bond.tensile_strength"])
     with pytest.raises(breccia.InputError, match="bond.tensile_strength"):
         breccia.sweep(breccia.Experiment(overrides=SMALL), over=("bond.tensile_strength", [-1.0]))
+    # A scalar where a list belongs, a value with no TOML form, a number that is not one: each
+    # names the argument, and nothing is written.
+    with pytest.raises(breccia.InputError, match="over = .*must be a list"):
+        breccia.sweep(breccia.Experiment(overrides=SMALL), over=("bond.tensile_strength", 3e6))
+    with pytest.raises(breccia.InputError, match=r"over\[1\]\[1\].*not a TOML value"):
+        breccia.sweep(breccia.Experiment(overrides=SMALL),
+                      over=("bond.tensile_strength", [3e6, object()]))
+    with pytest.raises(breccia.InputError, match="confining_mpa = 5: expected a list"):
+        breccia.sweep(breccia.Experiment(overrides=SMALL), confining_mpa=5)
+    with pytest.raises(breccia.InputError, match=r"strain_rates\[0\] = 'fast'"):
+        breccia.sweep(breccia.Experiment(overrides=SMALL), strain_rates=["fast"])
+    with pytest.raises(breccia.InputError, match="given twice"):
+        breccia.sweep(breccia.Experiment(overrides=SMALL), confining_mpa=[5, 5])
 
 
 def test_a_sweep_over_any_key_from_python():

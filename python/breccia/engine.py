@@ -109,6 +109,13 @@ def resume(folder, *, threads=None, progress=None, log=None, stop_at_step=0, job
     return RunFolder(result["folder"])
 
 
+def _number(name, k, value):
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"sweep: {name}[{k}] = {value!r}: expected a number") from None
+
+
 def sweep(experiment=None, *, confining_mpa=None, strain_rates=None, over=None, output=None,
           jobs=1, threads=None, progress=None, log=None):
     """Runs the experiment once per confining stress (MPa) or per strain rate (1/s) of its
@@ -124,11 +131,27 @@ def sweep(experiment=None, *, confining_mpa=None, strain_rates=None, over=None, 
                 not isinstance(over[0], str)):
             raise InputError(f"sweep: over = {over!r}: allowed: (key, [values]), e.g. "
                              "(\"sample.slab_thickness\", [5e-3, 1e-2])")
-        key, values = over[0], [toml_value(v) for v in over[1]]
+        key, given = over
+        if isinstance(given, (str, bytes, dict)) or not hasattr(given, "__iter__"):
+            raise InputError(f"sweep: over = {over!r}: its values must be a list, e.g. "
+                             f"({key!r}, [{given!r}, ...])")
+        values = []
+        for k, v in enumerate(given):
+            try:
+                values.append(toml_value(v))
+            except TypeError as e:
+                raise InputError(f"sweep: over[1][{k}] ({key}) = {e}") from None
+    for name, given in (("confining_mpa", confining_mpa), ("strain_rates", strain_rates)):
+        if given is not None and (isinstance(given, (str, bytes, dict)) or
+                                  not hasattr(given, "__iter__")):
+            raise InputError(f"sweep: {name} = {given!r}: expected a list of numbers, e.g. "
+                             f"{name}=[{given!r}]")
     exp = _experiment(experiment, output, threads)
     bar, _ = _progress(progress, exp["output.progress"])
-    confining = [1e6 * float(s) for s in confining_mpa] if confining_mpa is not None else []
-    rates = [float(r) for r in strain_rates] if strain_rates is not None else []
+    confining = [1e6 * _number("confining_mpa", k, s) for k, s in enumerate(confining_mpa)] \
+        if confining_mpa is not None else []
+    rates = [_number("strain_rates", k, r) for k, r in enumerate(strain_rates)] \
+        if strain_rates is not None else []
     result = _core.sweep(exp._spec, confining, rates, key, values, int(jobs), bar,
                          _printer(log), _command("sweep"))
     _checked(result, "sweep")

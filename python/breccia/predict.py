@@ -47,19 +47,41 @@ class PredictError(ValueError):
 # Data set
 # ---------------------------------------------------------------------------------------------
 
-def run_folders(paths):
-    """The run folders of the given sweep and run folders, in order."""
+def peak_of(run):
+    """(axial strain, deviatoric stress in Pa) at the run's peak, or None with the reason when
+    the run did not finish or never reached a peak: without it there is no time to failure."""
+    if not run.complete:
+        return None, f"the run is {run.status}, not complete"
+    s = run.summary
+    if not s.get("peak_reached", True):
+        return None, "the run never reached a peak (it stopped at its strain limit)"
+    strain, stress = s.get("axial_strain_at_peak"), s.get("peak_deviatoric_stress_pa")
+    if not isinstance(strain, (int, float)) or not isinstance(stress, (int, float)):
+        return None, "its summary.json has no axial_strain_at_peak or peak_deviatoric_stress_pa"
+    return (float(strain), float(stress)), ""
+
+
+def run_folders(paths, log=print):
+    """The run folders of the given sweep and run folders that reached a peak, in order; the
+    others are left out with the reason."""
     runs = []
     for p in paths:
         f = read(p)
         if isinstance(f, SweepFolder):
-            runs.extend(r for r in f.runs if r.complete)
+            found = [r for r in f.runs if r.complete]
         elif isinstance(f, RunFolder):
-            runs.append(f)
+            found = [f]
         else:
             raise PredictError(f"{p}: a calibration folder; give sweep or run folders")
+        for r in found:
+            peak, why = peak_of(r)
+            if peak is None:
+                log(f"predict: {r.path} left out: {why}")
+            else:
+                runs.append(r)
     if not runs:
-        raise PredictError(f"{' '.join(map(str, paths))}: no complete run folder")
+        raise PredictError(f"{' '.join(map(str, paths))}: no complete run that reached a peak "
+                           "(a predictor of the time to failure learns from tests that failed)")
     return runs
 
 
@@ -68,8 +90,9 @@ def windows(run, inputs=INPUTS, pre_peak_only=True):
     targets. Returns (all windows with every input present, number dropped for a missing one)."""
     ind = run.indicators
     s = run.summary
-    peak_strain = s["axial_strain_at_peak"]
-    peak_q_mpa = s["peak_deviatoric_stress_pa"] / 1e6
+    peak, _ = peak_of(run)
+    # Without a known peak (an unfinished run being forecast) the targets stay empty.
+    peak_strain, peak_q_mpa = (peak[0], peak[1] / 1e6) if peak else (np.nan, np.nan)
     h = run.history
     rows = pd.DataFrame({"test": os.path.basename(run.path),
                          "axial_strain": ind["axial_strain"].to_numpy()})
@@ -88,14 +111,14 @@ def windows(run, inputs=INPUTS, pre_peak_only=True):
     return rows[complete].reset_index(drop=True), int((~complete).sum())
 
 
-def dataset(paths, inputs=INPUTS):
+def dataset(paths, inputs=INPUTS, log=print):
     """The windows of every complete run in `paths` (sweep or run folders), and a per-test table
     of windows kept and dropped."""
     unknown = [i for i in inputs if i not in INPUTS]
     if unknown or not inputs:
         raise PredictError(f"inputs = {','.join(inputs)}: allowed: any of {', '.join(INPUTS)}")
     parts, report = [], []
-    for run in run_folders(paths):
+    for run in run_folders(paths, log):
         rows, dropped = windows(run, inputs)
         parts.append(rows)
         report.append({"test": os.path.basename(run.path),
@@ -261,7 +284,8 @@ def train(paths, output, inputs=INPUTS, networks=10, log=print):
     """Builds the data set, validates leave-one-test-out, trains the final networks (all tests
     but one kept for validation), and writes model.json, dataset.csv, windows.csv,
     validation.csv and importance.csv to `output`. Returns the model dict."""
-    data, per_test = dataset(paths, inputs)
+    check_output(output)
+    data, per_test = dataset(paths, inputs, log)
     if len(data) == 0:
         raise PredictError("no pre-peak window has every input "
                            f"({', '.join(inputs)}); dropped per test:\n"
@@ -308,13 +332,72 @@ def train(paths, output, inputs=INPUTS, networks=10, log=print):
     return model
 
 
+def check_output(output):
+    """A model folder: a new one, or one that holds a model already (it is replaced)."""
+    output = os.fspath(output)
+    if os.path.exists(output) and not os.path.isdir(output):
+        raise PredictError(f"--output {output}: is a file; the model is a folder (model.json and "
+                           "its tables): give a new folder's name")
+    if os.path.isdir(output) and os.listdir(output) and \
+            not os.path.exists(os.path.join(output, "model.json")):
+        raise PredictError(f"--output {output}: a folder that holds other files and no model; "
+                           "give a new folder's name (or an earlier model's, to replace it)")
+
+
+def _checked_network(d, path, name):
+    """A network of model.json, every field checked (shapes included)."""
+    where = f"{path}: targets.{name}.network"
+    if not isinstance(d, dict):
+        raise PredictError(f"{where}: expected an object")
+    for key in ("inputs", "target", "W1", "b1", "w2", "b2", "x_min", "x_max", "y_min", "y_max"):
+        if key not in d:
+            raise PredictError(f"{where}.{key}: missing")
+    inputs = d["inputs"]
+    if not isinstance(inputs, list) or not inputs or any(i not in INPUTS for i in inputs):
+        raise PredictError(f"{where}.inputs = {inputs!r}: expected a list of {', '.join(INPUTS)}")
+    try:
+        W1 = np.asarray(d["W1"], float)
+        vectors = {k: np.asarray(d[k], float) for k in ("b1", "w2", "x_min", "x_max")}
+        scalars = {k: float(d[k]) for k in ("b2", "y_min", "y_max")}
+    except (TypeError, ValueError) as e:
+        raise PredictError(f"{where}: weights and scalers must be numbers ({e})") from None
+    n, h = len(inputs), W1.shape[0] if W1.ndim == 2 else -1
+    if W1.ndim != 2 or W1.shape[1] != n or h < 1:
+        raise PredictError(f"{where}.W1: shape {W1.shape}: expected (hidden, {n})")
+    want = {"b1": h, "w2": h, "x_min": n, "x_max": n}
+    for k, size in want.items():
+        if vectors[k].shape != (size,):
+            raise PredictError(f"{where}.{k}: {vectors[k].shape[0] if vectors[k].ndim == 1 else vectors[k].shape} "
+                               f"values: expected {size}")
+    if not all(np.isfinite(v).all() for v in [W1, *vectors.values()]) or \
+            not all(np.isfinite(list(scalars.values()))):
+        raise PredictError(f"{where}: weights and scalers must be finite")
+    if d["target"] not in TARGETS.values():
+        raise PredictError(f"{where}.target = {d['target']!r}: expected one of "
+                           f"{', '.join(TARGETS.values())}")
+    return Network.from_dict(d)
+
+
 def load(model_dir):
     path = os.path.join(os.fspath(model_dir), "model.json")
     if not os.path.exists(path):
         raise PredictError(f"{model_dir}: no model.json (train one with `breccia predict train`)")
-    with open(path) as f:
-        model = json.load(f)
-    return {name: Network.from_dict(t["network"]) for name, t in model["targets"].items()}
+    if not os.path.isfile(path):
+        raise PredictError(f"{path}: not a file")
+    try:
+        with open(path) as f:
+            model = json.load(f)
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise PredictError(f"{path}: not valid JSON ({e}); train the model again") from None
+    if not isinstance(model, dict) or not isinstance(model.get("targets"), dict) \
+            or not model["targets"]:
+        raise PredictError(f"{path}: 'targets': missing or empty; not a model written by "
+                           "`breccia predict train`")
+    nets = {name: _checked_network(t.get("network") if isinstance(t, dict) else t, path, name)
+            for name, t in model["targets"].items()}
+    if len({tuple(n.inputs) for n in nets.values()}) != 1:
+        raise PredictError(f"{path}: the targets' networks have different inputs")
+    return nets
 
 
 def apply(run_path, model_dir, log=print):
@@ -327,13 +410,17 @@ def apply(run_path, model_dir, log=print):
         raise PredictError(f"{run_path}: not a run folder")
     inputs = next(iter(networks.values())).inputs
     rows, dropped = windows(run, inputs, pre_peak_only=False)
+    peak, why = peak_of(run)
     out = rows[["axial_strain", "deviatoric_mpa", *inputs]].copy()
     for name, net in networks.items():
         out[f"predicted_{net.target}"] = net.predict(rows[inputs]) if len(rows) else []
-        out[f"actual_{net.target}"] = rows[net.target]
+        # Without a known peak the actual values are unknown: the column stays empty.
+        out[f"actual_{net.target}"] = rows[net.target] if peak else np.nan
     path = run.file("failure_predictions.csv")
     out.to_csv(path, index=False)
-    pre = out[out["axial_strain"] <= run.summary["axial_strain_at_peak"]]
+    if not peak:
+        log(f"predict: no actual stress or strain to failure beside the forecast: {why}")
+    pre = out[out["axial_strain"] <= peak[0]] if peak else out.iloc[0:0]
     for name, net in networks.items():
         if len(pre):
             log(f"predict: {net.target}: RMSE {rmse(pre[f'actual_{net.target}'], pre[f'predicted_{net.target}']):.4g} "
@@ -366,6 +453,12 @@ def main(argv=None):
     except (PredictError, FileNotFoundError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("error: interrupted; the model folder may be incomplete", file=sys.stderr)
+        return 130
+    except OSError as e:
+        print(f"error: {e.filename or ''}: {e.strerror or e}", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -264,8 +264,10 @@ void bind_simulation(py::module_& m) {
       .def("set_wall_velocity", &set_wall_velocity, py::arg("name"), py::arg("velocity"))
       .def("set_contact_friction",
            [](Scripted& s, double mu) {
-             if (!(mu >= 0.0))
-               throw InputError("simulation", "friction", std::to_string(mu), "allowed: >= 0");
+             // As the experiment file's contact.friction: finite and >= 0.
+             if (!(mu >= 0.0) || !std::isfinite(mu))
+               throw InputError("set_contact_friction", "friction", fmt::format("{}", mu),
+                                "allowed: a finite number >= 0");
              s.sim().set_contact_friction(mu);
            })
       .def("set_local_damping", [](Scripted& s, double a) { s.sim().set_local_damping(a); })
