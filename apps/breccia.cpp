@@ -302,18 +302,31 @@ Command add_summarise(CLI::App& app) {
           }};
 }
 
+// The last non-empty line of a log (a Python exception's own line), for an error message.
+std::string last_line_of(const std::string& path) {
+  std::ifstream in(path);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last.empty() ? "(no message)" : last;
+}
+
 int report_command(const std::string& folder) {
   namespace fs = std::filesystem;
   const bool run_folder = fs::exists(fs::path(folder) / "summary.json");
   if (!run_folder && !fs::exists(fs::path(folder) / "sweep.json"))
     throw breccia::InputError(folder, "summary.json", "(missing)",
                               "not a finished run or sweep folder");
+  // A damaged summary or sweep.json is named by its key before any figure is drawn.
+  (void)breccia::summarise_folder(folder);
   if (run_folder && !breccia::plot_run(folder)) {
-    std::cerr << "error: stress_strain.png failed; see " << folder << "/plot.log\n";
+    std::cerr << "error: stress_strain.png failed: " << last_line_of(folder + "/plot.log")
+              << " (whole message: " << folder << "/plot.log)\n";
     return 1;
   }
   if (!breccia::write_report(folder)) {
-    std::cerr << "error: the report failed; see " << folder << "/report.log\n";
+    std::cerr << "error: the report failed: " << last_line_of(folder + "/report.log")
+              << " (whole message: " << folder << "/report.log)\n";
     return 1;
   }
   std::cout << folder << "/report.html" << std::endl;

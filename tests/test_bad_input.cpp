@@ -2,6 +2,7 @@
 // format and damaged run folders. Each case must end with a non-zero exit (never a signal), a
 // message naming the file, key or option and the value, and no run folder that looks whole.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -52,6 +53,8 @@ bool has_whole_looking_run(const fs::path& root) {
 }
 
 const char* kGeomHead = "breccia-geometry 1\ndimension 3\n";
+// A case file with this text is made a FIFO (a reader that opened it would wait forever).
+const char* kFifo = "\x01fifo";
 
 // A calibration of a tiny generated prism (about 330 grains): a case that must be refused before
 // the first trial gets there in a second or two, packing included.
@@ -204,7 +207,11 @@ std::vector<BadCase> cases() {
        run + kLattice + " --set output.snapshot_strain_interval=1e-300",
        2,
        {"output.snapshot_strain_interval"}},
-      {"lattice_radius_tiny", {}, run + kLattice + " --set sample.radius=1e-308", 2, {"lattice"}},
+      {"lattice_radius_tiny",
+       {},
+       run + kLattice + " --set sample.radius=1e-308",
+       2,
+       {"sample.radius", "1e-308"}},
       {"time_step_tiny",
        {},
        run + kLattice + " --set engine.time_step=1e-300",
@@ -387,7 +394,9 @@ std::vector<BadCase> cases() {
        {"s.geo:7", "particle count"}},
       // --- damaged run folders ---
       {"summary_wrong_type",
-       {{"summary.json", "{\"experiment\": \"x\", \"quasi_static\": 3}"}},
+       {{"summary.json",
+         "{\"experiment\": \"x\", \"status\": \"complete\", \"test\": \"UCS\", "
+         "\"quasi_static\": 3}"}},
        "summarise {d}",
        2,
        {"summary.json", "quasi_static", "3"}},
@@ -402,17 +411,19 @@ std::vector<BadCase> cases() {
        2,
        {"summary.json", "object"}},
       {"summary_bad_quarters",
-       {{"summary.json", "{\"crack_pattern\": {\"quarter_shares_along_axis\": [\"a\", 1, 2, 3]}}"}},
+       {{"summary.json",
+         "{\"experiment\": \"x\", \"status\": \"complete\", \"test\": \"UCS\", "
+         "\"crack_pattern\": {\"quarter_shares_along_axis\": [\"a\", 1, 2, 3]}}"}},
        "summarise {d}",
        2,
        {"crack_pattern.quarter_shares_along_axis[0]"}},
       {"sweep_runs_not_list",
-       {{"sweep.json", "{\"runs\": 5}"}},
+       {{"sweep.json", "{\"experiment\": \"x\", \"status\": \"complete\", \"runs\": 5}"}},
        "summarise {d}",
        2,
        {"sweep.json", "runs", "5"}},
       {"sweep_run_missing_stress",
-       {{"sweep.json", "{\"runs\": [{}]}"}},
+       {{"sweep.json", "{\"experiment\": \"x\", \"status\": \"complete\", \"runs\": [{}]}"}},
        "summarise {d}",
        2,
        {"sweep.json", "runs[0].confining_stress_pa", "missing"}},
@@ -611,6 +622,49 @@ std::vector<BadCase> cases() {
        "resume {d}",
        2,
        {"sweep-plan.json", "experiment.sample.file"}},
+      {"summary_empty_object",
+       {{"summary.json", "{}"}},
+       "summarise {d}",
+       2,
+       {"summary.json", "experiment", "missing"}},
+      {"sweep_empty_object",
+       {{"sweep.json", "{}"}},
+       "summarise {d}",
+       2,
+       {"sweep.json", "experiment", "missing"}},
+      {"report_damaged_summary",
+       {{"summary.json", "{\"experiment\": \"x\", \"status\": \"complete\"}"}},
+       "report {d}",
+       2,
+       {"summary.json", "'test'", "missing"}},
+      {"checkpoint_is_a_folder",
+       {{"manifest.json", "{\"status\": \"interrupted\"}"}, {"checkpoint.bin/x", ""}},
+       "resume {d}",
+       2,
+       {"checkpoint.bin", "is a folder"}},
+      {"geometry_fifo", {{"s.geom", kFifo}}, run + geom, 2, {"s.geom", "not a regular file"}},
+      {"empty_experiment", exp(""), e, 2, {"e.toml", "empty"}},
+      {"empty_experiment_comments", exp("# nothing here\n\n"), e, 2, {"e.toml", "empty"}},
+      {"radius_underflow",
+       {},
+       run + "--set sample.radius_min=1e-308 --set sample.radius_max=2e-308",
+       2,
+       {"sample.radius_max", "2e-308", "1e-09"}},
+      {"radius_overflow",
+       {},
+       run + "--set sample.radius_max=1e308",
+       2,
+       {"sample.radius_max", "1e+308"}},
+      {"radius_too_large_for_the_sample",
+       {},
+       run + "--set sample.radius_min=1e-3 --set sample.radius_max=3e-3",
+       2,
+       {"sample.radius_max", "0.003"}},
+      {"radius_too_many_grains",
+       {},
+       run + "--set sample.radius_min=1e-8 --set sample.radius_max=2e-8",
+       2,
+       {"sample.radius_min", "sample.max_particles"}},
       // --- the experiment file and --set ---
       {"set_unknown_table_on_a_file",
        exp("[engine]\nthreads = 1\n"),
@@ -634,7 +688,10 @@ TEST_P(BadInput, FailsClearlyAndLeavesNoWholeLookingRun) {
   fs::create_directories(dir);
   for (const auto& [name, text] : k.files) {
     fs::create_directories((dir / name).parent_path());
-    std::ofstream(dir / name) << text;
+    if (std::string(text) == kFifo)
+      ASSERT_EQ(mkfifo((dir / name).c_str(), 0600), 0);
+    else
+      std::ofstream(dir / name) << text;
   }
   const Result r = run(replace_all(k.args, "{d}", dir.string()));
   ASSERT_NE(r.code, -1) << "killed by a signal\n" << r.out;

@@ -4,11 +4,13 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "breccia/core/error.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/io/geometry_file.hpp"
+#include "breccia/io/sample_import.hpp"
 
 using namespace breccia;
 
@@ -123,4 +125,27 @@ TEST(GeometryFile, DuplicateBondIsRejectedAtInitialise) {
   sim.add_bond<ParallelBond>(1, 2);
   sim.add_bond<ParallelBond>(2, 1);
   EXPECT_THROW(sim.initialise(), InputError);
+}
+
+// An editor's UTF-8 byte-order mark in front of a sample file is dropped, as TOML files get it
+// dropped by their parser: the same sample reads the same with or without it, in every format.
+TEST(GeometryFile, AByteOrderMarkIsDroppedInEveryFormat) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "breccia_bom";
+  std::filesystem::create_directories(dir);
+  const std::string bom = "\xEF\xBB\xBF";
+  const std::string geom =
+      "breccia-geometry 1\ndimension 3\nparticles 2\n1 0 0 0 1e-3 2650\n"
+      "2 2e-3 0 0 1e-3 2650\n";
+  const std::string table = "0 0 0 1e-3\n2e-3 0 0 1e-3\n";
+  for (const auto& [name, text] :
+       {std::pair{"a.geom", bom + geom}, std::pair{"b.txt", bom + table}})
+    std::ofstream(dir / name) << text;
+  const GeometryData g = read_geometry((dir / "a.geom").string(), 100);
+  ASSERT_EQ(g.particles.size(), 2u);
+  EXPECT_EQ(g.particles[1].position[0], 2e-3);
+  const GeometryData t =
+      read_xyzr_table((dir / "b.txt").string(), Dimension::Three, 2650.0, 0.0, 100);
+  ASSERT_EQ(t.particles.size(), 2u);
+  EXPECT_EQ(t.particles[0].radius, 1e-3);
+  std::filesystem::remove_all(dir);
 }

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "breccia/core/error.hpp"
+#include "breccia/io/text_file.hpp"
 #include "breccia/io/toml_node.hpp"
 
 namespace breccia {
@@ -500,13 +501,7 @@ CalibrationSpec parse_calibration(const std::string& text, const std::string& so
 }
 
 CalibrationSpec load_calibration(const std::string& path) {
-  if (std::filesystem::is_directory(path))
-    throw InputError(path, "", "", "is a folder; expected a calibration file (TOML)");
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "", "cannot open the calibration file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_calibration(ss.str(), path);
+  return parse_calibration(read_text_file(path, "a calibration file (TOML)"), path);
 }
 
 std::vector<std::string> parameter_overrides(const CalibrationSpec& c,

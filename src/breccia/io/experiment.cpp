@@ -12,6 +12,7 @@
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
+#include "breccia/io/text_file.hpp"
 #include "breccia/io/toml_node.hpp"
 #include "breccia/material/library.hpp"
 
@@ -300,6 +301,8 @@ Key joint_planes_key() {
   return k;
 }
 
+constexpr double kGrainRadiusMin = 1e-9, kGrainRadiusMax = 1e3;  // m
+
 const std::vector<Key>& key_table() {
   static const std::vector<Key> keys = [] {
     std::vector<Key> k;
@@ -385,12 +388,14 @@ const std::vector<Key>& key_table() {
                            "[radius_min, radius_max]; classes: class_radii with "
                            "class_mass_fractions",
                            &ExperimentSpec::distribution));
-    k.push_back(real_key("sample", "radius_min", "m", 0, kInf, true, "smallest radius",
-                         &ExperimentSpec::radius_min));
-    k.push_back(real_key("sample", "radius_max", "m", 0, kInf, true,
+    // Grains from a nanometre to a kilometre: beyond, volumes and masses leave the range of
+    // doubles (a cube of 1e-308 is 0) and no rock is made of them.
+    k.push_back(real_key("sample", "radius_min", "m", kGrainRadiusMin, kGrainRadiusMax, false,
+                         "smallest radius", &ExperimentSpec::radius_min));
+    k.push_back(real_key("sample", "radius_max", "m", kGrainRadiusMin, kGrainRadiusMax, false,
                          "largest radius (>= radius_min)", &ExperimentSpec::radius_max));
-    k.push_back(real_key("sample", "radius_mean", "m", 0, kInf, true, "lognormal: mean radius",
-                         &ExperimentSpec::radius_mean));
+    k.push_back(real_key("sample", "radius_mean", "m", kGrainRadiusMin, kGrainRadiusMax, false,
+                         "lognormal: mean radius", &ExperimentSpec::radius_mean));
     k.push_back(real_key("sample", "radius_sd", "m", 0, kInf, false,
                          "lognormal: standard deviation of the radius",
                          &ExperimentSpec::radius_sd));
@@ -470,8 +475,8 @@ const std::vector<Key>& key_table() {
       };
       k.push_back(c);
     }
-    k.push_back(real_key("sample", "radius", "m", 0, kInf, true, "lattice: particle radius",
-                         &ExperimentSpec::radius));
+    k.push_back(real_key("sample", "radius", "m", kGrainRadiusMin, kGrainRadiusMax, false,
+                         "lattice: particle radius", &ExperimentSpec::radius));
     k.push_back(real_key("sample", "density", "kg/m^3", 0, kInf, true,
                          "grain density (not bulk density)", &ExperimentSpec::density));
     k.push_back(real_key("sample", "thickness", "m", 0, kInf, true,
@@ -1097,6 +1102,8 @@ double geometry_file_thickness(const ExperimentSpec& s) {
   std::filesystem::path p = s.geometry_file;
   if (p.is_relative() && s.source != "built-in default")
     p = std::filesystem::path(s.source).parent_path() / p;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(p, ec)) return 0.0;  // the reader names it later
   std::ifstream in(p);
   std::string key;
   double value = 0.0;
@@ -1165,13 +1172,19 @@ ExperimentSpec parse_experiment_table(const std::string& text, const std::string
 }
 
 ExperimentSpec load_experiment(const std::string& path, const std::vector<std::string>& overrides) {
-  if (std::filesystem::is_directory(path))
-    throw InputError(path, "", "", "is a folder; expected an experiment file (TOML)");
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "", "cannot open the experiment file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_experiment(ss.str(), path, overrides);
+  const std::string text = read_text_file(path, "an experiment file (TOML)");
+  // A file without a key (empty, or comments only) is a mistake more often than a wish for the
+  // defaults, which need no file. (A syntax error is left to the parser to name.)
+  bool no_key = false;
+  try {
+    no_key = toml::parse(text, path).empty();
+  } catch (const toml::parse_error&) {
+  }
+  if (no_key)
+    throw InputError(path, "", "",
+                     "the experiment file is empty; write its tables (docs/experiment.md), or give "
+                     "no file for the built-in default experiment");
+  return parse_experiment(text, path, overrides);
 }
 
 std::string to_toml(const ExperimentSpec& spec) {

@@ -11,6 +11,7 @@
 
 #include "breccia/core/error.hpp"
 #include "breccia/io/geometry_checks.hpp"
+#include "breccia/io/text_file.hpp"
 
 namespace breccia {
 
@@ -179,12 +180,7 @@ GeometryData parse_geometry(const std::string& text, const std::string& source,
 }
 
 GeometryData read_geometry(const std::string& path, std::uint64_t max_particles) {
-  std::ifstream in(path);
-  if (!in || std::filesystem::is_directory(path))
-    throw InputError(path, "", "", "cannot open the geometry file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_geometry(ss.str(), path, max_particles);
+  return parse_geometry(read_text_file(path, "the geometry file"), path, max_particles);
 }
 
 ParticleStore GeometryData::make_store(PlanarBody body) const {

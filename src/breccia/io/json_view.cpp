@@ -4,17 +4,14 @@
 #include <fstream>
 
 #include "breccia/core/error.hpp"
+#include "breccia/io/text_file.hpp"
 
 namespace breccia {
 
 using nlohmann::json;
 
 json read_json_object(const std::string& path) {
-  if (std::filesystem::is_directory(path))
-    throw InputError(path, "", "", "is a folder; expected a JSON file");
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "", "cannot read the file");
-  json j = json::parse(in, nullptr, false);
+  const json j = json::parse(read_text_file(path, "a JSON file"), nullptr, false);
   if (j.is_discarded()) throw InputError(path, "", "", "not valid JSON (damaged or truncated?)");
   if (!j.is_object()) throw InputError(path, "", "", "expected a JSON object");
   return j;

@@ -107,9 +107,16 @@ std::string range(const JsonView& j, const char* key) {
   return fmt::format("{:.2f} to {:.2f}", r[0].as_number(), r[1].as_number());
 }
 
+// The keys every summary (or sweep.json) is written with: a file without them is not one that
+// Breccia wrote whole, and is named rather than summarised as a page of n/a.
+void require_keys(const JsonView& j, std::initializer_list<const char*> keys) {
+  for (const char* k : keys) (void)j.at(k);
+}
+
 std::string summarise_sweep(const fs::path& file) {
   const json doc = read_json_object(file.string());
   const JsonView j(doc, file.string());
+  require_keys(j, {"experiment", "status", "runs"});
   std::string s = fmt::format("sweep {} ({})\n", j.text("experiment", ""), j.text("status", ""));
   if (j.text("variable", "confining_stress") == "strain_rate") {
     s += "  rate (1/s)   peak q (MPa)   E_t50 (GPa)   cracks   damage ratio (%)\n";
@@ -176,6 +183,7 @@ std::string summarise_acoustic_emission(const JsonView& ae) {
 std::string summarise_run(const fs::path& file) {
   const json doc = read_json_object(file.string());
   const JsonView j(doc, file.string());
+  require_keys(j, {"experiment", "status", "test"});
   // Tests that are not read as stress-strain curves write their own headline lines.
   const auto own = j.find(j.text("test_kind", ""));
   const bool headline = own && own->has("headline");

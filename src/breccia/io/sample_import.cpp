@@ -9,6 +9,7 @@
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 #include "breccia/io/geometry_checks.hpp"
+#include "breccia/io/text_file.hpp"
 
 namespace breccia {
 
@@ -47,18 +48,15 @@ bool parse_id(const std::string& t, std::uint64_t& id) {
   return true;
 }
 
-std::ifstream open(const std::string& path) {
-  std::ifstream in(path);
-  if (!in || std::filesystem::is_directory(path))
-    throw InputError(path, "", "", "cannot open the sample file");
-  return in;
+std::istringstream open(const std::string& path) {
+  return std::istringstream(read_text_file(path, "the sample file"));
 }
 
 }  // namespace
 
 GeometryData read_xyzr_table(const std::string& path, Dimension dim, double density,
                              double thickness, std::uint64_t max_particles) {
-  std::ifstream in = open(path);
+  std::istringstream in = open(path);
   return parse_xyzr_table(in, path, dim, density, thickness, max_particles);
 }
 
@@ -120,7 +118,7 @@ GeometryData parse_xyzr_table(std::istream& in, const std::string& path, Dimensi
 
 GeometryData read_gengeo(const std::string& path, double density, double thickness,
                          std::uint64_t max_particles) {
-  std::ifstream in = open(path);
+  std::istringstream in = open(path);
   return parse_gengeo(in, path, density, thickness, max_particles);
 }
 

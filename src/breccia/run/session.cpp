@@ -10,6 +10,7 @@
 
 #include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/io/text_file.hpp"
 #include "breccia/version.hpp"
 
 namespace breccia {
@@ -58,6 +59,7 @@ void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Sessio
 }
 
 std::string read_checkpoint_bytes(const fs::path& cpath) {
+  require_regular_file(cpath.string(), "a checkpoint");
   std::ifstream in(cpath, std::ios::binary);
   if (!in) throw InputError(cpath.string(), "", "", "cannot read the checkpoint");
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -247,9 +247,13 @@ void check_settings(const PackingSettings& s) {
           : s.radii.r_max;
   const double smallest = packing_region(s).smallest_extent();
   if (smallest < 4.0 * rmax)
-    throw InputError(w, "sample size", num(smallest) + " m across",
-                     "must be at least 4 maximum radii (" + num(4 * rmax) +
-                         " m); physics.md §7.1 recommends 20-30 particles across");
+    throw InputError(w,
+                     s.radii.kind == RadiusDistribution::Kind::Classes ? "sample.class_radii"
+                                                                       : "sample.radius_max",
+                     num(rmax) + " m",
+                     "the sample (" + num(smallest) +
+                         " m across at its narrowest) must be at least 4 largest radii across; "
+                         "physics.md §7.1 recommends 20-30 particles across");
 }
 
 // Radius moments of the packed particles.

@@ -135,9 +135,17 @@ std::vector<double> draw_radii_for_volume(const RadiusDistribution& dist, std::u
   double v = 0.0;
   while (v < solid_volume) {
     if (r.size() >= max_particles)
-      throw InputError("sample generation", "particle count", "> " + std::to_string(max_particles),
-                       "the sample would need more particles than sample.max_particles; use "
-                       "larger grains, a smaller sample or raise the limit");
+      throw InputError("sample generation",
+                       dist.kind == RadiusDistribution::Kind::Classes
+                           ? "sample.class_radii"
+                           : "sample.radius_min / sample.radius_max",
+                       dist.kind == RadiusDistribution::Kind::Classes
+                           ? std::string("(the classes given)")
+                           : "grains of " + num(dist.r_min) + " to " + num(dist.r_max) + " m",
+                       "the sample would need more than sample.max_particles = " +
+                           std::to_string(max_particles) +
+                           " grains of these radii; use larger grains, a smaller sample or raise "
+                           "the limit");
     const double x = dist.draw(seed, r.size());
     r.push_back(x);
     v += planar ? std::numbers::pi * x * x * thickness : 4.0 / 3.0 * std::numbers::pi * x * x * x;
