@@ -33,6 +33,9 @@ extern "C" void on_signal(int) {
 void catch_signals() {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+  // A file-size limit makes the write fail (EFBIG), which the run reports and marks, instead of
+  // killing the process with a half-written folder.
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 // CLI11 answers an unknown first word with "A subcommand is required"; name it instead.

@@ -221,7 +221,7 @@ TEST(App, BadExperimentFilesFailClearly) {
                      {"exp.toml:2", "loading.platen_sped", "unknown key", "platen_speed"});
   expect_input_error("[loading]\nplaten_speed = \"fast\"\n", {"exp.toml:2", "expected a number"});
   expect_input_error("[loading]\nplaten_speed = 0\n", {"loading.platen_speed", "value > 0"});
-  expect_input_error("[sample]\nradius = -1e-3\n", {"sample.radius", "-0.001", "value > 0"});
+  expect_input_error("[sample]\nradius = -1e-3\n", {"sample.radius", "-0.001", "1e-09 <= value"});
   expect_input_error("[sample]\nradius_max = \"big\"\n",
                      {"sample.radius_max", "expected a number"});
   expect_input_error("[bond]\nmodulus = -5\n", {"bond.modulus", "value > 0 Pa"});
@@ -239,7 +239,7 @@ TEST(App, BadExperimentFilesFailClearly) {
       {"contact.law", "2D disks", "planar_sphere"});
   expect_input_error("[engine\n", {"exp.toml:1", "TOML syntax"});
   // Sample generation keys.
-  expect_input_error("[sample]\nradius_min = -1e-3\n", {"sample.radius_min", "value > 0"});
+  expect_input_error("[sample]\nradius_min = -1e-3\n", {"sample.radius_min", "1e-09 <= value"});
   expect_input_error("[sample]\nradius_min = 2e-3\nradius_max = 1e-3\n",
                      {"sample.radius_max", ">= sample.radius_min"});
   expect_input_error("[sample]\nporosity = 1.2\n", {"sample.porosity", "0 < value < 1"});

@@ -21,6 +21,7 @@
 #include "breccia/core/interrupt.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
+#include "breccia/io/text_file.hpp"
 #include "breccia/version.hpp"
 
 namespace breccia {
@@ -93,13 +94,7 @@ struct Evaluation {
 };
 
 void write_text(const fs::path& p, const std::string& text) {
-  const fs::path tmp = p.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << text;
-    if (!out) throw InputError(p.string(), "", "", "cannot write the file");
-  }
-  fs::rename(tmp, p);
+  write_file_atomically(p, text);
 }
 
 std::string now_text() {
@@ -491,9 +486,13 @@ CalibrationResult Calibrator::run() {
   } catch (const Interrupted&) {
     r.status = "interrupted";
   } catch (const std::exception& e) {
-    // The trials finished so far stay in trials.jsonl; the manifest says why it stopped.
-    write_convergence();
-    write_manifest("failed", e.what());
+    // The trials finished so far stay in trials.jsonl; the manifest says why it stopped (if
+    // even that cannot be written, the error that stopped it is still the one reported).
+    try {
+      write_convergence();
+      write_manifest("failed", e.what());
+    } catch (const std::exception&) {
+    }
     throw;
   }
   r.values = values_;

@@ -19,6 +19,7 @@
 #include "breccia/core/format.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/io/json_view.hpp"
+#include "breccia/io/text_file.hpp"
 
 namespace breccia {
 
@@ -42,13 +43,7 @@ std::string machine_description() {
 }
 
 void write_json(const fs::path& p, const json& j) {
-  const fs::path tmp = p.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw InputError(p.string(), "", "", "cannot write the file");
-    out << j.dump(2) << "\n";
-  }
-  fs::rename(tmp, p);  // atomic: a reader never sees half a manifest
+  write_file_atomically(p, j.dump(2) + "\n");  // a reader never sees half a manifest
 }
 
 std::string folder_safe_name(const std::string& name) {

@@ -6,6 +6,7 @@
 
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/io/text_file.hpp"
 
 namespace breccia {
 
@@ -42,12 +43,15 @@ CsvFile::~CsvFile() {
 }
 
 void CsvFile::write_line(const std::string& line) {
-  std::fputs(line.c_str(), f_);
-  std::fputc('\n', f_);
+  errno = 0;
+  if (std::fputs(line.c_str(), f_) < 0 || std::fputc('\n', f_) == EOF)
+    throw InputError(path_, "", "", "cannot write the table: " + write_failure(errno));
 }
 
 void CsvFile::flush() {
-  if (f_) std::fflush(f_);
+  errno = 0;
+  if (f_ && std::fflush(f_) != 0)
+    throw InputError(path_, "", "", "cannot write the table: " + write_failure(errno));
 }
 
 namespace {

@@ -7,6 +7,7 @@
 
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/io/text_file.hpp"
 
 namespace breccia {
 
@@ -16,14 +17,7 @@ namespace {
 
 // Writes `text` to path atomically (temporary file, then rename).
 void put(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::FILE* f = std::fopen(tmp.c_str(), "w");
-    if (!f) throw InputError(tmp.string(), "", "", "cannot write the snapshot file");
-    std::fwrite(text.data(), 1, text.size(), f);
-    std::fclose(f);
-  }
-  fs::rename(tmp, path);
+  write_file_atomically(path, text);
 }
 
 std::string header(std::size_t points, std::size_t cells) {

@@ -18,9 +18,11 @@
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/core/interrupt.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
+#include "breccia/io/text_file.hpp"
 #include "breccia/material/library.hpp"
 #include "breccia/run/failure_analysis.hpp"
 #include "breccia/run/sample_build.hpp"
@@ -512,6 +514,21 @@ void list_run_files(const ExperimentSpec& spec, const fs::path& folder, const Lo
   }
 }
 
+// The manifest of a run that failed, perhaps because the disk is full: written whole if it can
+// be, else over the old one in place (rewriting frees the old one's blocks first), so that it
+// does not go on saying "running". Never throws: the run's own error is the one to report.
+void write_final_manifest(const fs::path& path, const json& manifest) {
+  try {
+    write_json(path, manifest);
+  } catch (const std::exception&) {
+    if (std::FILE* f = std::fopen(path.c_str(), "w")) {
+      const std::string text = manifest.dump(2) + "\n";
+      std::fwrite(text.data(), 1, text.size(), f);
+      std::fclose(f);
+    }
+  }
+}
+
 // After the loop: the recorders' last rows, the analysis, summary.json and the manifest.
 RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json& manifest,
                        Session& ss, const LoopEnd& end, const std::function<double()>& wall,
@@ -523,7 +540,7 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   ss.history.flush();
   ss.snaps.write(sim);
   const analysis::CompressionResult an = analysis::analyse_compression(ss.loop.series);
-  const RunResult result = run_result(folder, ss, end, an, wall());
+  RunResult result = run_result(folder, ss, end, an, wall());
   const QualityVerdict q = judge_quality(ss.loop, an);
   std::vector<std::string> warnings = ss.loop.warnings;  // those of the set-up, logged already
   for (const std::string& w : quality_warnings(q, *ss.test)) {
@@ -532,10 +549,22 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   }
   json summary = run_summary(spec, ss, result, an, q, warnings, manifest);
   // Failure analysis: events, indicators, stages, fragments, energy budget (analysis.md §2-§9).
-  const json failure = write_failure_analysis(
-      folder, FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0,
-                            ss.loop.porosity0, ss.loop.length_min, ss.loop.wave_speed_method,
-                            ss.test->stress_strain_test(), ss.test->rock_particles(sim)});
+  // A signal stops it between its stages: the loading's tables are whole, the summary is not
+  // written, and the run is marked interrupted.
+  json failure;
+  try {
+    failure = write_failure_analysis(
+        folder, FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0,
+                              ss.loop.porosity0, ss.loop.length_min, ss.loop.wave_speed_method,
+                              ss.test->stress_strain_test(), ss.test->rock_particles(sim)});
+  } catch (const Interrupted& e) {
+    log(std::string(e.what()) + ": the loading had ended (" + result.stop_reason +
+        "); its tables are whole, summary.json is not written");
+    result.status = "interrupted";
+    result.stop_reason = std::string(e.what()) + " (the loading had ended: " + result.stop_reason +
+                         "; no summary.json)";
+    return result;
+  }
   for (const auto& [key, value] : failure.items()) summary[key] = value;
   write_json(folder / "summary.json", summary);
   list_run_files(spec, folder, end, manifest, log);
@@ -557,7 +586,10 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
     manifest["status"] = status;
     manifest["stop_reason"] = reason;
     manifest["wall_seconds"] = seconds;
-    write_json(folder / "manifest.json", manifest);
+    if (status == "failed")
+      write_final_manifest(folder / "manifest.json", manifest);
+    else
+      write_json(folder / "manifest.json", manifest);
   };
   auto checkpoint = [&] {
     const double before = ss.loop.wall_seconds;
@@ -634,7 +666,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   Built b = build(spec, log);
   const fs::path folder = make_folder(spec);
   json manifest = initial_manifest(spec, b, opt);
-  { std::ofstream(folder / "experiment.toml") << to_toml(spec); }
+  write_file_atomically(folder / "experiment.toml", to_toml(spec));
   write_json(folder / "manifest.json", manifest);
 
   Simulation& sim = b.sim;
@@ -702,7 +734,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   } catch (const std::exception& e) {
     manifest["status"] = "failed";
     manifest["stop_reason"] = e.what();
-    write_json(folder / "manifest.json", manifest);
+    write_final_manifest(folder / "manifest.json", manifest);
     throw;
   }
   return execute(spec, folder, manifest, *ss, opt, t_start);

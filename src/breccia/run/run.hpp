@@ -96,5 +96,8 @@ SweepResult run_parameter_sweep(const ExperimentSpec& spec, const std::string& k
 // that of the uninterrupted run), the others start anew; then sweep.json, fits and report are
 // written again. options.jobs and options.stop_at_step apply as for a new sweep.
 SweepResult resume_sweep(const std::string& folder, const RunOptions& options);
+// Checks a sweep plan's text (sweep-plan.json) as resume does before anything runs: the
+// format, the kind, the resolved experiment and the values; throws InputError naming `where`.
+void check_sweep_plan(const std::string& text, const std::string& where);
 
 }  // namespace breccia

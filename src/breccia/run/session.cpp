@@ -27,7 +27,7 @@ constexpr std::uint32_t kCheckpointFormat = 12;
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
 // it is trusted.
 void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Session& s) {
-  const fs::path path = folder / kCheckpointFile, tmp = folder / "checkpoint.bin.tmp";
+  const fs::path path = folder / kCheckpointFile;
   std::ostringstream body(std::ios::binary);
   {
     ArchiveWriter a(body);
@@ -47,15 +47,10 @@ void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Sessio
   }
   const std::string bytes = std::move(body).str();
   const std::uint64_t hash = fnv1a64(bytes);
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint");
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.write(reinterpret_cast<const char*>(&hash), sizeof hash);
-    out.flush();
-    if (!out) throw InputError(tmp.string(), "", "", "cannot write the checkpoint (disk full?)");
-  }
-  fs::rename(tmp, path);
+  std::string file = bytes;
+  file.append(reinterpret_cast<const char*>(&hash), sizeof hash);
+  // The last complete checkpoint stays until this one is written whole.
+  write_file_atomically(path, file);
 }
 
 std::string read_checkpoint_bytes(const fs::path& cpath) {

@@ -24,6 +24,7 @@
 #include "breccia/core/parallel.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
+#include "breccia/io/text_file.hpp"
 #include "breccia/run/run.hpp"
 #include "breccia/run/sample_build.hpp"
 #include "breccia/version.hpp"
@@ -178,7 +179,7 @@ std::vector<std::string> child_arguments(const ExperimentSpec& one, const Earlie
   std::vector<std::string> args{"resume", earlier.folder.string(), "--threads",
                                 std::to_string(threads)};
   if (!earlier.resumable()) {
-    std::ofstream(stem.string() + ".toml") << to_toml(one);
+    write_file_atomically(stem.string() + ".toml", to_toml(one));
     args = {"run", stem.string() + ".toml"};
   }
   if (stop_at_step > 0) args.insert(args.end(), {"--stop-at-step", std::to_string(stop_at_step)});
@@ -746,6 +747,13 @@ ExperimentSpec checked_plan(const fs::path& path, const json& plan) {
 }
 
 }  // namespace
+
+void check_sweep_plan(const std::string& text, const std::string& where) {
+  const json plan = json::parse(text, nullptr, false);
+  if (plan.is_discarded() || !plan.is_object())
+    throw InputError(where, "", "", "not a JSON object (damaged or truncated?)");
+  (void)checked_plan(where, plan);
+}
 
 SweepResult resume_sweep(const std::string& folder_name, const RunOptions& opt) {
   const fs::path folder(folder_name), path = folder / kPlanFile;
