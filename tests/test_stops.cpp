@@ -125,3 +125,48 @@ TEST(Stops, AFullDiskStopsACalibrationWithAFailedManifest) {
 }
 
 }  // namespace
+
+namespace {
+
+// A sweep stopped by Ctrl-C while its second run packs its own sample (each seed packs anew)
+// exits 130 and leaves a folder that `breccia resume` finishes: the first run is kept, the
+// second runs from the start. (The signal is sent once the second packing has begun; should the
+// packing be done by then, the run stops with a checkpoint instead, and the same holds.)
+TEST(Stops, ASweepStoppedWhileARunPacksResumesToTheEnd) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_stop_packing";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string sweep =
+      std::string(BRECCIA_CLI) + " sweep --jobs 1 --output " + dir.string() +
+      " --set engine.threads=1 --set output.plot=false --set output.snapshot_strain_interval=0"
+      " --set sample.width=3e-3 --set sample.depth=3e-3 --set sample.height=6e-3"
+      " --set test.max_strain=0.004 --over engine.seed 1 2";
+  const std::string log = (dir / "sweep.log").string();
+  const std::string script = sweep + " > " + log + ".out 2> " + log +
+                             " & pid=$!; n=0; while [ $n -lt 600 ] && [ "
+                             "\"$(grep -c 'sample: generating' " +
+                             log +
+                             ")\" -lt 2 ]; do sleep 0.02; n=$((n+1)); done; "
+                             "kill -INT $pid; wait $pid; echo \"exit $?\"";
+  const auto stopped = breccia::testing::run_with_prefix("", "version >/dev/null; " + script);
+  EXPECT_NE(stopped.out.find("exit 130"), std::string::npos) << stopped.out << read(log);
+  fs::path folder;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.is_directory() && e.path().string().ends_with("-sweep")) folder = e.path();
+  ASSERT_FALSE(folder.empty()) << read(log);
+  // The sweep says where it stopped (its last line is the folder, to resume).
+  const auto stopped_json = nlohmann::json::parse(read(folder / "sweep.json"), nullptr, false);
+  ASSERT_FALSE(stopped_json.is_discarded()) << read(log);
+  EXPECT_EQ(stopped_json.value("status", ""), "interrupted");
+  EXPECT_NE(read(log + ".out").find(folder.string()), std::string::npos);
+  const auto resumed = breccia::testing::run("resume --quiet " + folder.string());
+  EXPECT_EQ(resumed.code, 0) << resumed.out;
+  const auto sweep_json = nlohmann::json::parse(read(folder / "sweep.json"), nullptr, false);
+  ASSERT_FALSE(sweep_json.is_discarded()) << resumed.out;
+  EXPECT_EQ(sweep_json.value("status", ""), "complete");
+  ASSERT_EQ(sweep_json["runs"].size(), 2u);
+  for (const auto& r : sweep_json["runs"]) EXPECT_EQ(r.value("status", ""), "complete");
+  fs::remove_all(dir);
+}
+
+}  // namespace

@@ -540,27 +540,36 @@ std::string calibration_docs() {
       "| `verify_set` | [] | experiment overrides (`\"section.key=value\"`) of the verification, "
       "e.g. the shipping sample size |\n"
       "| `brazilian_diameter`, `brazilian_thickness` | the prism's width, half of it | the "
-      "Brazilian disc, m |\n"
+      "Brazilian disc, m, above 0 |\n"
       "| `brazilian_platen_speed` | 0.02 | m/s |\n\n"
-      "### [experiment]\n\nThe keys of an experiment file (docs/experiment.md) as sub-tables "
-      "(`[experiment.sample]`, `[experiment.bond]`, ...): the sample, the laws, the fixed "
-      "micro-parameters and the start values of the free ones. The calibration sets the test "
-      "kind itself (UCS, triaxial, Brazilian).\n\n"
+      "### [experiment]\n\nRequired. The keys of an experiment file (docs/experiment.md) as "
+      "sub-tables (`[experiment.sample]`, `[experiment.bond]`, ...): the sample, the laws, the "
+      "fixed micro-parameters and the start values of the free ones. The calibration sets the "
+      "test kind itself (UCS, triaxial, Brazilian) and packs its own samples, so "
+      "`sample.source` is `\"generate\"`. Before the first trial (and with `--check`) the "
+      "samples of every set are packed and each test is built on them at the start values and "
+      "with every free parameter at its lower, then its upper bound: a test that could not run "
+      "there (a disc too small for its grains, a run too long at the stiffest bound) is refused "
+      "before anything runs.\n\n"
       "### [targets]\n\nEach target is `name = value` (the default tolerance) or "
       "`name = { value = ..., tolerance = ..., source = \"...\" }`.\n\n"
-      "| target | unit | stage | default tolerance | what is measured |\n|---|---|---|---|---|\n";
+      "| target | unit | stage | default tolerance | loosest allowed | what is measured |\n"
+      "|---|---|---|---|---|---|\n";
+  auto tolerance = [](const PropertyInfo& i, double t) {
+    return i.relative ? fmt::format("{:g} % of the target", 100 * t)
+                      : fmt::format("{:g} {}", t, i.unit);
+  };
   for (const auto& i : property_table())
-    s += fmt::format("| `{}` | {} | {} | {} | {} |\n", i.key, i.unit, stage_name(i.stage),
-                     i.relative ? fmt::format("{:g} % of the target", 100 * i.tolerance)
-                                : fmt::format("{:g} {}", i.tolerance, i.unit),
-                     i.doc);
+    s += fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", i.key, i.unit, stage_name(i.stage),
+                     tolerance(i, i.tolerance), tolerance(i, i.max_tolerance), i.doc);
   s += "\n### [free]\n\n`\"section.key\" = [lower, upper]` or `{ lower, upper, scale = "
        "\"log\"|\"linear\", stage = ... }`. The keys a calibration can free, with the stage that "
        "fits each:\n\n| key | stage |\n|---|---|\n";
   for (const auto& k : kFreeKeys) s += fmt::format("| `{}` | {} |\n", k.key, stage_name(k.stage));
   s += "\n### [tied]\n\n`\"section.key\" = { follows = \"<free key>\", factor = 1.0 }`: the "
        "key takes factor x the free parameter's value in every trial (e.g. contact modulus = "
-       "bond modulus).\n";
+       "bond modulus). The factor is above 0, the key a real-valued one (not the seed or a "
+       "count), and factor x each bound of the free parameter a value the experiment accepts.\n";
   return s;
 }
 

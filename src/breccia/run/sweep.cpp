@@ -21,6 +21,7 @@
 #include "breccia/analysis/rate_dependence.hpp"
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/core/interrupt.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
@@ -289,10 +290,19 @@ std::vector<RunResult> run_all(const ExperimentSpec& spec, const std::vector<Exp
       continue;
     }
     if (opt.log) opt.log("sweep: " + describe(one) + (earlier.resumable() ? " (resumed)" : ""));
-    runs.push_back(earlier.resumable()
-                       ? resume_run(earlier.folder.string(),
-                                    ResumeOptions{static_cast<int>(spec.threads)}, opt)
-                       : run_experiment(one, opt));
+    try {
+      runs.push_back(earlier.resumable()
+                         ? resume_run(earlier.folder.string(),
+                                      ResumeOptions{static_cast<int>(spec.threads)}, opt)
+                         : run_experiment(one, opt));
+    } catch (const Interrupted& e) {
+      // Stopped before the run had a folder (packing its sample, say): the sweep stops as
+      // interrupted, and resume starts this run anew.
+      RunResult stopped;
+      stopped.status = "interrupted";
+      stopped.stop_reason = std::string(e.what()) + " (not started: resume runs it)";
+      runs.push_back(stopped);
+    }
     if (runs.back().status != "complete") break;
   }
   return runs;
