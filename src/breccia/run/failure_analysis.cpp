@@ -28,6 +28,11 @@ using analysis::kNaN;
 
 namespace {
 
+// Stops the analysis at a signal, where its inputs allow (FailureInputs::stoppable).
+void poll(const FailureInputs& in, const char* stage) {
+  if (in.stoppable) throw_if_interrupted(stage);
+}
+
 // Writes a file atomically (temporary name, then rename).
 void put(const fs::path& p, const std::string& text) {
   write_file_atomically(p, text);
@@ -269,7 +274,7 @@ D2Stats correlation_dimensions(const fs::path& folder, const FailureInputs& in,
   const auto w = static_cast<std::size_t>(in.spec.ae_window_events);
   const auto step = static_cast<std::size_t>(in.spec.ae_window_step);
   for (std::size_t end = w; end <= cp.count; end += step) {
-    throw_if_interrupted("computing D2 windows");
+    poll(in, "computing D2 windows");
     const std::vector<Vec3> p(cp.position.begin() + static_cast<std::ptrdiff_t>(end - w),
                               cp.position.begin() + static_cast<std::ptrdiff_t>(end));
     const auto dw = analysis::correlation_dimension(p, d.settings);
@@ -330,7 +335,7 @@ void write_indicators(const fs::path& folder, const FailureInputs& in, const Cra
       "d2,d2_points,d2_window_strain,porosity,damage_index,stage,missing\n";
   const double window = spec.ae_bin_width * static_cast<double>(spec.ae_window_bins);
   for (std::size_t j = 0; j < cs.bin_end.size(); ++j) {
-    throw_if_interrupted("computing the indicator series");
+    poll(in, "computing the indicator series");
     const double e1 = cs.bin_end[j];
     double b_from = 0.0;
     const analysis::BValue bj = trailing_b_value(cat, mc, e1, window, min_events, b_from);
@@ -655,17 +660,17 @@ json write_failure_analysis(const fs::path& folder, const FailureInputs& in) {
                        : analysis::Stages{};
   // A signal stops the analysis between stages (and between the windows of its longest ones).
   const char* stage = "analysing the failure";
-  throw_if_interrupted(stage);
+  poll(in, stage);
   const CrackPoints cp = crack_points(in);
   const EventCatalogue cat = catalogue_events(in);
-  throw_if_interrupted(stage);
+  poll(in, stage);
   write_events_csv(folder, in, cat, stages);
   write_crack_catalogue(folder, in, cat, stages, cp.count);
   const MagnitudeStats ms = frequency_magnitude(folder, in, cat);
-  throw_if_interrupted(stage);
+  poll(in, stage);
   const D2Stats d2 = correlation_dimensions(folder, in, cp);
   write_indicators(folder, in, cp, cat, ms, d2, stages);
-  throw_if_interrupted(stage);
+  poll(in, stage);
   json out;
   out["fragments"] = fragments_summary(folder, in);
   if (in.stress_strain) out["stages"] = stages_summary(in, stages, cat, ms, cp.count);

@@ -31,6 +31,9 @@ struct FailureInputs {
   bool stress_strain = true;
   // The rock's grains: the first this many of the store (a test's apparatus grains follow).
   std::size_t rock_particles = std::numeric_limits<std::size_t>::max();
+  // Whether a signal stops the analysis (polled between its stages). Not after a loading that a
+  // signal already stopped: that run's analysis of what it recorded is part of its stop.
+  bool stoppable = true;
 };
 
 nlohmann::json write_failure_analysis(const std::filesystem::path& folder, const FailureInputs& in);

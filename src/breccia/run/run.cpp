@@ -554,9 +554,10 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   json failure;
   try {
     failure = write_failure_analysis(
-        folder, FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0,
-                              ss.loop.porosity0, ss.loop.length_min, ss.loop.wave_speed_method,
-                              ss.test->stress_strain_test(), ss.test->rock_particles(sim)});
+        folder,
+        FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0, ss.loop.porosity0,
+                      ss.loop.length_min, ss.loop.wave_speed_method, ss.test->stress_strain_test(),
+                      ss.test->rock_particles(sim), end.status != "interrupted"});
   } catch (const Interrupted& e) {
     log(std::string(e.what()) + ": the loading had ended (" + result.stop_reason +
         "); its tables are whole, summary.json is not written");
