@@ -514,7 +514,7 @@ TEST(Biaxial, MembranesHoldSigma3ThroughThePeakAndTheShearBand) {
   // peak: the membranes' applied confining stress (their inward force per unit height) stays at
   // sigma_3 in every row. By construction it is exact to rounding whatever shape the chains
   // take, so 1e-9 tells a lost or broken chain from rounding; the side walls it replaces
-  // strayed by 8 % before the peak and 180 % after it (issue 13).
+  // strayed by 8 % before the peak and 180 % after it.
   const fs::path dir = fs::temp_directory_path() / "breccia_membrane";
   fs::remove_all(dir);
   std::string toml = tiny_experiment("biaxial");

@@ -1,4 +1,4 @@
-// The analyses of the strain-rate study (issue 14): the rate law of analysis.md §11 on its worked
+// The analyses of the strain-rate study: the rate law of analysis.md §11 on its worked
 // examples and planted data, and the failure plane fitted to crack midpoints.
 #include <gtest/gtest.h>
 
