@@ -104,12 +104,7 @@ TEST(Stops, AFullDiskStopsACalibrationWithAFailedManifest) {
   std::ofstream(dir / "c.toml")
       << "[calibration]\nname = \"t\"\ntrials_per_stage = 1\npasses = 1\nverify_seeds = []\n"
          "[targets]\nyoungs_modulus = 8e9\n[free]\n\"bond.modulus\" = [2e9, 60e9]\n"
-         "[experiment]\n[experiment.engine]\nthreads = 1\ndensity_scaling = 10.0\n"
-         "[experiment.material]\npreset = \"custom\"\n[experiment.sample]\nwidth = 3e-3\n"
-         "depth = 3e-3\nheight = 6e-3\nradius_min = 0.22e-3\nradius_max = 0.36e-3\n"
-         "[experiment.contact]\nlaw = \"hertz_mindlin\"\nshear_modulus = 29e9\n"
-         "poisson_ratio = 0.33\nfriction = 0.4\n[experiment.bond]\nmodulus = 8e9\n"
-         "tensile_strength = 30e6\ncohesion = 60e6\n";
+      << breccia::testing::kTinyCalibrationExperiment;
   const auto r = breccia::testing::run_with_prefix(
       "trap '' XFSZ; ulimit -f 160; ",
       "calibrate " + (dir / "c.toml").string() + " --output " + (dir / "out").string());
