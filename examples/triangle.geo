@@ -1,4 +1,4 @@
-# Three bonded spheres of physics.md §8 (R = 0.5 mm) forming a triangle in the x-z plane: sphere 1
+# Three bonded spheres of docs/physics.md §8 (R = 0.5 mm) forming a triangle in the x-z plane: sphere 1
 # at the bottom, sphere 2 on top of it, sphere 3 beside them. Platens along z load 1 and 2.
 breccia-geometry 1
 dimension 3

@@ -46,7 +46,7 @@ inline PairResult assemble(const PairGeometry& g, const PairForce& pf) {
   return r;
 }
 
-// Joint laws (physics.md §5) are installed with a joint-plane normal, not body frames.
+// Joint laws (docs/physics.md §5) are installed with a joint-plane normal, not body frames.
 template <class Law>
 constexpr bool is_joint_law = requires {
   Law::starts_bonded;

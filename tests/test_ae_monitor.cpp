@@ -1,7 +1,7 @@
 // The acoustic-emission monitor on a hand-built tensile source: a bonded chain of five grains
 // along x pulled apart at its ends. When a bond breaks, the tension T that the source grains
 // exerted on their outside neighbours is released, so the moment tensor is the opening dipole
-// M = diag(M_xx, 0, 0) with M_xx > 0: Hudson (u, v) = (-2/3, 1/3), R ratio 42.9 (analysis.md
+// M = diag(M_xx, 0, 0) with M_xx > 0: Hudson (u, v) = (-2/3, 1/3), R ratio 42.9 (docs/analysis.md
 // §4.2-§4.3). Statically the release is T on each outside contact at lever arm l (contact point
 // minus crack midpoint), so M_xx = T sum(l); the dynamic maximum lies between that and twice it
 // (an undamped release overshoots by at most 2x).

@@ -149,7 +149,7 @@ TEST(App, SmallUcsWritesACompleteRunFolder) {
   int cracks = -1;
   while (std::getline(c, line)) ++cracks;
   EXPECT_EQ(cracks, summary["bonds_broken"].get<int>());
-  // Energy balance of the small UCS run (analysis.md §2.2): the relative residual stays within
+  // Energy balance of the small UCS run (docs/analysis.md §2.2): the relative residual stays within
   // 1 % ("good") of the work once the work exceeds 1 % of its final value. Measured ~1e-4: the
   // ledger closes to round-off for linear springs; what remains is Hertz and contact-change
   // error, which a missing term (a component of U_b, friction, D_del) would exceed by far.

@@ -1,4 +1,4 @@
-// The brittle beam (physics.md §4.2) against numbers worked by hand: two spheres of R = 0.5 mm
+// The brittle beam (docs/physics.md §4.2) against numbers worked by hand: two spheres of R = 0.5 mm
 // touching along x (d0 = L = 1 mm, R_b = 0.5 mm), E_b = 10 GPa, nu_b = 0.25 (G_b = 4 GPa):
 //   A = pi R_b^2 = 7.854e-7 m^2, I = pi R_b^4 / 4 = 4.909e-14 m^4, J = 2 I,
 //   K_r = E A / L = 7.854e6 N/m, K_s = G A / L = 3.1416e6 N/m,
@@ -88,7 +88,7 @@ TEST(BrittleBeam, LateralOffsetShearsWithoutBending) {
 
 TEST(BrittleBeam, RelativeRotationBendsAndShears) {
   // Particle 2 turned by theta about z: the bending couple -chi K_b theta and the
-  // rotation-induced shear K_s d0 theta / 2 along +y on particle 2 (physics.md §4.2, 2D form).
+  // rotation-induced shear K_s d0 theta / 2 along +y on particle 2 (docs/physics.md §4.2, 2D form).
   for (const double chi : {1.0, 0.5}) {
     auto s = touching_beam();
     s.params.bending_factor = chi;

@@ -1,4 +1,4 @@
-// Contact laws and walls against hand formulas (physics.md §3, §6.1, §8 cross-check 3).
+// Contact laws and walls against hand formulas (docs/physics.md §3, §6.1, §8 cross-check 3).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -274,7 +274,7 @@ TEST(Wall, RampFollowsTheCosineProfile) {
 
 TEST(HertzMindlin, PlanarSpheresReproduceTheConfined3DRun) {
   // Two spheres colliding obliquely in the x-y plane with spins about z: the 2D planar-sphere
-  // mode (sphere mass and inertia, physics.md §3.4) gives the 3D trajectory to round-off.
+  // mode (sphere mass and inertia, docs/physics.md §3.4) gives the 3D trajectory to round-off.
   auto run = [](Dimension dim) {
     ParticleStore ps(dim, 1.0, PlanarBody::PlanarSphere);
     ps.add({.tag = 1,
@@ -304,7 +304,7 @@ TEST(HertzMindlin, PlanarSpheresReproduceTheConfined3DRun) {
 
 TEST(Wall, ServoWallsHoldTheTargetStressOnABondedBlock) {
   // A bonded FCC block between fixed platens, confined in x by two servo walls at 2 MPa: they
-  // close in until the block pushes back with 2 MPa (physics.md §6.2), within 2 %.
+  // close in until the block pushes back with 2 MPa (docs/physics.md §6.2), within 2 %.
   const double R = 0.5e-3;
   ParticleStore ps = fcc_block(3, 3, 6, R, 2650);
   EngineConfig cfg;

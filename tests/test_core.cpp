@@ -11,7 +11,7 @@
 using namespace breccia;
 
 TEST(Quat, RotateMatchesMatrixOfPhysicsReference) {
-  // physics.md §0.4 matrix, body to world.
+  // docs/physics.md §0.4 matrix, body to world.
   const Quat q = normalized(Quat{0.3, -0.5, 0.7, 0.2});
   const Vec3 v{0.4, -1.2, 2.5};
   const double w = q.w, x = q.x, y = q.y, z = q.z;

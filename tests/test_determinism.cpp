@@ -1,5 +1,6 @@
-// The same input gives bitwise the same trajectory with 1 and 2 threads (design.md: two-pass
-// force computation, fixed-block reductions, breaks processed in bond order).
+// The same input gives bitwise the same trajectory with 1 and 2 threads (ARCHITECTURE.md,
+// "Determinism without atomics": per-pair force slots, fixed-block reductions, breaks processed in
+// bond order).
 #include <gtest/gtest.h>
 
 #include <cstring>

@@ -1,4 +1,4 @@
-// Time integration (physics.md §1): free rotation, energy conservation without damping, the
+// Time integration (docs/physics.md §1): free rotation, energy conservation without damping, the
 // analytic restitution of a damped linear contact, and local damping bookkeeping.
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
-// Elastic moduli of a bonded hexagonal disk lattice against the closed form of physics.md §7.5:
-// E_2D = 2 sqrt(3) K_n (K_n + K_s) / (t (3 K_n + K_s)), nu_2D = (K_n - K_s) / (3 K_n + K_s).
+// Elastic moduli of a bonded hexagonal disk lattice against the closed form of docs/physics.md
+// §7.5: E_2D = 2 sqrt(3) K_n (K_n + K_s) / (t (3 K_n + K_s)), nu_2D = (K_n - K_s) / (3 K_n + K_s).
 // The lattice is strained affinely (exact here: rotations stay zero under uniform strain) and the
 // stress of an interior particle is taken from its bond forces (§6.5).
 #include <gtest/gtest.h>
@@ -74,7 +74,7 @@ TEST(HexLattice2D, ParallelBondAloneMatchesClosedForm) {
   const double t = 2e-3, kn = 10e9 * t;
   const Moduli m = measure(-0.5, 10e9);
   const Moduli ref = closed_form(kn, kn / 2.5, t);
-  EXPECT_NEAR(ref.e2d / 10e9, 1.426, 1e-3);  // physics.md's quoted value
+  EXPECT_NEAR(ref.e2d / 10e9, 1.426, 1e-3);  // docs/physics.md's quoted value
   EXPECT_NEAR(ref.nu2d, 0.176, 1e-3);
   EXPECT_NEAR(m.e2d, ref.e2d, 0.01 * ref.e2d);
   EXPECT_NEAR(m.nu2d, ref.nu2d, 0.01 * ref.nu2d);

@@ -1,6 +1,6 @@
 // Conformance suite run over every law in the registry (law/registry.hpp): a law added there is
-// checked here without further work. Each check is physics any pair law must obey (physics.md §0.3,
-// design.md "Tests and benchmarks").
+// checked here without further work. Each check is physics any pair law must obey (docs/physics.md
+// §0.3).
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -60,8 +60,8 @@ template <class Law>
 class ContactLawConformance : public ::testing::Test {};
 TYPED_TEST_SUITE(ContactLawConformance, GTypes<ContactLaws>::type);
 
-// Joint laws (physics.md §5) with their example parameters (a bonded joint, so that tension and
-// compression both load it), on a plane tilted from the branch.
+// Joint laws (docs/physics.md §5) with their example parameters (a bonded joint, so that tension
+// and compression both load it), on a plane tilted from the branch.
 template <class Law>
 class JointLawConformance : public ::testing::Test {};
 TYPED_TEST_SUITE(JointLawConformance, GTypes<JointLaws>::type);
@@ -178,7 +178,7 @@ template <class Law>
 void check_force_is_energy_gradient(double speed, double spin, int steps) {
   // The work the interaction does on the two particles along a smooth elastic path equals minus
   // the change of its stored energy, plus what the law books as lost without work (the Hertz
-  // shear spring whose stiffness follows the overlap, physics.md §2.4). Trapezoidal work over
+  // shear spring whose stiffness follows the overlap, docs/physics.md §2.4). Trapezoidal work over
   // 1e-8 s steps: error O(dt^2), far below the tolerance; a wrong sign or factor in any
   // stiffness, or an unbooked loss, fails it.
   auto s = loaded_pair<Law>(7, speed, spin);

@@ -1,4 +1,4 @@
-// The 2D flexible membrane (physics.md §6.3, boundary/membrane.hpp): which grains form the
+// The 2D flexible membrane (docs/physics.md §6.3, boundary/membrane.hpp): which grains form the
 // chains, the follower loads against numbers worked by hand, and a biaxial test whose confining
 // stress stays at its target through the peak and the shear band.
 #include <gtest/gtest.h>

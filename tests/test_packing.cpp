@@ -1,6 +1,6 @@
-// Sample generation (physics.md §7): the tangent fits of §7.4 against hand numbers, the expansion
-// packing against the sample bars (floaters, homogeneity, locked-in stress from the test's own
-// contact law), the insertion packing, and 2D preconsolidation.
+// Sample generation (docs/physics.md §7): the tangent fits of §7.4 against hand numbers, the
+// expansion packing against the sample bars (floaters, homogeneity, locked-in stress from the
+// test's own contact law), the insertion packing, and 2D preconsolidation.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -343,7 +343,7 @@ TEST(Packing, InsertionIsDenseStressFreeAndWithinItsBounds) {
   s.radii.r_min = 0.08e-3;  // GenGeo-style wide range
   s.radii.r_max = 0.2e-3;
   s.insertion_failures = 2000;
-  s.bond_gap_tolerance = 1e-3 * s.radii.r_min;  // physics.md §7.6 for geometric packings
+  s.bond_gap_tolerance = 1e-3 * s.radii.r_min;  // docs/physics.md §7.6 for geometric packings
   const PackedSample p = pack_sample(s);
   const SampleStructure& st = p.report.structure;
   for (const ParticleSpec& q : p.geometry.particles) {
@@ -412,9 +412,9 @@ TEST(Packing, BadSettingsAreRefused) {
 }
 
 TEST(Packing, PreconsolidationOfHertzPlanarSpheresHoldsItsStress) {
-  // RICEBAL's grains (physics.md §3.4, §7.3): planar spheres with Hertz-Mindlin contacts, whose
-  // stiffness grows with the load; the row servo's gain comes from the stiffness at the target
-  // load (from the stiffness at first touch the rows raced and never settled).
+  // RICEBAL's grains (docs/physics.md §3.4, §7.3): planar spheres with Hertz-Mindlin contacts,
+  // whose stiffness grows with the load; the row servo's gain comes from the stiffness at the
+  // target load (from the stiffness at first touch the rows raced and never settled).
   PackingSettings s = preconsolidated_rectangle();
   s.radii.r_min = 20e-6;
   s.radii.r_max = 80e-6;

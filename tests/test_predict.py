@@ -1,4 +1,4 @@
-"""The failure predictor (breccia.predict; analysis.md §10): Garson and Olden against the hand
+"""The failure predictor (breccia.predict; docs/analysis.md §10): Garson and Olden against the hand
 example and seed 000's tables S1/S2, the scalers and metrics against their worked examples, the
 network's own forward pass against scikit-learn's, recovery of a planted relation under
 leave-one-test-out with the planted input ranked first, the data set of a real run, and the
@@ -19,7 +19,7 @@ SOURCE = os.environ["BRECCIA_SOURCE_DIR"]
 
 
 def test_garson_and_olden_reproduce_the_worked_example():
-    # analysis.md §10.6: w[input, hidden], v[hidden].
+    # docs/analysis.md §10.6: w[input, hidden], v[hidden].
     w = np.array([[1.0, 0.2], [-0.5, 0.8]])
     v = np.array([2.0, -1.0])
     assert predict.garson(w, v) == pytest.approx([0.43333, 0.56667], abs=1e-5)

@@ -368,7 +368,7 @@ def test_a_sample_generated_from_python_is_the_commands_and_reads_back():
 
 
 def test_the_rate_law_fit_reproduces_the_worked_example():
-    # analysis.md §11: rates (0.1, 1, 10) /s, UCS (100.501, 105.127, 164.872) MPa -> a = 100 MPa,
+    # docs/analysis.md §11: rates (0.1, 1, 10) /s, UCS (100.501, 105.127, 164.872) MPa -> a = 100 MPa,
     # b = 0.05 s.
     f = breccia.fit_rate_dependence([0.1, 1, 10], [100.501, 105.127, 164.872])
     assert f["valid"] and f["a"] == pytest.approx(100.0, abs=1e-3)

@@ -1,4 +1,4 @@
-// The quaternion bond (physics.md §4.3, LAMMPS bpm/rotational) against numbers worked by hand,
+// The quaternion bond (docs/physics.md §4.3, LAMMPS bpm/rotational) against numbers worked by hand,
 // for the pair of tests/test_brittle_beam.cpp: R = 0.5 mm touching along x (d0 = 1 mm,
 // R_b = 0.5 mm), E_b = 10 GPa, nu_b = 0.25 (G_b = 4 GPa), sigma_t,b = c_b = 20 MPa:
 //   K_r = E A / d0 = 7.854e6 N/m, K_s = G A / d0 = 3.1416e6 N/m, K_b = E I / d0 = 0.4909 N m,

@@ -1,4 +1,4 @@
-// The analyses of the strain-rate study: the rate law of analysis.md §11 on its worked
+// The analyses of the strain-rate study: the rate law of docs/analysis.md §11 on its worked
 // examples and planted data, and the failure plane fitted to crack midpoints.
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 using namespace breccia::analysis;
 
 TEST(RateDependence, WorkedExampleOfTheTwoParameterLaw) {
-  // analysis.md §11: rates 0.1, 1, 10 /s and UCS 100.501, 105.127, 164.872 MPa (100 e^(0.05 r)
+  // docs/analysis.md §11: rates 0.1, 1, 10 /s and UCS 100.501, 105.127, 164.872 MPa (100 e^(0.05 r)
   // to 3 decimals): ln UCS on the rate gives b = 0.0500 s and a = 100.0 MPa.
   const ExponentialRateFit f = fit_rate_dependence({0.1, 1, 10}, {100.501, 105.127, 164.872});
   ASSERT_TRUE(f.valid) << f.flag;
@@ -28,7 +28,7 @@ TEST(RateDependence, WorkedExampleOfTheTwoParameterLaw) {
 }
 
 TEST(RateDependence, WorkedExampleOfTheThreeParameterLaw) {
-  // analysis.md §11: c = 80, a = 20, b = 0.1 at rates 0, 2, 5, 10 /s give 100.000, 104.428,
+  // docs/analysis.md §11: c = 80, a = 20, b = 0.1 at rates 0, 2, 5, 10 /s give 100.000, 104.428,
   // 112.974, 134.366 MPa. Four points fix the three parameters (to the data's rounding).
   const ExponentialRateFit f =
       fit_rate_dependence({0, 2, 5, 10}, {100.000, 104.428, 112.974, 134.366});

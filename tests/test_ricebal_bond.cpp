@@ -1,4 +1,4 @@
-// The RICEBAL 2D bond (physics.md §4.4) against numbers worked by hand: its stiffnesses on the
+// The RICEBAL 2D bond (docs/physics.md §4.4) against numbers worked by hand: its stiffnesses on the
 // circle of the smaller grain (planar spheres) or the slab (disks), its tensile check with the
 // moment, its shear envelope in tension and in compression, and the engine judging it on the
 // interface totals with a Hertz-Mindlin contact pressing the grains together.

@@ -1,5 +1,5 @@
 // Sample generation and import, and the compression-test analysis against the worked examples of
-// analysis.md §1.8-§1.9.
+// docs/analysis.md §1.8-§1.9.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,7 +19,7 @@ using namespace breccia;
 using namespace breccia::analysis;
 
 TEST(Analysis, WorkedExampleModuliAndPoisson) {
-  // analysis.md §1.8: q = E e (1 - e / 2 e_p), E = 20 GPa, e_p = 0.01, e_l = -0.25 e_a.
+  // docs/analysis.md §1.8: q = E e (1 - e / 2 e_p), E = 20 GPa, e_p = 0.01, e_l = -0.25 e_a.
   CompressionSeries s;
   for (int k = 0; k <= 20; ++k) {
     const double e = 0.5e-3 * k;
@@ -85,7 +85,7 @@ TEST(Analysis, ModuliComeFromTheGaugesWhenEveryRowHasThem) {
 }
 
 TEST(Analysis, WorkedExampleCrackDamageAndInitiation) {
-  // analysis.md §1.8 volumetric example; the last sample is the peak, a drop follows.
+  // docs/analysis.md §1.8 volumetric example; the last sample is the peak, a drop follows.
   CompressionSeries s;
   const double ea[] = {1, 2, 3, 4, 5, 6, 7}, ev[] = {0.5, 1.0, 1.4, 1.6, 1.4, 0.6, 0.0};
   const double q[] = {20, 40, 58, 74, 86, 90, 50}, nb[] = {0, 50, 100, 400, 1000, 2000, 3000};

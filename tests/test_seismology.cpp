@@ -1,5 +1,5 @@
-// Acoustic-emission and failure statistics against the worked examples of analysis.md §3-§9 and
-// synthetic data with known answers.
+// Acoustic-emission and failure statistics against the worked examples of docs/analysis.md §3-§9
+// and synthetic data with known answers.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -360,7 +360,7 @@ TEST(CrackSeries, VariancesAndShearFraction) {
 }
 
 TEST(Clustering, GrainLinkageBySharedGrainsAndContacts) {
-  // Option b of analysis.md §4.1: crack (own grains, grains touched) with its own window T_c.
+  // Option b of docs/analysis.md §4.1: crack (own grains, grains touched) with its own window T_c.
   EventClusterer c({0.0, 0.0, Linkage::Grain});
   const double tc = 1e-6;
   EXPECT_EQ(c.add_grain(0, 0.0, tc, {1, 2}, {1, 2, 3, 4}), 0u);

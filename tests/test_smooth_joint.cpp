@@ -1,4 +1,4 @@
-// The smooth joint (physics.md §5) against numbers worked by hand: two spheres of R = 0.5 mm
+// The smooth joint (docs/physics.md §5) against numbers worked by hand: two spheres of R = 0.5 mm
 // touching along x, a joint plane tilted 30 degrees from the branch, k_n = 2e13 Pa/m and
 // k_s = 8e12 Pa/m per unit area:
 //   A = pi R^2 = 7.854e-7 m^2, K_n = k_n A = 1.5708e7 N/m, K_s = k_s A = 6.2832e6 N/m.

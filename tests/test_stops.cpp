@@ -137,7 +137,9 @@ TEST(Stops, ASweepStoppedWhileARunPacksResumesToTheEnd) {
       " --set sample.width=3e-3 --set sample.depth=3e-3 --set sample.height=6e-3"
       " --set test.max_strain=0.004 --over engine.seed 1 2";
   const std::string log = (dir / "sweep.log").string();
-  const std::string script = sweep + " > " + log + ".out 2> " + log +
+  // The log exists before the sweep starts: the loop below must not read a missing file (grep
+  // would print nothing, the test would fail and the signal would come at once).
+  const std::string script = ": > " + log + "; " + sweep + " > " + log + ".out 2> " + log +
                              " & pid=$!; n=0; while [ $n -lt 600 ] && [ "
                              "\"$(grep -c 'sample: generating' " +
                              log +

@@ -1,5 +1,5 @@
-// Two bonded particles driven through the whole engine, against the hand numbers of physics.md §8:
-// R = 0.5 mm, E_bar = 10 GPa, kappa = 2.5, sigma_c = c = 20 MPa, lambda = 1.
+// Two bonded particles driven through the whole engine, against the hand numbers of docs/physics.md
+// §8: R = 0.5 mm, E_bar = 10 GPa, kappa = 2.5, sigma_c = c = 20 MPa, lambda = 1.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -16,7 +16,7 @@ commit = _core.commit
 
 
 def fit_rate_dependence(rates, ucs):
-    """The strain-rate law of analysis.md §11, as the rate sweeps fit it: UCS = a exp(b rate)
+    """The strain-rate law of docs/analysis.md §11, as the rate sweeps fit it: UCS = a exp(b rate)
     (Levenberg-Marquardt from the log-linear start, with standard errors) and, from 4 rates,
     UCS = c + a exp(b rate). `ucs` in any unit (a and c come out in it); returns a dict."""
     return _core.fit_rate_dependence([float(r) for r in rates], [float(u) for u in ucs])

@@ -1,4 +1,4 @@
-"""Failure prediction from microcracking indicators (seed 000; analysis.md §10).
+"""Failure prediction from microcracking indicators (seed 000; docs/analysis.md §10).
 
 The data set: one row per pre-peak trailing strain window of each test (indicators.csv), with
 the seed's six inputs (confining pressure, MCvar, shear fraction, D2, AEvar, b-value; all causal)
@@ -8,7 +8,7 @@ eps_peak - eps_k. Windows with a missing input are dropped and counted per test.
 The network is the seed's 6-6-1 (tanh hidden layer, linear output; one network per target) on
 inputs and target scaled min-max to [-1, 1] with the training tests' ranges. scikit-learn's
 MLPRegressor trains it with L-BFGS, full batch: scikit-learn has no Levenberg-Marquardt
-(analysis.md §10.3's default) and L-BFGS is its full-batch quasi-Newton method, the closest
+(docs/analysis.md §10.3's default) and L-BFGS is its full-batch quasi-Newton method, the closest
 in kind. Ten networks with different seeds are trained and the one with the lowest error on a
 validation test is kept. Validation is leave-one-test-out (§10.4): each fold holds one test out
 for testing and one other for validation. Input importance is Garson's (§10.6) with Olden's
@@ -141,7 +141,7 @@ def _transform(X, inputs):
 
 
 class MinMax:
-    """Min-max scaling to [-1, 1] (analysis.md §10.2); a constant column maps to 0."""
+    """Min-max scaling to [-1, 1] (docs/analysis.md §10.2); a constant column maps to 0."""
 
     def __init__(self, low, high):
         self.low, self.high = np.asarray(low, float), np.asarray(high, float)
@@ -202,7 +202,7 @@ class Network:
 
 
 def garson(w_input_hidden, v_hidden_output):
-    """Garson's relative importance (analysis.md §10.6): w[i, h] input-to-hidden weights,
+    """Garson's relative importance (docs/analysis.md §10.6): w[i, h] input-to-hidden weights,
     v[h] hidden-to-output weights; returns RI[i], summing to 1."""
     c = np.abs(np.asarray(w_input_hidden, float) * np.asarray(v_hidden_output, float)[None, :])
     r = c / c.sum(axis=0, keepdims=True)
@@ -256,7 +256,7 @@ def validation_test(tests_by_pc, held_out):
 
 
 def leave_one_test_out(data, inputs, target, networks=10):
-    """Per-fold metrics and the pooled held-out predictions (analysis.md §10.4)."""
+    """Per-fold metrics and the pooled held-out predictions (docs/analysis.md §10.4)."""
     tests = data.groupby("test")["confining_mpa"].first().sort_values()
     if len(tests) < 3:
         raise PredictError(f"{len(tests)} tests with usable windows: leave-one-test-out needs "

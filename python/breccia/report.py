@@ -639,7 +639,7 @@ def run_trends(folder, entry):
          "crack_damage_mpa": nan_if_none(summary.get("crack_damage_stress_pa")) * 1e-6,
          "youngs_modulus_gpa": nan_if_none(entry.get("youngs_modulus_pa")) * 1e-9,
          "cracks": summary.get("bonds_broken", 0)}
-    # Where stages I-III end (analysis.md §8), as axial strain; NaN where a stage is missing.
+    # Where stages I-III end (docs/analysis.md §8), as axial strain; NaN where a stage is missing.
     stages = summary.get("stages", {}).get("by_stage", [])
     for k, label in enumerate(("I", "II", "III")):
         end = stages[k].get("axial_strain_to") if k < len(stages) else None
@@ -781,7 +781,7 @@ def rate_curves(folder, runs, fit, outdir, figures):
 
 
 def rate_sweep_report(folder, sweep):
-    """A strain-rate sweep: UCS against the rate with its fit (analysis.md §11), the stress-strain
+    """A strain-rate sweep: UCS against the rate with its fit (docs/analysis.md §11), the stress-strain
     curves, the damage ratio over strain, and the failure plane against the rate."""
     runs = [r for r in sweep["runs"] if r.get("status") == "complete"]
     outdir = os.path.join(folder, "report")

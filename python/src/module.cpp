@@ -37,7 +37,7 @@ PYBIND11_MODULE(_core, m) {
                         py::arg("dynamic_increase") = f.dynamic_increase);
       },
       py::arg("rate"), py::arg("ucs"),
-      "UCS = a exp(b rate) and UCS = c + a exp(b rate) (analysis.md §11); the sweeps' fit");
+      "UCS = a exp(b rate) and UCS = c + a exp(b rate) (docs/analysis.md §11); the sweeps' fit");
   breccia::python::bind_experiment(m);
   breccia::python::bind_run(m);
   breccia::python::bind_simulation(m);

@@ -1,7 +1,7 @@
 #pragma once
 // Space-time clustering of microcracks into acoustic-emission events after Hazzard & Young (2000)
-// (analysis.md §4.1): a crack joins an open event when it lies within the source radius r_s of any
-// of the event's cracks (single linkage; events it bridges are merged) and follows the event's
+// (docs/analysis.md §4.1): a crack joins an open event when it lies within the source radius r_s of
+// any of the event's cracks (single linkage; events it bridges are merged) and follows the event's
 // latest crack by at most T_d = 2 r_s / v_r, v_r = 0.5 v_S (the window rolls with each crack).
 // Streaming: the run feeds cracks as they happen, so that a recorder can watch the source
 // particles of the open events (moment tensors); a finished catalogue is clustered the same way.
@@ -20,7 +20,7 @@ class ArchiveReader;
 
 namespace breccia::analysis {
 
-// Two linkage rules (analysis.md §4.1): by source radius (the default of the reference: within
+// Two linkage rules (docs/analysis.md §4.1): by source radius (the default of the reference: within
 // r_s of any crack of the event, window T_d after its latest crack), or by grain (option b of the
 // reference: the crack shares a particle with, or touches a contact of, the event's particles;
 // window T_c = 2 D_c / v_S of its latest cracks, D_c the larger grain's diameter).

@@ -1,6 +1,6 @@
 #pragma once
-// Macroscopic results of a compression test (analysis.md §1.2-§1.7) and strength envelopes from a
-// set of tests (§1.9). Pure functions over recorded series; stresses compression-positive.
+// Macroscopic results of a compression test (docs/analysis.md §1.2-§1.7) and strength envelopes
+// from a set of tests (§1.9). Pure functions over recorded series; stresses compression-positive.
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -62,7 +62,7 @@ struct HoekBrownFit {
 // Intact Hoek-Brown (s = 1, a = 0.5), §1.9: linearised fit, then Levenberg-Marquardt.
 HoekBrownFit fit_hoek_brown(const std::vector<double>& sigma3, const std::vector<double>& sigma1);
 
-// Continuum energy estimates of the source papers (analysis.md §2.3), Pa in, J/m^3 out.
+// Continuum energy estimates of the source papers (docs/analysis.md §2.3), Pa in, J/m^3 out.
 // Elastic strain-energy density of isotropic linear elasticity under a triaxial state
 // (sigma_2 = sigma_3).
 double elastic_energy_density(double sigma1, double sigma3, double youngs, double poisson);

@@ -1,7 +1,7 @@
 #pragma once
-// Correlation fractal dimension D2 of a point set (analysis.md §6; Grassberger & Procaccia 1983):
-// the slope of log10 C(r) against log10 r over an automatically chosen scaling range, with the
-// pair counts from an all-pairs pass (N <= 5000) or a cell list over r_hi.
+// Correlation fractal dimension D2 of a point set (docs/analysis.md §6; Grassberger & Procaccia
+// 1983): the slope of log10 C(r) against log10 r over an automatically chosen scaling range, with
+// the pair counts from an all-pairs pass (N <= 5000) or a cell list over r_hi.
 #include <cstddef>
 #include <string>
 #include <vector>

@@ -1,5 +1,5 @@
 #pragma once
-// Microcrack indicator series over axial strain (analysis.md §3.2): strain bins of width
+// Microcrack indicator series over axial strain (docs/analysis.md §3.2): strain bins of width
 // Delta eps_b with counts by mode and summed energy, and trailing windows of W bins giving the
 // shear fraction, the microcrack variance MCvar and the AE-energy variance AEvar (sample
 // variances of the per-bin counts and energies). A window with fewer than W complete bins, or

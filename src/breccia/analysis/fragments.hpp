@@ -1,5 +1,5 @@
 #pragma once
-// Fragments after a test (analysis.md §9): connected components of the intact-bond graph by
+// Fragments after a test (docs/analysis.md §9): connected components of the intact-bond graph by
 // union-find; particles without an intact bond are single-particle debris. Classes relative to
 // the largest fragment: smallest f < 0.1, biggest f > 0.9, intermediate otherwise.
 #include <cstddef>

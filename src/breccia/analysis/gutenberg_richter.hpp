@@ -1,6 +1,6 @@
 #pragma once
-// Frequency-magnitude statistics of acoustic-emission catalogues (analysis.md §5): the b-value by
-// maximum likelihood (Aki 1965, Utsu's binning correction) with the Shi & Bolt (1982) error, the
+// Frequency-magnitude statistics of acoustic-emission catalogues (docs/analysis.md §5): the b-value
+// by maximum likelihood (Aki 1965, Utsu's binning correction) with the Shi & Bolt (1982) error, the
 // magnitude of completeness by maximum curvature (+0.2, Woessner & Wiemer 2005), and the
 // magnitude relations of §4.2-§4.4 (moment magnitude, Kanamori's energy relation in joules).
 #include <cstddef>

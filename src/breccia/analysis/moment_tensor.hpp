@@ -1,5 +1,5 @@
 #pragma once
-// Source parameters of a moment tensor (analysis.md §4.2-§4.3): scalar moment (Silver & Jordan
+// Source parameters of a moment tensor (docs/analysis.md §4.2-§4.3): scalar moment (Silver & Jordan
 // 1982), the isotropic/deviatoric split, the Hudson et al. (1989) source-type parameters k, T,
 // tau and plot coordinates (u, v), the DC/CLVD/ISO percentages, and the Feignier & Young (1992)
 // R ratio. Eigenvalues come from Eigen's symmetric solver on the symmetrised tensor.

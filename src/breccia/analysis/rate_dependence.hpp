@@ -1,6 +1,6 @@
 #pragma once
-// Strain-rate dependence of strength (analysis.md §11): UCS(rate) = a exp(b rate), fitted first
-// by least squares on ln UCS (the start) and then by Levenberg-Marquardt on the untransformed
+// Strain-rate dependence of strength (docs/analysis.md §11): UCS(rate) = a exp(b rate), fitted
+// first by least squares on ln UCS (the start) and then by Levenberg-Marquardt on the untransformed
 // residuals; and the three-parameter form UCS = c + a exp(b rate) for a low-rate plateau. `a`
 // (or c + a) is the quasi-static strength; UCS / a the dynamic increase factor. Pure functions.
 #include <cstddef>

@@ -1,6 +1,7 @@
 #pragma once
-// Deformation stages from the stress-strain curve (analysis.md §8): I initiation (quasi-linear),
-// II nucleation (to the peak), III rupture (post-peak drop), IV frictional sliding (residual).
+// Deformation stages from the stress-strain curve (docs/analysis.md §8): I initiation
+// (quasi-linear), II nucleation (to the peak), III rupture (post-peak drop), IV frictional sliding
+// (residual).
 #include <cstddef>
 #include <string>
 #include <vector>

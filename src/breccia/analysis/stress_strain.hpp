@@ -1,7 +1,7 @@
 #pragma once
-// Headline results of a compression curve (analysis.md §1.2-§1.3): peak strength, strain at peak,
-// and Young's modulus as the least-squares slope of stress against axial strain over 40-60 % of the
-// peak on the pre-peak branch (the ISRM tangent modulus E_t50). Pure functions over recorded
+// Headline results of a compression curve (docs/analysis.md §1.2-§1.3): peak strength, strain at
+// peak, and Young's modulus as the least-squares slope of stress against axial strain over 40-60 %
+// of the peak on the pre-peak branch (the ISRM tangent modulus E_t50). Pure functions over recorded
 // series.
 #include <cstddef>
 #include <vector>

@@ -1,7 +1,7 @@
 #pragma once
-// Flexible membrane of a 2D sample (physics.md §6.3, RICEBAL practice, seed 002): the confining
-// pressure acts on the outermost chain of grains of each lateral side, found afresh every step as
-// the sample deforms, as a follower load per unit length along the chain.
+// Flexible membrane of a 2D sample (docs/physics.md §6.3, RICEBAL practice, seed 002): the
+// confining pressure acts on the outermost chain of grains of each lateral side, found afresh every
+// step as the sample deforms, as a follower load per unit length along the chain.
 //
 // Finding a chain: the sample's height between the platens is cut into bins one mean grain
 // diameter tall; in each bin the grain whose surface reaches furthest out on that side joins the

@@ -1,5 +1,5 @@
 #pragma once
-// Servo control of a wall to a target normal stress (physics.md §6.2, after the PFC servo):
+// Servo control of a wall to a target normal stress (docs/physics.md §6.2, after the PFC servo):
 // V = G (sigma_target - sigma_measured), G = alpha A / (k_sum dt), where k_sum is the summed normal
 // stiffness of the wall's contacts, so that one step corrects the fraction alpha of the error.
 // Positive V moves the wall into the sample. Stresses are compression-positive.

@@ -1,7 +1,7 @@
 #pragma once
-// Rigid walls (physics.md §6.1): an unbounded plane, a cylinder about an axis, or a sphere, moving
-// with a prescribed velocity reached through a cosine ramp, driven by a controller (servo) that
-// sets the velocity each step, or, given a mass, free: a rigid body (a projectile) that the
+// Rigid walls (docs/physics.md §6.1): an unbounded plane, a cylinder about an axis, or a sphere,
+// moving with a prescribed velocity reached through a cosine ramp, driven by a controller (servo)
+// that sets the velocity each step, or, given a mass, free: a rigid body (a projectile) that the
 // contact forces and gravity move, integrated by the same leapfrog as the grains. The wall is body
 // 1 of every wall contact.
 #include <cmath>

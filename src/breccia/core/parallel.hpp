@@ -1,7 +1,7 @@
 #pragma once
 // Deterministic parallel helpers. Work is cut into fixed-size blocks that do not depend on the
 // thread count; partial sums are kept per block and added in block order, so every reduction is
-// bitwise identical for any number of threads (design.md, "two passes, no atomics").
+// bitwise identical for any number of threads (ARCHITECTURE.md, "Determinism without atomics").
 #include <cstddef>
 #include <vector>
 

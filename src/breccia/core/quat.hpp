@@ -1,5 +1,5 @@
 #pragma once
-// Unit quaternion q = (w, x, y, z), scalar first, mapping body to world (physics.md §0.4).
+// Unit quaternion q = (w, x, y, z), scalar first, mapping body to world (docs/physics.md §0.4).
 #include <cmath>
 
 #include "breccia/core/vec3.hpp"

@@ -33,7 +33,7 @@ inline double standard_normal(std::uint64_t seed, std::uint64_t stream,
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
 }
 
-// Normal(mean, sd) truncated to positive values by redrawing (physics.md §9 decision 4). With
+// Normal(mean, sd) truncated to positive values by redrawing (docs/physics.md §9 decision 4). With
 // sd == 0 the mean itself is returned. Gives up after 1000 redraws, which only happens when the
 // mean is many standard deviations below zero; callers validate mean > 0 beforehand.
 inline double positive_normal(double mean, double sd, std::uint64_t seed, std::uint64_t stream,

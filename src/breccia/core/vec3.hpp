@@ -1,6 +1,6 @@
 #pragma once
 // Plain 3-vector of doubles. 2D simulations use the same type with z = 0 so that every law is
-// written once (physics.md §0.5).
+// written once (docs/physics.md §0.5).
 #include <cmath>
 
 namespace breccia {
@@ -91,8 +91,8 @@ constexpr Vec3 spin_about(const Vec3& v, const Vec3& n, double psi) noexcept {
 
 // The rotation that carries history vectors (shear force, bending moment) from the previous
 // contact plane into the current one: the tilt taking n_old to n followed by a spin about n
-// (physics.md §3.1, decision 19). Built once per pair and step, applied to several vectors; the
-// same as spin_about(rotate_between(v, n_old, n), n, psi), which stays as the test reference.
+// (docs/physics.md §3.1, decision 19). Built once per pair and step, applied to several vectors;
+// the same as spin_about(rotate_between(v, n_old, n), n, psi), which stays as the test reference.
 struct PlaneCarry {
   Vec3 axis;  // n_old x n
   double inv_one_plus_c = 1.0;

@@ -1,7 +1,7 @@
 #pragma once
 // Events the engine emits while stepping. A CrackRecord is written in the step a bond breaks, with
-// the fields physics.md §4.0 defines (forces compression-positive, those computed but not applied
-// in the breaking step).
+// the fields docs/physics.md §4.0 defines (forces compression-positive, those computed but not
+// applied in the breaking step).
 #include <cstdint>
 #include <string_view>
 

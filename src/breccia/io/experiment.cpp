@@ -275,7 +275,7 @@ Key joint_planes_key() {
         "dip_direction_deg (clockwise from +y; 90 = dipping towards +x, the default), radius "
         "(m: a disc joint, a segment of half-length radius in 2D; 0 = the whole plane) and "
         "spacing (m: a set of parallel planes; 0 = one plane). Every pair whose branch crosses "
-        "a joint gets the joint law (physics.md §5)",
+        "a joint gets the joint law (docs/physics.md §5)",
         {},
         {}};
   k.set = [](ExperimentSpec& s, const toml::node& n, const std::string& where,
@@ -319,9 +319,10 @@ const std::vector<Key>& key_table() {
                         [](ExperimentSpec& s) -> std::int64_t& {
                           return reinterpret_cast<std::int64_t&>(s.engine.seed);
                         }));
-    k.push_back(nested_real("engine", "time_step", "s", 0, kInf, false, true,
-                            "time step; 0 = critical estimate x safety_factor (physics.md §1.5)",
-                            [](ExperimentSpec& s) -> double& { return s.engine.time_step; }));
+    k.push_back(
+        nested_real("engine", "time_step", "s", 0, kInf, false, true,
+                    "time step; 0 = critical estimate x safety_factor (docs/physics.md §1.5)",
+                    [](ExperimentSpec& s) -> double& { return s.engine.time_step; }));
     k.push_back(nested_real("engine", "safety_factor", "", 0, 1, true, false,
                             "fraction of the critical time step used",
                             [](ExperimentSpec& s) -> double& { return s.engine.safety_factor; }));
@@ -357,7 +358,7 @@ const std::vector<Key>& key_table() {
     }
     // [sample]
     k.push_back(choice_key("sample", "source", {"generate", "file", "table", "gengeo", "lattice"},
-                           "generate: dense random packing (physics.md §7.2); file: a "
+                           "generate: dense random packing (docs/physics.md §7.2); file: a "
                            "breccia-geometry file (what `breccia generate` writes); table: "
                            "whitespace- or comma-separated x y z radius rows (YADE/PFC exports); "
                            "gengeo: an ESyS-Particle GenGeo LSMGeometry 1.2 file; lattice: FCC "
@@ -383,7 +384,7 @@ const std::vector<Key>& key_table() {
                          "slab: thickness along z (2D: along y); seed 001's slabs are 5-10 mm",
                          &ExperimentSpec::slab_thickness));
     k.push_back(choice_key("sample", "distribution", {"uniform", "lognormal", "classes"},
-                           "radius distribution (physics.md §7.1): uniform on [radius_min, "
+                           "radius distribution (docs/physics.md §7.1): uniform on [radius_min, "
                            "radius_max]; lognormal with radius_mean and radius_sd truncated to "
                            "[radius_min, radius_max]; classes: class_radii with "
                            "class_mass_fractions",
@@ -412,7 +413,7 @@ const std::vector<Key>& key_table() {
         "sample", "packing", {"expansion", "insertion", "preconsolidation"},
         "how a generated sample is packed: expansion: radius expansion in a rigid vessel to "
         "isotropic_stress or porosity, floaters grown (PFC / Potyondy & Cundall 2004, "
-        "physics.md §7.2); insertion: GenGeo-style constructive packing, every grain fitted "
+        "docs/physics.md §7.2); insertion: GenGeo-style constructive packing, every grain fitted "
         "tangent to its neighbours, stress-free, radii emergent in [radius_min, radius_max] "
         "(§7.4); preconsolidation (2D): disks compacted between particle-row walls to "
         "preconsolidation_stress and bonded in that state (RICEBAL practice, seed 002, §7.3)",
@@ -482,12 +483,12 @@ const std::vector<Key>& key_table() {
     k.push_back(real_key("sample", "thickness", "m", 0, kInf, true,
                          "2D thickness t: disks' thickness (forces are for this thickness); "
                          "for planar spheres the effective thickness that turns forces into "
-                         "stresses, 2 x the mean radius when not given (physics.md §3.4)",
+                         "stresses, 2 x the mean radius when not given (docs/physics.md §3.4)",
                          &ExperimentSpec::thickness));
     k.push_back(choice_key("sample", "planar_body", {"auto", "disk", "planar_sphere"},
                            "2D grains: disks of thickness t, or spheres confined to the plane "
                            "(sphere mass and inertia; needed by Hertz-Mindlin contacts, "
-                           "physics.md §3.4); auto: planar spheres with hertz_mindlin, disks "
+                           "docs/physics.md §3.4); auto: planar spheres with hertz_mindlin, disks "
                            "otherwise",
                            &ExperimentSpec::planar_body));
     k.push_back(string_key("sample", "file",
@@ -496,7 +497,7 @@ const std::vector<Key>& key_table() {
                            &ExperimentSpec::geometry_file));
     k.push_back(real_key("sample", "bond_gap_tolerance", "m", 0, kInf, false,
                          "pairs with a gap up to this get a bond (generated samples, and files "
-                         "that list no bonds); a calibration parameter (physics.md §7.6)",
+                         "that list no bonds); a calibration parameter (docs/physics.md §7.6)",
                          &ExperimentSpec::bond_gap_tolerance));
     // [contact] and [bond]: the law keys come from the law tables (see make_law_keys).
     k.push_back(law_choice_key<ContactLaws>(
@@ -551,14 +552,14 @@ const std::vector<Key>& key_table() {
     // [ae]
     k.push_back(choice_key(
         "ae", "clustering", {"source_radius", "grain"},
-        "how cracks link into events (analysis.md §4.1): \"source_radius\" (within r_s of any "
+        "how cracks link into events (docs/analysis.md §4.1): \"source_radius\" (within r_s of any "
         "crack of the event, window T_d = 4 r_s / v_S after its latest crack) or \"grain\" "
         "(shares a grain with, or touches a contact of, the event's grains; window 2 D_c / v_S "
         "with D_c the larger grain's diameter)",
         &ExperimentSpec::ae_clustering));
     k.push_back(real_key("ae", "source_radius", "m", 0, kInf, false,
                          "r_s: a crack joins an event within this distance of any of its cracks "
-                         "(analysis.md §4.1); 0 = 3 x the largest particle diameter",
+                         "(docs/analysis.md §4.1); 0 = 3 x the largest particle diameter",
                          &ExperimentSpec::ae_source_radius));
     k.push_back(real_key("ae", "shear_wave_speed", "m/s", 0, kInf, false,
                          "v_S for the event duration T_d = 4 r_s / v_S; 0 = sqrt(G / rho) from "
@@ -567,7 +568,7 @@ const std::vector<Key>& key_table() {
                          &ExperimentSpec::ae_shear_wave_speed));
     k.push_back(bool_key("ae", "moment_tensors",
                          "watch the source particles of open events for moment tensors "
-                         "(analysis.md §4.2)",
+                         "(docs/analysis.md §4.2)",
                          &ExperimentSpec::ae_moment_tensors));
     k.push_back(int_key("ae", "moment_interval", 1, 1000000,
                         "steps between moment-tensor evaluations of an open event",
@@ -577,7 +578,7 @@ const std::vector<Key>& key_table() {
                          "-6.07 IASPEI)",
                          &ExperimentSpec::ae_magnitude_constant));
     k.push_back(real_key("ae", "bin_width", "", 0, 1, true,
-                         "strain bin of the indicator series (analysis.md §3.2)",
+                         "strain bin of the indicator series (docs/analysis.md §3.2)",
                          &ExperimentSpec::ae_bin_width));
     k.push_back(int_key("ae", "window_bins", 1, 100000,
                         "trailing window of the indicator series, in bins (shear fraction, "
@@ -585,7 +586,7 @@ const std::vector<Key>& key_table() {
                         [](ExperimentSpec& s) -> std::int64_t& { return s.ae_window_bins; }));
     k.push_back(int_key("ae", "window_events", 10, 1000000,
                         "events (b-value) or cracks (D2) per moving window of the curves over "
-                        "strain (analysis.md §5.4, §6.3)",
+                        "strain (docs/analysis.md §5.4, §6.3)",
                         [](ExperimentSpec& s) -> std::int64_t& { return s.ae_window_events; }));
     k.push_back(int_key("ae", "window_step", 1, 1000000,
                         "events or cracks between successive moving windows",
@@ -844,7 +845,7 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
     throw InputError(source, "contact.law", "\"hertz_mindlin\"",
                      "2D disks (sample.planar_body = \"disk\") use \"linear\" contacts: Hertz "
                      "has no disk form; set sample.planar_body = \"planar_sphere\" (or "
-                     "\"auto\") for RICEBAL-style planar spheres (physics.md §3.4)");
+                     "\"auto\") for RICEBAL-style planar spheres (docs/physics.md §3.4)");
   if (s.sample_source == "generate") {
     if (s.dimension == 2 && s.shape != "rectangle" && s.shape != "disk" && s.shape != "slab")
       throw InputError(source, "sample.shape", "\"" + s.shape + "\"",
@@ -1115,7 +1116,7 @@ double geometry_file_thickness(const ExperimentSpec& s) {
   return 0.0;
 }
 
-// The 2D body and thickness that "auto" and an absent thickness stand for (physics.md §3.4):
+// The 2D body and thickness that "auto" and an absent thickness stand for (docs/physics.md §3.4):
 // planar spheres with Hertz-Mindlin contacts, and for them t_eff = 2 R_bar of the grains the
 // sample will have.
 void resolve_planar_body(ExperimentSpec& s, bool thickness_given, const std::string& source) {
@@ -1135,7 +1136,7 @@ void resolve_planar_body(ExperimentSpec& s, bool thickness_given, const std::str
   } else {
     throw InputError(source, "sample.thickness", "(not set)",
                      "planar spheres read from a file that records no thickness need the "
-                     "effective thickness that turns their forces into stresses (physics.md "
+                     "effective thickness that turns their forces into stresses (docs/physics.md "
                      "§3.4: 2 x the mean radius)");
   }
 }

@@ -14,9 +14,9 @@
 
 namespace breccia {
 
-// One joint of the [joint] table (physics.md §5): a plane through the sample centre plus `centre`,
-// oriented by `normal` or by dip and dip direction, limited to a disc of `radius` (0: unlimited),
-// or a set of parallel planes `spacing` apart.
+// One joint of the [joint] table (docs/physics.md §5): a plane through the sample centre plus
+// `centre`, oriented by `normal` or by dip and dip direction, limited to a disc of `radius` (0:
+// unlimited), or a set of parallel planes `spacing` apart.
 struct JointPlaneSpec {
   std::array<double, 3> centre{};  // m, from the centre of the sample's bounding box
   bool has_normal = false;
@@ -61,7 +61,7 @@ struct ExperimentSpec {
   double radius = 0.5e-3;                       // lattice
   double density = 2650.0;
   double thickness = 1e-3;  // 2D only; planar spheres: 2 R_bar unless the file sets it
-  // 2D grain bodies (physics.md §3.4): "disk", "planar_sphere", or "auto" (planar spheres with
+  // 2D grain bodies (docs/physics.md §3.4): "disk", "planar_sphere", or "auto" (planar spheres with
   // Hertz-Mindlin contacts, disks otherwise; resolved when the file is read)
   std::string planar_body = "auto";
   std::string geometry_file;  // file, table, gengeo
@@ -86,8 +86,8 @@ struct ExperimentSpec {
   bool plot = true;                         // stress-strain PNG at the end (needs matplotlib)
   bool progress = true;
   double checkpoint_interval = 600.0;  // wall-clock s between checkpoints; 0 = on interrupt only
-  // [ae] acoustic emission and indicator series (analysis.md §3-§6)
-  std::string ae_clustering = "grain";  // grain | source_radius (analysis.md §4.1)
+  // [ae] acoustic emission and indicator series (docs/analysis.md §3-§6)
+  std::string ae_clustering = "grain";  // grain | source_radius (docs/analysis.md §4.1)
   double ae_source_radius = 0.0;        // m; 0 = 3 x the largest particle diameter
   double ae_shear_wave_speed = 0.0;     // m/s; 0 = estimated at the first crack
   bool ae_moment_tensors = true;
@@ -111,8 +111,8 @@ struct ExperimentSpec {
   std::string_view joint_law() const { return name_of_params<JointLaws>(joint); }
 };
 
-// The unit normal of a joint plane (from `normal`, or from dip and dip direction: physics.md §5
-// with x = East, y = North, z = Up; in 2D the loading axis y is "up").
+// The unit normal of a joint plane (from `normal`, or from dip and dip direction: docs/physics.md
+// §5 with x = East, y = North, z = Up; in 2D the loading axis y is "up").
 Vec3 joint_normal(const JointPlaneSpec& plane, int dimension);
 
 ExperimentSpec default_experiment();

@@ -1,5 +1,5 @@
 #pragma once
-// The kinematics and elastic loads shared by the total beam bonds (physics.md §4.2, §4.3): the
+// The kinematics and elastic loads shared by the total beam bonds (docs/physics.md §4.2, §4.3): the
 // ESyS-Particle brittle beam and the quaternion bond of LAMMPS bpm/rotational differ in their
 // shear arms and their failure rules only.
 #include <algorithm>

@@ -1,8 +1,8 @@
 #pragma once
-// ESyS-Particle's rotational brittle beam (BrittleBeamPrms; Wang 2009 kinematics), physics.md §4.2:
-// an elastic cylinder (3D) or slab (2D) between the two centres, in a total formulation: forces
-// and moments follow from the present positions and orientations against the reference state of
-// installation, so nothing drifts. Six relative motions (stretch, two shears, twist, two bends)
+// ESyS-Particle's rotational brittle beam (BrittleBeamPrms; Wang 2009 kinematics), docs/physics.md
+// §4.2: an elastic cylinder (3D) or slab (2D) between the two centres, in a total formulation:
+// forces and moments follow from the present positions and orientations against the reference state
+// of installation, so nothing drifts. Six relative motions (stretch, two shears, twist, two bends)
 // with four stiffnesses; Mohr-Coulomb failure on the beam's peak stresses with a tensile cut-off.
 #include <algorithm>
 #include <array>

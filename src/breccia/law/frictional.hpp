@@ -1,5 +1,5 @@
 #pragma once
-// Pieces every frictional contact law shares (physics.md §3.1, §3.2, §2.2, §3.6): carrying the
+// Pieces every frictional contact law shares (docs/physics.md §3.1, §3.2, §2.2, §3.6): carrying the
 // shear spring into the current contact plane, the incremental shear update with the Coulomb
 // limit, and the dashpots with the no-tension rule. Each books its losses into PairDissipation.
 #include <cmath>

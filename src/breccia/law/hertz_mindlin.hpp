@@ -1,7 +1,8 @@
 #pragma once
 // Hertz normal contact with an incremental Mindlin no-slip tangential spring and Coulomb friction
-// (physics.md §3.3), unloading rescale of the shear force after LAMMPS `mindlin_rescale/force`,
-// Tsuji-type dashpots (§2.2). In 2D it needs planar-sphere bodies (§3.4): disks have no Hertz law.
+// (docs/physics.md §3.3), unloading rescale of the shear force after LAMMPS
+// `mindlin_rescale/force`, Tsuji-type dashpots (§2.2). In 2D it needs planar-sphere bodies (§3.4):
+// disks have no Hertz law.
 #include <array>
 #include <cmath>
 #include <numbers>

@@ -1,6 +1,6 @@
 #pragma once
-// Linear spring contact with Coulomb friction and optional dashpots (physics.md §3.1, §3.2, §2.2),
-// after Cundall & Strack (1979) with the PFC 5+ "deformability" stiffness k_n = A E_c / L.
+// Linear spring contact with Coulomb friction and optional dashpots (docs/physics.md §3.1, §3.2,
+// §2.2), after Cundall & Strack (1979) with the PFC 5+ "deformability" stiffness k_n = A E_c / L.
 // This is the exemplar every contact law copies: Params with a field table, per-contact State,
 // and noexcept kernels.
 #include <array>

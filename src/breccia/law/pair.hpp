@@ -1,8 +1,8 @@
 #pragma once
 // What every pair law (contact or bond) receives and returns. The engine computes the geometry of
-// a pair once (physics.md §0.2); a law turns it into a force on particle 2 and a pure couple on
-// particle 2 (§0.3). Particle 1 receives the opposite force and couple; torques about the centres
-// follow from the lever arms, which conserves linear and angular momentum exactly.
+// a pair once (docs/physics.md §0.2); a law turns it into a force on particle 2 and a pure couple
+// on particle 2 (§0.3). Particle 1 receives the opposite force and couple; torques about the
+// centres follow from the lever arms, which conserves linear and angular momentum exactly.
 #include <cmath>
 #include <cstdint>
 
@@ -108,7 +108,7 @@ struct BondEnergy {
 };
 
 // A bond law's elastic moduli as the papers use them: the bar-wave speed sqrt(E / rho) of a
-// sample and the crack energy sigma^2 V / (2 E) or tau^2 V / (2 G) (analysis.md §2.3).
+// sample and the crack energy sigma^2 V / (2 E) or tau^2 V / (2 G) (docs/analysis.md §2.3).
 struct BondModuli {
   double young = 0.0;  // Pa
   double shear = 0.0;  // Pa

@@ -1,9 +1,9 @@
 #pragma once
 // Potyondy & Cundall (2004) parallel bond, with the cohesion-friction shear strength of the later
-// linear parallel bond (physics.md §4.1): an incremental elastic beam glued over a disc (3D) or a
-// slab of thickness t (2D) of radius R_bar = lambda min(R1, R2), carrying normal and shear force,
-// twisting and bending moment. Fails in tension when sigma_max >= sigma_c (checked first), else in
-// shear when tau_max >= c - sigma_avg tan(phi); with phi = 0 this is the 2004 model.
+// linear parallel bond (docs/physics.md §4.1): an incremental elastic beam glued over a disc (3D)
+// or a slab of thickness t (2D) of radius R_bar = lambda min(R1, R2), carrying normal and shear
+// force, twisting and bending moment. Fails in tension when sigma_max >= sigma_c (checked first),
+// else in shear when tau_max >= c - sigma_avg tan(phi); with phi = 0 this is the 2004 model.
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -70,7 +70,7 @@ struct ParallelBond {
   static BondModuli moduli(const Params& p) noexcept {
     return {p.modulus, p.modulus / p.stiffness_ratio};
   }
-  // The linear contact acts in parallel with the bond (physics.md §4.0).
+  // The linear contact acts in parallel with the bond (docs/physics.md §4.0).
   static bool contact_while_bonded(const Params&) noexcept { return true; }
 
   struct State {

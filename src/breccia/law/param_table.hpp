@@ -1,7 +1,7 @@
 #pragma once
 // One table per law: every parameter with its key, SI unit, default, allowed range and a one-line
 // description. The same table validates input files, fills defaults and generates the docs
-// (design.md, "Laws: one file and one line").
+// (ARCHITECTURE.md, "How to add...").
 #include <cmath>
 #include <limits>
 #include <string>

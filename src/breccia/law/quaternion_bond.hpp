@@ -1,7 +1,7 @@
 #pragma once
 // The quaternion bond of seed 004 (Zhao & Collins 2024), specified through its reference
-// implementation LAMMPS bond_style bpm/rotational (physics.md §4.3): the beam kinematics of §4.2
-// with chi_b = 1 and the present length d as the arm of both shear terms, and an additive
+// implementation LAMMPS bond_style bpm/rotational (docs/physics.md §4.3): the beam kinematics of
+// §4.2 with chi_b = 1 and the present length d as the arm of both shear terms, and an additive
 // breakage index B = <-F_n> / F_n^max + F_s / F_s^max + M_b / M_b^max + M_t / M_t^max >= 1.
 #include <algorithm>
 #include <array>

@@ -17,11 +17,11 @@ namespace breccia {
 
 using ContactLaws = TypeList<LinearContact, HertzMindlin>;
 using BondLaws = TypeList<ParallelBond, BrittleBeam, QuaternionBond, RicebalBond>;
-// Laws of the pairs that a joint plane cuts (physics.md §5): they replace the pair's bond and
+// Laws of the pairs that a joint plane cuts (docs/physics.md §5): they replace the pair's bond and
 // contact law, and the experiment's [joint] table places them.
 using JointLaws = TypeList<SmoothJoint>;
 
-// A bond law whose failure envelope reads the interface totals, bond plus contact (physics.md
+// A bond law whose failure envelope reads the interface totals, bond plus contact (docs/physics.md
 // §4.4), splits its step into loads() and judge(); the engine judges it once the pair's contact
 // force of the step is known.
 template <class Law>

@@ -1,7 +1,7 @@
 #pragma once
-// The RICEBAL 2D bond (Morgan 2015; Guo & Morgan 2007; seed 002), as physics.md §4.4 reconstructs
-// it: an elastic bond between the centres of two planar grains with a total normal spring
-// K_n = E_b A_b / d0, an incremental shear spring K_s = G_b A_b / d0 and a bending spring
+// The RICEBAL 2D bond (Morgan 2015; Guo & Morgan 2007; seed 002), as docs/physics.md §4.4
+// reconstructs it: an elastic bond between the centres of two planar grains with a total normal
+// spring K_n = E_b A_b / d0, an incremental shear spring K_s = G_b A_b / d0 and a bending spring
 // K_M = E_b I_b / d0. Overlapping grains also press through their Hertz-Mindlin contact, and the
 // failure envelope reads the interface totals (bond plus contact): tensile when
 // -f_n / A_b + |M| r_b / I_b >= T_b, else shear when |f_s| >= C_b A_b (1 - f_n / f_n,min) in
@@ -65,7 +65,7 @@ struct RicebalBond {
     prepare(q);
     return {p.modulus, q.shear_modulus_used};
   }
-  // The Hertz-Mindlin contact is added whenever the grains overlap (physics.md §4.0, §4.4).
+  // The Hertz-Mindlin contact is added whenever the grains overlap (docs/physics.md §4.0, §4.4).
   static bool contact_while_bonded(const Params&) noexcept { return true; }
 
   struct State {

@@ -1,5 +1,5 @@
 #pragma once
-// The PFC smooth joint (physics.md §5; Mas Ivars et al. 2011): a pair that a joint plane cuts
+// The PFC smooth joint (docs/physics.md §5; Mas Ivars et al. 2011): a pair that a joint plane cuts
 // interacts through springs aligned with the joint plane instead of its own contact normal, so
 // grains on either side slide along the plane however bumpy their spheres are. The springs follow
 // the contact point's relative motion split along the fixed joint normal (ARCHITECTURE.md: the

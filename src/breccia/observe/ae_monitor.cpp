@@ -26,7 +26,7 @@ double kinetic(const ParticleStore& p, std::uint32_t i) {
   return 0.5 * p.mass[i] * norm2(p.vel[i]) + 0.5 * p.inertia[i] * norm2(p.angvel[i]);
 }
 
-// Contact point of pair (i, j) (physics.md §0.2: middle of the overlap or gap).
+// Contact point of pair (i, j) (docs/physics.md §0.2: middle of the overlap or gap).
 Vec3 contact_point(const ParticleStore& p, std::uint32_t i, std::uint32_t j) {
   const PosRad& a = p.pos_rad[i];
   const PosRad& b = p.pos_rad[j];

@@ -1,7 +1,7 @@
 #pragma once
 // Acoustic-emission monitor: a recorder subscribed to the engine's break events (the crack
 // catalogue, read after every step). It clusters cracks into events as they happen (Hazzard &
-// Young 2000, analysis.md §4.1) and, while an event is open, watches its source particles: the
+// Young 2000, docs/analysis.md §4.1) and, while an event is open, watches its source particles: the
 // change of the contact and bond forces they exert on outside neighbours gives the event's moment
 // tensor (Hazzard & Young 2004, §4.2), taken at the maximum scalar moment, and the kinetic energy
 // of the particles within r_s of its cracks gives the kinetic-energy event energy (§4.4). When no
@@ -50,7 +50,7 @@ struct AeEvent {
 struct CrackContext {
   double axial_strain = 0.0;
   double deviatoric = 0.0;       // Pa
-  double fracture_energy = 0.0;  // J, analysis.md §2.3
+  double fracture_energy = 0.0;  // J, docs/analysis.md §2.3
 };
 
 class AeMonitor {
@@ -124,7 +124,7 @@ class AeMonitor {
   std::map<std::array<long long, 3>, std::vector<std::uint32_t>> grid_;
 };
 
-// The fracture-energy estimate of analysis.md §2.3 for a bond crack: sigma^2 V / (2 E_b) in
+// The fracture-energy estimate of docs/analysis.md §2.3 for a bond crack: sigma^2 V / (2 E_b) in
 // tension, tau^2 V / (2 G_b) in shear, over the bond volume V = A (R1 + R2).
 double fracture_energy(const CrackRecord& c, const BondModuli& moduli, bool planar,
                        double thickness);

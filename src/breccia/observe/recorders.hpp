@@ -51,11 +51,11 @@ class HistoryRecorder {
   std::uint64_t cracks_seen_ = 0, tensile_ = 0;  // running count: no rescan of the catalogue
 };
 
-// The columns and one row of the crack table (physics.md §4.0 fields).
+// The columns and one row of the crack table (docs/physics.md §4.0 fields).
 std::vector<std::string> crack_columns();
 std::string crack_row(const CrackRecord& c);
 
-// cracks.csv: one row per broken bond with the fields of physics.md §4.0.
+// cracks.csv: one row per broken bond with the fields of docs/physics.md §4.0.
 class CrackRecorder {
  public:
   explicit CrackRecorder(const std::string& path);

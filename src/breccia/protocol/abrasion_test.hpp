@@ -14,7 +14,7 @@
 // rolling under the grit change it. With flat_plate = true it is a smooth plane wall whose
 // only roughness is its Coulomb friction, contact.wall_friction: on an unbreakable slab whose
 // contacts all slide, the bulk coefficient is then that friction exactly
-// (tests/test_protocols.cpp). Either way a servo holds the normal stress (physics.md §6.2):
+// (tests/test_protocols.cpp). Either way a servo holds the normal stress (docs/physics.md §6.2):
 // first until it settles, then through the sliding, reached through a cosine ramp. The grit
 // grains are apparatus, not rock: fragments and wear leave them out (rock_particles()). 2D: the
 // slab's top is y = max and the abrader slides along x.
@@ -61,7 +61,7 @@ class AbrasionTest final : public Protocol {
          "grains whose centres lie this close to the bottom face are held fixed; 0 = one "
          "largest grain diameter"},
         {"servo_relaxation", "-", &Params::servo_relaxation, 0, 1, false, true,
-         "alpha_s of the abrader's normal-stress servo (physics.md §6.2)"},
+         "alpha_s of the abrader's normal-stress servo (docs/physics.md §6.2)"},
         {"grit_radius", "m", &Params::grit_radius, 0, kInf, true, true,
          "radius of the abrader's grit grains (one hexagonal layer); 0 = the sample's largest "
          "grain radius"},

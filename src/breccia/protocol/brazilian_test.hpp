@@ -5,7 +5,7 @@
 // stress at the centre of an elastic disc under two opposite line loads (Hertz 1883; Hondros
 // 1959). 3D: a cylinder with its axis along z (the disc's thickness), loaded along y; 2D: a disk
 // in the x-y plane of thickness t, loaded along y. The platens approach at a constant speed
-// reached through the cosine ramp of physics.md §6.1.
+// reached through the cosine ramp of docs/physics.md §6.1.
 //
 // Rows: strain = platen approach / D, stress = 2 F / (pi D t) with F the mean platen force,
 // lateral strain from the grains at the x extremes (the disc's horizontal diameter).

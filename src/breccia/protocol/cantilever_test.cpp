@@ -228,7 +228,7 @@ void CantileverTest::summarise(const Simulation& sim, nlohmann::json& out) const
            {"max_force_imbalance_before_peak", imbalance},
            {"note",
             "|F_pusher - F_vice| / F_pusher over the rows above 10 % of the largest force, "
-            "up to it (limit 0.05, as the platens' of physics.md §6.1)"}}},
+            "up to it (limit 0.05, as the platens' of docs/physics.md §6.1)"}}},
          {"lever_m", free_length_},
          {"lever_note", "from the vice's edge to the rod's axis"},
          {"clamp_length_m", p_.clamp_length},

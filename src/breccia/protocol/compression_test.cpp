@@ -249,7 +249,7 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
       }
     }
   }
-  // Axial loading from here: the reference state of analysis.md §1.1.
+  // Axial loading from here: the reference state of docs/analysis.md §1.1.
   h0_ = height(sim);
   z0_ = sim.walls()[bottom_].point[axis_];
   widths(sim, w0_);

@@ -1,12 +1,12 @@
 #pragma once
-// Compression between two rigid platens (physics.md §6.1): unconfined (UCS), or confined at a
+// Compression between two rigid platens (docs/physics.md §6.1): unconfined (UCS), or confined at a
 // constant confining stress: triaxial in 3D by servo-controlled lateral walls (§6.2; four plane
 // walls around a prism, or a cylindrical wall around a cylinder) and biaxial in 2D by flexible
 // membranes on the outermost grain chains (§6.3, boundary/membrane.hpp) or two servo walls.
 // Stages: consolidation (platens and lateral walls servo to sigma_3 until steady), then axial
 // loading at a prescribed platen speed reached through a cosine ramp, stopping at a maximum strain
 // or once the stress has fallen to a fraction of the peak. Axis: z in 3D, y in 2D.
-// Stresses and strains follow analysis.md §1.1, referred to the start of axial loading.
+// Stresses and strains follow docs/analysis.md §1.1, referred to the start of axial loading.
 #include <array>
 #include <cstddef>
 #include <memory>
@@ -114,7 +114,7 @@ class PlatenCompression final : public Protocol {
   std::size_t bottom_ = 0, top_ = 0;
   std::vector<std::size_t> side_;  // lateral walls: x0, x1, y0, y1 (prism) or the cylinder
   Vec3 centre_;                    // cylinder axis foot (x, y)
-  // Unconfined: boundary particles that measure the lateral strain (analysis.md §1.1).
+  // Unconfined: boundary particles that measure the lateral strain (docs/analysis.md §1.1).
   std::vector<std::uint32_t> face_[4];  // x-, x+, y-, y+ (prism) or face_[0] = outer shell
   double h0_ = 0.0, area0_ = 0.0, w0_[2] = {0.0, 0.0}, z0_ = 0.0;
   // Gauges: the grain layers centred at 1/4 and 3/4 of the height (one largest radius either
@@ -162,13 +162,14 @@ template <class P>
 constexpr std::array<ParamField<P>, 2> confining_fields(std::string_view walls) {
   return {{{"confining_stress", "Pa", &P::confining_stress, 0, 1e10, false, true, walls},
            {"servo_relaxation", "-", &P::servo_relaxation, 0, 1, false, true,
-            "alpha_s of the wall servo (physics.md §6.2)"}}};
+            "alpha_s of the wall servo (docs/physics.md §6.2)"}}};
 }
 
 struct UcsTest {
   static constexpr std::string_view name = "ucs";
   static constexpr std::string_view summary =
-      "Uniaxial compression between two frictionless rigid platens (physics.md §6.1, analysis.md "
+      "Uniaxial compression between two frictionless rigid platens (docs/physics.md §6.1, "
+      "docs/analysis.md "
       "§1), 3D or 2D; the unconfined compressive strength and the ISRM moduli.";
   struct Params {
     double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
@@ -192,12 +193,12 @@ struct ConfinedCompressionTest {
   static constexpr std::string_view summary =
       Dim == 3 ? "Triaxial compression (3D): the sample is consolidated to sigma_3 with the "
                  "platens and lateral walls servo-controlled (four plane walls around a prism, a "
-                 "cylindrical wall around a cylinder; physics.md §6.2), then loaded axially "
+                 "cylindrical wall around a cylinder; docs/physics.md §6.2), then loaded axially "
                  "while the lateral walls hold sigma_3."
                : "Biaxial compression (2D, seed 002): consolidation to sigma_3 with "
                  "servo-controlled platens, then axial loading at constant platen speed to "
                  "max_strain (10.3 %) while flexible membranes on the outermost grain chains "
-                 "hold sigma_3 on the sides (physics.md §6.3; membrane = false: "
+                 "hold sigma_3 on the sides (docs/physics.md §6.3; membrane = false: "
                  "servo-controlled side walls, §6.2).";
   // The biaxial test is seed 002's: loaded to 10.3 % axial strain whatever the peak, so that the
   // post-peak stages, the shear band and the energy partition are all recorded.
@@ -216,11 +217,12 @@ struct ConfinedCompressionTest {
           "sigma_3 held by the membranes (or the side walls with membrane = false)");
       return compression_fields<Params, 3>(std::array<ParamField<Params>, 3>{
           c[0], c[1],
-          ParamField<Params>{"membrane", "-", &Params::membrane, 0, 0, true, true,
-                             "flexible membranes (physics.md §6.3): sigma_3 acts as a follower "
-                             "load per unit length on the outermost grain chain of each side, "
-                             "found again every step; false: rigid side walls servo-controlled "
-                             "to sigma_3 (servo_relaxation)"}});
+          ParamField<Params>{
+              "membrane", "-", &Params::membrane, 0, 0, true, true,
+              "flexible membranes (docs/physics.md §6.3): sigma_3 acts as a follower "
+              "load per unit length on the outermost grain chain of each side, "
+              "found again every step; false: rigid side walls servo-controlled "
+              "to sigma_3 (servo_relaxation)"}});
     }
   }
   static void check(const Params&, const SampleInfo& s, const std::string& where) {

@@ -54,7 +54,7 @@ struct SampleInfo {
   // Generated samples: the requested size (a slab's thickness is its height) and the largest
   // grain radius (0 when not known before the sample is built).
   double diameter = 0.0, height = 0.0, r_max = 0.0;
-  // The run's mass scaling (physics.md §1.5): dynamic tests measure inertia and refuse it.
+  // The run's mass scaling (docs/physics.md §1.5): dynamic tests measure inertia and refuse it.
   double density_scaling = 1.0;
 };
 
@@ -76,7 +76,7 @@ inline SampleBounds sample_bounds(const ParticleStore& p) {
   return b;
 }
 
-// The smallest stiffness a wall servo divides by (physics.md §6.2): one wall contact of a
+// The smallest stiffness a wall servo divides by (docs/physics.md §6.2): one wall contact of a
 // mean-size grain at a small overlap, so that a wall without contacts still moves at a bounded
 // speed.
 inline double smallest_wall_stiffness(const Simulation& sim) {

@@ -456,7 +456,7 @@ json stages_summary(const FailureInputs& in, const analysis::Stages& stages,
                   {"b_value_flag", bs.flag}});
   }
   return {{"method",
-           "analysis.md §8: 5-sample smoothing, reference line over 20-50 % of the peak, 2 % "
+           "docs/analysis.md §8: 5-sample smoothing, reference line over 20-50 % of the peak, 2 % "
            "deviation, end of drop at residual + 10 % of the drop"},
           {"linear_limit_strain", jnum(stages.linear_limit)},
           {"peak_strain", jnum(stages.peak)},
@@ -603,7 +603,7 @@ json continuum_estimates(const FailureInputs& in, const Table& hist, std::size_t
           {"method",
            "W = V0 (int sigma_1 d eps_a + k sigma_3 d eps_lat) with nominal stresses; "
            "u_e = [sigma_1^2 + 2 sigma_3^2 - 2 nu (2 sigma_1 sigma_3 + sigma_3^2)] / 2E with "
-           "E_t50 and nu of this test (analysis.md §2.3)"}};
+           "E_t50 and nu of this test (docs/analysis.md §2.3)"}};
 }
 
 // The energy budget at the test's landmarks (§2): crack initiation (5 % of the cracks at the
@@ -638,7 +638,7 @@ json energy_budget_summary(const fs::path& folder, const FailureInputs& in) {
       rel_max = std::max(rel_max, std::abs(hist.at(r, "energy_residual_relative")));
   json out = {{"convention",
                "cumulative from the engine's first step (consolidation included); residual = "
-               "work in - change of stored energy - dissipated (physics.md §2.4)"},
+               "work in - change of stored energy - dissipated (docs/physics.md §2.4)"},
               {"residual_relative_at_end", rel_end},
               {"residual_relative_max_after_1pct_work", rel_max},
               {"classification", rel_max <= 0.01   ? "good"

@@ -1,5 +1,5 @@
 #pragma once
-// Post-test failure analysis of a compression run (analysis.md §2-§9), written into the run
+// Post-test failure analysis of a compression run (docs/analysis.md §2-§9), written into the run
 // folder: the crack catalogue with its derived fields (strain, stage, event), the
 // acoustic-emission event catalogue (events.csv), the indicator series over strain
 // (indicators.csv), moving-window b-values and D2 (b_value_windows.csv, d2_windows.csv), the

@@ -62,8 +62,8 @@ json nan_null(double v) {
   return std::isfinite(v) ? json(v) : json(nullptr);
 }
 
-// v_S for the event duration (analysis.md §4.1), fixed at the first crack: sqrt(G / rho) with E and
-// nu fitted over the rows recorded so far above 20 % of the current peak (the sample is still
+// v_S for the event duration (docs/analysis.md §4.1), fixed at the first crack: sqrt(G / rho) with
+// E and nu fitted over the rows recorded so far above 20 % of the current peak (the sample is still
 // intact), and rho the (scaled) grain density times (1 - n0).
 void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
   const auto& s = L.series;
@@ -188,7 +188,7 @@ struct LoopEnd {
 };
 
 // One history row: the tables (flushed, so an interrupted run keeps them), the analysed series,
-// the quality monitors (physics.md §6.1) and the snapshot when its strain is due.
+// the quality monitors (docs/physics.md §6.1) and the snapshot when its strain is due.
 void record_row(const ExperimentSpec& spec, Session& ss, const AxialState& a) {
   const Simulation& sim = ss.sim;
   LoopState& L = ss.loop;
@@ -294,7 +294,7 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
 }
 
 // The quality monitors over the pre-peak rows once the load exceeds 10 % of the peak (the
-// ramp-up start is excluded), judged against physics.md §6.1's limits.
+// ramp-up start is excluded), judged against docs/physics.md §6.1's limits.
 struct QualityVerdict {
   double imbalance_pre = 0.0, ke_ratio_pre = 0.0, confine_err_pre = 0.0, confine_err_all = 0.0;
   // Before the first crack, kinetic energy comes from the loading alone; after, breaking bonds
@@ -548,9 +548,9 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
     warnings.push_back(w);
   }
   json summary = run_summary(spec, ss, result, an, q, warnings, manifest);
-  // Failure analysis: events, indicators, stages, fragments, energy budget (analysis.md §2-§9).
-  // A signal stops it between its stages: the loading's tables are whole, the summary is not
-  // written, and the run is marked interrupted.
+  // Failure analysis: events, indicators, stages, fragments, energy budget (docs/analysis.md
+  // §2-§9). A signal stops it between its stages: the loading's tables are whole, the summary is
+  // not written, and the run is marked interrupted.
   json failure;
   try {
     failure = write_failure_analysis(

@@ -78,7 +78,7 @@ SweepResult run_sweep(const ExperimentSpec& spec, const std::vector<double>& con
 
 // Runs the experiment's compression test once per strain rate (1/s) on copies of one sample, the
 // platens' speed set from the sample's length (rate = 2 v / L); writes a sweep folder with the
-// runs, their failure planes and damage ratios, and the fit of UCS(rate) (analysis.md §11).
+// runs, their failure planes and damage ratios, and the fit of UCS(rate) (docs/analysis.md §11).
 // Refuses density scaling: a rate study measures the inertia it would scale.
 SweepResult run_rate_sweep(const ExperimentSpec& spec, const std::vector<double>& strain_rates,
                            const RunOptions& options);

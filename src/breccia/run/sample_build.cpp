@@ -354,7 +354,7 @@ Built assemble(const ExperimentSpec& s, const std::function<void(const std::stri
   json report;
   SampleInfo info;
   GeometryData g = load_sample(s, report, info, log);
-  // Density scaling (physics.md §1.5): masses and inertias grow, so does the stable time step.
+  // Density scaling (docs/physics.md §1.5): masses and inertias grow, so does the stable time step.
   for (ParticleSpec& q : g.particles) q.density *= s.density_scaling;
   ParticleStore ps = g.make_store(s.grain_body());
   EngineConfig cfg = s.engine;

@@ -350,7 +350,7 @@ json rate_fit_json(const analysis::ExponentialRateFit& f) {
           {"points", f.points},
           {"method",
            "UCS = a exp(b rate): least squares of ln UCS on the rate (start), then "
-           "Levenberg-Marquardt on the untransformed residuals (analysis.md §11); a is the "
+           "Levenberg-Marquardt on the untransformed residuals (docs/analysis.md §11); a is the "
            "quasi-static strength"},
           {"a_pa", nan_null(f.valid ? f.a : std::nan(""))},
           {"b_s", nan_null(f.valid ? f.b : std::nan(""))},

@@ -1,4 +1,4 @@
-// Radius expansion in a rigid vessel (physics.md §7.2; Potyondy & Cundall 2004, "material
+// Radius expansion in a rigid vessel (docs/physics.md §7.2; Potyondy & Cundall 2004, "material
 // genesis"), frictionless throughout, in four stages:
 //  1. growth: the grains, placed shrunk at random, grow at a constant rate to the radii of the
 //     target porosity (a porosity denser than jamming over-compresses the packing);

@@ -1,6 +1,6 @@
-// Floater elimination (physics.md §7.2 step 5), with floaters counted by their bonded neighbours
-// (other grains within the bond gap tolerance; vessel walls do not count, since the test removes
-// them or turns them into platens). Potyondy & Cundall grow a floater in small radius
+// Floater elimination (docs/physics.md §7.2 step 5), with floaters counted by their bonded
+// neighbours (other grains within the bond gap tolerance; vessel walls do not count, since the test
+// removes them or turns them into platens). Potyondy & Cundall grow a floater in small radius
 // steps, cycling in between, until it has N_f contacts; here each floater is placed at once where
 // that growth ends: the largest sphere that fits its cage, i.e. tangent to D + 1 of the nearest
 // grains and walls (the fitters of §7.4). It then touches them without overlap, so nothing else

@@ -1,4 +1,4 @@
-// Constructive insertion (physics.md §7.4; Place & Mora 2001, ESyS-Particle's GenGeo
+// Constructive insertion (docs/physics.md §7.4; Place & Mora 2001, ESyS-Particle's GenGeo
 // InsertGenerator): no dynamics. A few grains are seeded at random, then each new grain is fitted
 // into the hole nearest a random point, tangent to the D + 1 nearest grains, or to D grains and
 // the nearest vessel wall; it is kept when its radius lies in [r_min, r_max] and it overlaps

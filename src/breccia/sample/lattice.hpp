@@ -1,7 +1,7 @@
 #pragma once
-// Regular packings for verification and benchmarks (physics.md §7.5): face-centred cubic blocks of
-// equal spheres and hexagonal blocks of equal disks, touching exactly. Tags run from 1 in storage
-// order, which is spatial (rows, then layers), so neighbours are close in memory.
+// Regular packings for verification and benchmarks (docs/physics.md §7.5): face-centred cubic
+// blocks of equal spheres and hexagonal blocks of equal disks, touching exactly. Tags run from 1 in
+// storage order, which is spatial (rows, then layers), so neighbours are close in memory.
 #include "breccia/state/particle_store.hpp"
 
 namespace breccia {

@@ -253,7 +253,7 @@ void check_settings(const PackingSettings& s) {
                      num(rmax) + " m",
                      "the sample (" + num(smallest) +
                          " m across at its narrowest) must be at least 4 largest radii across; "
-                         "physics.md §7.1 recommends 20-30 particles across");
+                         "docs/physics.md §7.1 recommends 20-30 particles across");
 }
 
 // Radius moments of the packed particles.

@@ -1,5 +1,5 @@
 #pragma once
-// Synthetic rock samples (physics.md §7): a packing of spheres (3D) or disks (2D) in a vessel,
+// Synthetic rock samples (docs/physics.md §7): a packing of spheres (3D) or disks (2D) in a vessel,
 // then bonds between every pair with a gap within the tolerance (§7.6). Three ways to pack:
 //
 //  - expansion (default; PFC / Potyondy & Cundall 2004 material genesis, §7.2): radii drawn for a
@@ -36,7 +36,7 @@ struct PackingSettings {
   // rectangle (2D): width (x) and height (y). Lowest corner (or the axis foot) at the origin.
   double width = 0.0, depth = 0.0, height = 0.0, diameter = 0.0;
   double thickness = 1.0;  // 2D thickness (disks), or planar spheres' effective thickness
-  PlanarBody planar_body = PlanarBody::Disk;  // 2D grain mass and inertia (physics.md §3.4)
+  PlanarBody planar_body = PlanarBody::Disk;  // 2D grain mass and inertia (docs/physics.md §3.4)
   RadiusDistribution radii;
   double density = 2650.0;
   PackingMethod method = PackingMethod::Expansion;

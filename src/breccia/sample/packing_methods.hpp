@@ -26,7 +26,7 @@ PackedState pack_by_preconsolidation(const PackingSettings& s, const Log& log);
 
 // --- shared pieces ---
 
-// Radii for the target porosity of the vessel (physics.md §7.1), largest first.
+// Radii for the target porosity of the vessel (docs/physics.md §7.1), largest first.
 std::vector<double> draw_radii(const PackingSettings& s, const Region& region);
 
 // Random sequential placement without overlap at `shrink` times the radii (§7.2 step 2). The

@@ -1,9 +1,9 @@
-// 2D preconsolidation between particle rows (physics.md §7.3; RICEBAL practice as in seed 002,
+// 2D preconsolidation between particle rows (docs/physics.md §7.3; RICEBAL practice as in seed 002,
 // where the rows are pushed in until the sample carries 10 MPa). The disks, drawn for the target
 // porosity of the width x height box, are placed shrunk between four rows of fixed disks and
 // grown to size, frictionless, as in the expansion method; then the two side rows are driven by
-// a servo (physics.md §6.2) until they carry the preconsolidation stress, the end rows held. The
-// rows are rough walls: the grains against them stay as disordered as the bulk. The sample is
+// a servo (docs/physics.md §6.2) until they carry the preconsolidation stress, the end rows held.
+// The rows are rough walls: the grains against them stay as disordered as the bulk. The sample is
 // bonded in this compacted state; when the test starts it unloads to its test stress and the
 // bonds take up the difference, the locked-in stress of a cemented rock (§7.3 step 7). Floaters
 // are then placed snug in their cages as in the expansion method.
@@ -153,7 +153,7 @@ RowServo servo_side_rows(Simulation& sim, const Rows& rows, std::size_t n, doubl
   const double rw = rows.radius;
   const double area =
       (P.pos_rad[rows.left.back()].x.y - P.pos_rad[rows.left.front()].x.y - 2.0 * rw) * thickness;
-  // Half the row's disks taken as its contacts (physics.md §6.2 needs their number).
+  // Half the row's disks taken as its contacts (docs/physics.md §6.2 needs their number).
   const double contacts = static_cast<double>(std::max<std::size_t>(1, rows.left.size() / 2));
   const double kn = row_contact_stiffness(sim, rw, thickness, target * area / contacts);
   auto width = [&] {
@@ -176,7 +176,7 @@ RowServo servo_side_rows(Simulation& sim, const Rows& rows, std::size_t n, doubl
                ? held + 1
                : 0;
     if (held >= kChecksHeld) break;
-    // Half the row's disks taken as its contacts (physics.md §6.2 needs their number).
+    // Half the row's disks taken as its contacts (docs/physics.md §6.2 needs their number).
     // Proportional-integral: a packing that creeps under load (frictionless grains rearranging)
     // leaves a proportional servo short of its target for good (Hertz grains: 9.25 of 10 MPa
     // after 400,000 steps); each check adds kIntegralShare of the correction to the integral.

@@ -78,7 +78,8 @@ double RadiusDistribution::draw(std::uint64_t seed, std::uint64_t k) const {
     case Kind::Uniform:
       return r_min + uniform01(seed, kRadiusStream, k) * (r_max - r_min);
     case Kind::Lognormal: {
-      // ln R ~ N(mu, s^2) with the moments of R itself (physics.md §7.1), truncated by redrawing.
+      // ln R ~ N(mu, s^2) with the moments of R itself (docs/physics.md §7.1), truncated by
+      // redrawing.
       const double s2 = std::log1p(sd * sd / (mean * mean));
       const double mu = std::log(mean) - 0.5 * s2;
       for (std::uint64_t t = 0; t < 10000; ++t) {

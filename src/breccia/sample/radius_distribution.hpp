@@ -1,6 +1,6 @@
 #pragma once
-// Particle-size distributions for synthetic samples (physics.md §7.1), reproducible from a seed:
-// uniform in radius, lognormal truncated to [r_min, r_max], or discrete size classes given by
+// Particle-size distributions for synthetic samples (docs/physics.md §7.1), reproducible from a
+// seed: uniform in radius, lognormal truncated to [r_min, r_max], or discrete size classes given by
 // radius and mass fraction (a grain-size curve).
 #include <cstdint>
 #include <string>
@@ -28,7 +28,7 @@ struct RadiusDistribution {
   static const char* name(Kind k);
 };
 
-// Radii drawn in order until their solid volume reaches `solid_volume` (physics.md §7.1: the
+// Radii drawn in order until their solid volume reaches `solid_volume` (docs/physics.md §7.1: the
 // particle count for a target porosity). 2D counts disk areas times `thickness`.
 std::vector<double> draw_radii_for_volume(const RadiusDistribution& dist, std::uint64_t seed,
                                           double solid_volume, bool planar, double thickness,

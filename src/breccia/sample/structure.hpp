@@ -1,8 +1,8 @@
 #pragma once
-// What a packed and bonded sample looks like: porosity with overlap corrections (physics.md §7.7),
-// contact and bond coordination, floaters, and the profile in slices along the vessel's profile
-// axis (Region::profile_axis: the loading axis, or a slab's longest side), bonds per grain and
-// solid fraction per eighth, with the homogeneity check the sample bars use.
+// What a packed and bonded sample looks like: porosity with overlap corrections (docs/physics.md
+// §7.7), contact and bond coordination, floaters, and the profile in slices along the vessel's
+// profile axis (Region::profile_axis: the loading axis, or a slab's longest side), bonds per grain
+// and solid fraction per eighth, with the homogeneity check the sample bars use.
 #include <cstdint>
 #include <utility>
 #include <vector>

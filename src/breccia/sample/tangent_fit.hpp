@@ -1,8 +1,8 @@
 #pragma once
 // Spheres (3D) and circles (2D, in the x-y plane) tangent to given spheres and planes: the
-// Apollonius problem of physics.md §7.4, as ESyS-Particle's GenGeo fitters pose it. Subtracting
-// the tangency equation of one reference sphere from the others makes them linear in the centre
-// (and the radius); the reference equation then gives a quadratic.
+// Apollonius problem of docs/physics.md §7.4, as ESyS-Particle's GenGeo fitters pose it.
+// Subtracting the tangency equation of one reference sphere from the others makes them linear in
+// the centre (and the radius); the reference equation then gives a quadratic.
 #include <optional>
 #include <vector>
 
@@ -25,7 +25,7 @@ struct FittedSphere {
 
 // Spheres (circles) of free radius tangent to D + 1 surfaces, at least one of them a sphere.
 // Every positive-radius solution, smallest radius first. Empty when the system is singular
-// (condition number above 1e8, physics.md §7.4).
+// (condition number above 1e8, docs/physics.md §7.4).
 std::vector<FittedSphere> fit_free_radius(const std::vector<Surface>& surfaces, bool planar);
 
 // Centres of a sphere (circle) of the given radius tangent to D surfaces, at least one of them a

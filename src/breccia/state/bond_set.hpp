@@ -1,7 +1,7 @@
 #pragma once
-// The bonds of one law: contiguous arrays sorted by particle index pair (design.md). Broken bonds
-// are flagged in the step and compacted at the next neighbour rebuild. Bonds are evaluated in the
-// engine's single pass over interacting pairs (one geometry, one result slot per pair), through
+// The bonds of one law: contiguous arrays sorted by particle index pair (ARCHITECTURE.md). Broken
+// bonds are flagged in the step and compacted at the next neighbour rebuild. Bonds are evaluated in
+// the engine's single pass over interacting pairs (one geometry, one result slot per pair), through
 // `bond_of_pair`, rebuilt with the neighbour list.
 #include <cstdint>
 #include <vector>

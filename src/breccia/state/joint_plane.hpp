@@ -1,8 +1,8 @@
 #pragma once
-// Where the joints of a sample lie (physics.md §5, "Assigning smooth joints"): one plane through
-// `point` with unit `normal`, limited to a disc of `radius` (a penny-shaped joint; a segment of
-// half-length `radius` in 2D), or a set of parallel planes `spacing` apart. A particle pair is
-// cut by the joint when its branch segment crosses a plane inside the plane's extent.
+// Where the joints of a sample lie (docs/physics.md §5, "Assigning smooth joints"): one plane
+// through `point` with unit `normal`, limited to a disc of `radius` (a penny-shaped joint; a
+// segment of half-length `radius` in 2D), or a set of parallel planes `spacing` apart. A particle
+// pair is cut by the joint when its branch segment crosses a plane inside the plane's extent.
 #include <cmath>
 #include <limits>
 

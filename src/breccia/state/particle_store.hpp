@@ -1,6 +1,6 @@
 #pragma once
-// The particle state: plain arrays grouped by how the hot loops read them (design.md, "Data layout
-// for speed"). Identity is the stable tag; indices are positions in these arrays.
+// The particle state: plain arrays grouped by how the hot loops read them (ARCHITECTURE.md,
+// "Layers"). Identity is the stable tag; indices are positions in these arrays.
 #include <cstdint>
 #include <string>
 #include <unordered_map>
@@ -16,7 +16,7 @@ class ArchiveReader;
 
 enum class Dimension : std::uint8_t { Three = 3, Two = 2 };
 
-// How a 2D particle's mass and inertia are computed (physics.md §1.2, §3.4).
+// How a 2D particle's mass and inertia are computed (docs/physics.md §1.2, §3.4).
 enum class PlanarBody : std::uint8_t {
   Disk,          // disk of thickness t: m = rho pi R^2 t, I = m R^2 / 2 (default)
   PlanarSphere,  // sphere confined to the plane (RICEBAL-style; needed by planar Hertz contacts)
