@@ -1,8 +1,8 @@
 #pragma once
 // The engine: particles, bonds of every registered law, the contact law, walls, neighbour search
-// and the leapfrog integrator with local damping (physics.md §1-§4, §6.1). It knows nothing about
-// lab tests: protocols drive it through walls, driven particles and external forces, and read it
-// through const views, the crack catalogue and the energy ledger.
+// and the leapfrog integrator with local damping (docs/physics.md §1-§4, §6.1). It knows nothing
+// about lab tests: protocols drive it through walls, driven particles and external forces, and read
+// it through const views, the crack catalogue and the energy ledger.
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -34,8 +34,8 @@ struct EngineConfig {
   std::uint64_t energy_interval = 100;  // steps between energy-ledger samples (0 = on demand)
 };
 
-// One sample of the energy budget at time t_n (physics.md §2.4). Cumulative terms count from the
-// start of the run; the balance residual is taken against the first sample (the baseline).
+// One sample of the energy budget at time t_n (docs/physics.md §2.4). Cumulative terms count from
+// the start of the run; the balance residual is taken against the first sample (the baseline).
 struct EnergyLedger {
   std::uint64_t step = 0;
   double time = 0.0;
@@ -117,13 +117,14 @@ struct IntegrateBlock {
   double damping_boundary = 0.0, external_boundary = 0.0;
 };
 
-// Stress carried by the pair forces (physics.md §6.5): the sum over interacting pairs of l (x) F,
-// with l = x2 - x1 and F the force on particle 2, so a repulsion counts compression-positive.
+// Stress carried by the pair forces (docs/physics.md §6.5): the sum over interacting pairs of l (x)
+// F, with l = x2 - x1 and F the force on particle 2, so a repulsion counts compression-positive.
 // Divide by the sample volume for the average stress tensor.
 struct PairStress {
-  std::array<double, 9> lf{};     // row-major sum of l_i F_j, N m
-  double radius_stiffness = 0.0;  // sum over touching pairs of k_n (R1 + R2) d (physics.md §7.2)
-  std::size_t touching = 0;       // pairs in contact (overlapping), bonded or not
+  std::array<double, 9> lf{};  // row-major sum of l_i F_j, N m
+  double radius_stiffness =
+      0.0;                   // sum over touching pairs of k_n (R1 + R2) d (docs/physics.md §7.2)
+  std::size_t touching = 0;  // pairs in contact (overlapping), bonded or not
   std::vector<std::uint32_t> coordination;  // touching pairs per particle
 
   double mean(int dimension, double volume) const noexcept {
@@ -145,16 +146,16 @@ class Simulation {
   std::uint64_t add_bond(std::uint64_t tag1, std::uint64_t tag2);
   template <class Law>
   void set_bond_params(const typename Law::Params& p);
-  // Bonds every pair whose gap is at most gap_tolerance (physics.md §7.6). Returns the count.
+  // Bonds every pair whose gap is at most gap_tolerance (docs/physics.md §7.6). Returns the count.
   template <class Law>
   std::size_t bond_touching_pairs(double gap_tolerance);
   // Adds a wall; before initialise() or between two steps (its contacts are then found at once;
   // the time step stays as estimated: a wall contact adds about one grain contact's stiffness
   // to the particles it touches, well inside the safety factor's margin).
   std::size_t add_wall(Wall w);
-  // Adds a joint plane (physics.md §5): at initialise() the bonds it cuts are replaced by joints
-  // of the joint law (bonded joints when its parameters say so), and every neighbour pair it cuts
-  // that is not yet in contact becomes an unbonded joint, at every neighbour-list rebuild.
+  // Adds a joint plane (docs/physics.md §5): at initialise() the bonds it cuts are replaced by
+  // joints of the joint law (bonded joints when its parameters say so), and every neighbour pair it
+  // cuts that is not yet in contact becomes an unbonded joint, at every neighbour-list rebuild.
   void add_joint_plane(JointPlane plane);
   template <class Law>
   void set_joint_params(const typename Law::Params& p);
@@ -167,8 +168,8 @@ class Simulation {
   void run(std::uint64_t steps);
   void request_energy_sample() noexcept { sample_requested_ = true; }
   // Multiplies every radius by `factor` at constant density (masses follow). For packing by
-  // radius expansion (physics.md §7.2) only: it is refused once bonds exist, and the energy ledger
-  // restarts its baseline because stored energy changes without work.
+  // radius expansion (docs/physics.md §7.2) only: it is refused once bonds exist, and the energy
+  // ledger restarts its baseline because stored energy changes without work.
   void scale_radii(double factor);
   // Sets one particle's radius at constant density (packing: growing floaters). Same rules as
   // scale_radii.
@@ -215,7 +216,7 @@ class Simulation {
   BondModuli bond_moduli(std::string_view law) const noexcept;
   std::size_t active_contacts() const noexcept;
   std::size_t neighbour_pairs() const noexcept;
-  // Pair forces of the last step as a stress sum and contact counts (physics.md §6.5, §7.2).
+  // Pair forces of the last step as a stress sum and contact counts (docs/physics.md §6.5, §7.2).
   PairStress pair_stress() const;
   std::uint64_t neighbour_rebuilds() const noexcept { return rebuilds_; }
   // External per-particle load for the coming step (membranes, follower loads); its work is
@@ -237,12 +238,20 @@ class Simulation {
   explicit Simulation(RestoreTag) {}
   template <class Archive>
   void transfer(Archive& a);  // the checkpoint's field list (engine/checkpoint.cpp)
+  // The stages of a step, each in its own file of engine/: the neighbour list (neighbours.cpp),
+  // the pass over pairs (pair_pass.cpp), the walls (wall_pass.cpp), the integrator
+  // (integrator.cpp) and the ledger's stored energies (energy_ledger.cpp). Each dispatches once on
+  // the contact law in use and runs its loops for that law (`*_for`), without virtual calls.
+  void rebuild();
+  void compute_pairs();
+  void compute_walls();
+  void integrate(bool sample);
+  void sample_stored_energy();
+  void advance_walls();
   template <class CL>
-  void step_impl(ContactSet<CL>& contacts);
+  void rebuild_for(ContactSet<CL>& contacts);
   template <class CL>
-  void rebuild(ContactSet<CL>& contacts);
-  template <class CL>
-  void compute_pairs(ContactSet<CL>& contacts);
+  void compute_pairs_for(ContactSet<CL>& contacts);
   template <class Law>
   void process_failure(BondSet<Law>& set, std::uint32_t bond, const BondFailure& info);
   template <class Law>
@@ -256,14 +265,15 @@ class Simulation {
     std::uint32_t index = 0;
     std::apply([&](auto&... set) { ((index++ == joint_law_ ? f(set) : void()), ...); }, joints_);
   }
+  void assign_joints();
   template <class CL>
-  void assign_joints(ContactSet<CL>& contacts);
+  void assign_joints_for(ContactSet<CL>& contacts);
   template <class CL>
-  void compute_walls(ContactSet<CL>& contacts);
+  void compute_walls_for(ContactSet<CL>& contacts);
   template <class CL>
-  void integrate(ContactSet<CL>& contacts, bool sample);
+  void integrate_for(ContactSet<CL>& contacts, bool sample);
   template <class CL>
-  void sample_stored_energy(ContactSet<CL>& contacts);
+  void sample_stored_energy_for(ContactSet<CL>& contacts);
   template <class Law>
   void install_bonds(BondSet<Law>& set);
   template <class Law>
@@ -283,8 +293,10 @@ class Simulation {
     else
       return {};
   }
-  // Geometry of particle pair (i, j) at the current state (hot path: inline).
-  PairGeometry geometry(std::uint32_t i, std::uint32_t j) const noexcept {
+  // Geometry of particle pair (i, j) at the current state. Kept out of line: inlined into the
+  // pair pass it made that loop 15-20 % slower (bench_engine, 100k-grain bonded FCC block,
+  // elastic phase, one thread; perf showed the whole pass in one function).
+  [[gnu::noinline]] PairGeometry geometry(std::uint32_t i, std::uint32_t j) const noexcept {
     const PosRad& a = p_.pos_rad[i];
     const PosRad& b = p_.pos_rad[j];
     PairGeometry g =

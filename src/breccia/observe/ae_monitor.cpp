@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
+#include "breccia/io/experiment.hpp"
 
 namespace breccia {
 
@@ -85,6 +87,41 @@ void AeMonitor::bind_clusterer() {
   clusterer_->closed = [this](std::size_t root) { close(root); };
 }
 
+std::unique_ptr<Recorder> AeMonitor::create(const RecorderSetup& setup) {
+  const ExperimentSpec& spec = setup.spec;
+  double r_max = 0.0;
+  const ParticleStore& p = setup.sim.particles();
+  for (std::size_t i = 0; i < setup.test.rock_particles(setup.sim); ++i)
+    r_max = std::max(r_max, p.pos_rad[i].r);
+  AeSettings s;
+  s.source_radius = spec.ae_source_radius > 0.0 ? spec.ae_source_radius : 3.0 * (2.0 * r_max);
+  s.shear_wave_speed = spec.ae_shear_wave_speed;
+  s.moment_tensors = spec.ae_moment_tensors;
+  s.moment_interval = static_cast<std::uint64_t>(spec.ae_moment_interval);
+  s.linkage =
+      spec.ae_clustering == "grain" ? analysis::Linkage::Grain : analysis::Linkage::SourceRadius;
+  auto ae = std::make_unique<AeMonitor>(s);
+  if (spec.ae_shear_wave_speed > 0.0) ae->configure(spec.ae_shear_wave_speed);
+  return ae;
+}
+
+std::unique_ptr<Recorder> AeMonitor::restore(const RecorderSetup&, ArchiveReader& a) {
+  auto ae = std::make_unique<AeMonitor>();
+  ae->load(a);
+  return ae;
+}
+
+void AeMonitor::after_step(const Simulation& sim, const Protocol& test) {
+  if (sim.cracks().size() <= cracks_seen() && !has_open_events()) return;
+  const AxialState now = test.measure(sim);
+  if (!configured()) {
+    if (!wave_speed_source_)
+      throw std::logic_error("AeMonitor: no shear-wave speed and no source to estimate it");
+    configure(wave_speed_source_());
+  }
+  after_step(sim, now.strain, now.deviatoric);
+}
+
 AeMonitor& AeMonitor::operator=(AeMonitor&& o) noexcept {
   s_ = o.s_;
   duration_ = o.duration_;
@@ -98,6 +135,7 @@ AeMonitor& AeMonitor::operator=(AeMonitor&& o) noexcept {
   stamp_ = o.stamp_;
   steps_ = o.steps_;
   grid_ = std::move(o.grid_);
+  wave_speed_source_ = std::move(o.wave_speed_source_);
   bind_clusterer();  // the moved callbacks still point at `o`
   return *this;
 }

@@ -13,12 +13,14 @@
 // source. Likewise the kinetic-energy baseline of a monitored particle is read after that step.
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <vector>
 
 #include "breccia/analysis/ae_clustering.hpp"
 #include "breccia/engine/simulation.hpp"
+#include "breccia/observe/recorder.hpp"
 
 namespace breccia {
 
@@ -53,8 +55,13 @@ struct CrackContext {
   double fracture_energy = 0.0;  // J, docs/analysis.md §2.3
 };
 
-class AeMonitor {
+class AeMonitor : public Recorder {
  public:
+  static constexpr std::string_view kind = "ae monitor";
+  // Settings from the experiment's [ae] table, r_s from the sample's largest grain.
+  static std::unique_ptr<Recorder> create(const RecorderSetup& setup);
+  static std::unique_ptr<Recorder> restore(const RecorderSetup& setup, ArchiveReader& a);
+
   AeMonitor() = default;
   // `source_radius` resolved (> 0); clustering starts once the wave speed is set.
   explicit AeMonitor(AeSettings s) : s_(s) {}
@@ -83,6 +90,18 @@ class AeMonitor {
 
   void save(ArchiveWriter& a) const;
   void load(ArchiveReader& a);
+
+  // As a recorder: v_S comes from `source` at the first crack unless the experiment gave it (the
+  // run estimates it from the rows recorded so far).
+  void set_wave_speed_source(std::function<double()> source) {
+    wave_speed_source_ = std::move(source);
+  }
+  std::string_view name() const noexcept override { return kind; }
+  // Cheap unless bonds broke in the step or an event is open.
+  void after_step(const Simulation& sim, const Protocol& test) override;
+  void finish(const Simulation&) override { finish(); }
+  void save_state(ArchiveWriter& a) const override { save(a); }
+  std::vector<std::string> files() const override { return {}; }  // events.csv: the analysis
 
  private:
   struct Ref {
@@ -113,6 +132,7 @@ class AeMonitor {
   void build_grid(const Simulation& sim);
 
   AeSettings s_;
+  std::function<double()> wave_speed_source_;
   double duration_ = 0.0;
   std::optional<analysis::EventClusterer> clusterer_;
   std::map<std::size_t, Open> open_;  // by clusterer root

@@ -31,7 +31,7 @@ CsvFile::CsvFile(const std::string& path, std::uint64_t bytes) : path_(path) {
   if (!f_) throw InputError(path, "", "", "cannot append to the output file");
 }
 
-std::uint64_t CsvFile::bytes() {
+std::uint64_t CsvFile::bytes() const {
   flush();
   const long pos = f_ ? std::ftell(f_) : -1;
   if (pos < 0) throw InputError(path_, "", "", "cannot tell the position in the output file");
@@ -48,7 +48,7 @@ void CsvFile::write_line(const std::string& line) {
     throw InputError(path_, "", "", "cannot write the table: " + write_failure(errno));
 }
 
-void CsvFile::flush() {
+void CsvFile::flush() const {
   errno = 0;
   if (f_ && std::fflush(f_) != 0)
     throw InputError(path_, "", "", "cannot write the table: " + write_failure(errno));
@@ -97,6 +97,15 @@ std::vector<std::string> history_header(const std::vector<std::string>& extra) {
 
 }  // namespace
 
+std::unique_ptr<Recorder> HistoryRecorder::create(const RecorderSetup& setup) {
+  return std::make_unique<HistoryRecorder>((setup.folder / "history.csv").string(),
+                                           setup.test.history_columns());
+}
+
+std::unique_ptr<Recorder> HistoryRecorder::restore(const RecorderSetup& setup, ArchiveReader& a) {
+  return std::make_unique<HistoryRecorder>((setup.folder / "history.csv").string(), a);
+}
+
 HistoryRecorder::HistoryRecorder(const std::string& path, const std::vector<std::string>& extra)
     : csv_(path, history_header(extra)) {}
 
@@ -106,7 +115,7 @@ HistoryRecorder::HistoryRecorder(const std::string& path, ArchiveReader& a)
   a.value(tensile_);
 }
 
-void HistoryRecorder::save_state(ArchiveWriter& a) {
+void HistoryRecorder::save_state(ArchiveWriter& a) const {
   a.label("history");
   a.value(csv_.bytes());
   a.value(cracks_seen_);
@@ -179,6 +188,14 @@ std::vector<std::string> crack_columns() {
           "energy_twisting_j"};
 }
 
+std::unique_ptr<Recorder> CrackRecorder::create(const RecorderSetup& setup) {
+  return std::make_unique<CrackRecorder>((setup.folder / "cracks.csv").string());
+}
+
+std::unique_ptr<Recorder> CrackRecorder::restore(const RecorderSetup& setup, ArchiveReader& a) {
+  return std::make_unique<CrackRecorder>((setup.folder / "cracks.csv").string(), a);
+}
+
 CrackRecorder::CrackRecorder(const std::string& path) : csv_(path, crack_columns()) {}
 
 CrackRecorder::CrackRecorder(const std::string& path, ArchiveReader& a)
@@ -186,7 +203,7 @@ CrackRecorder::CrackRecorder(const std::string& path, ArchiveReader& a)
   a.value(written_);
 }
 
-void CrackRecorder::save_state(ArchiveWriter& a) {
+void CrackRecorder::save_state(ArchiveWriter& a) const {
   a.label("crack table");
   a.value(csv_.bytes());
   a.value(written_);

@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 #include <fmt/os.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/io/experiment.hpp"
 #include "breccia/io/text_file.hpp"
 
 namespace breccia {
@@ -66,15 +68,30 @@ void vector(std::string& s, const char* name, std::size_t n, F&& f) {
 
 }  // namespace
 
-SnapshotWriter::SnapshotWriter(std::string folder) : folder_(std::move(folder)) {
+std::unique_ptr<Recorder> SnapshotWriter::create(const RecorderSetup& setup) {
+  auto w = std::make_unique<SnapshotWriter>((setup.folder / "snapshots").string(),
+                                            setup.spec.snapshot_strain_interval);
+  w->write(setup.sim);  // the sample as loading begins
+  return w;
+}
+
+std::unique_ptr<Recorder> SnapshotWriter::restore(const RecorderSetup& setup, ArchiveReader& a) {
+  return std::make_unique<SnapshotWriter>((setup.folder / "snapshots").string(),
+                                          setup.spec.snapshot_strain_interval, a, setup.sim);
+}
+
+SnapshotWriter::SnapshotWriter(std::string folder, double interval)
+    : folder_(std::move(folder)), interval_(interval), next_strain_(interval) {
   std::error_code ec;
   fs::create_directories(folder_, ec);
   if (ec) throw InputError(folder_, "", "", "cannot create the snapshot folder: " + ec.message());
 }
 
-SnapshotWriter::SnapshotWriter(std::string folder, ArchiveReader& a, const Simulation& sim)
-    : SnapshotWriter(std::move(folder)) {
+SnapshotWriter::SnapshotWriter(std::string folder, double interval, ArchiveReader& a,
+                               const Simulation& sim)
+    : SnapshotWriter(std::move(folder), interval) {
   a.label("snapshots");
+  a.value(next_strain_);
   a.vector(times_);
   names_.resize(times_.size());
   for (std::string& n : names_) a.string(n);
@@ -92,9 +109,18 @@ SnapshotWriter::SnapshotWriter(std::string folder, ArchiveReader& a, const Simul
 
 void SnapshotWriter::save_state(ArchiveWriter& a) const {
   a.label("snapshots");
+  a.value(next_strain_);
   a.vector(times_);
   for (const std::string& n : names_) a.string(n);
   a.value(static_cast<std::uint64_t>(cracks_seen_));
+}
+
+void SnapshotWriter::at_row(const Simulation& sim, const Protocol&, const RecordedRow& row) {
+  const double strain = row.axial.strain;
+  if (interval_ <= 0.0 || strain < next_strain_) return;
+  write(sim);
+  // The next multiple of the interval above this strain (one snapshot per row at most).
+  next_strain_ = interval_ * (std::floor(strain / interval_) + 1.0);
 }
 
 void SnapshotWriter::write(const Simulation& sim) {
@@ -169,14 +195,14 @@ void SnapshotWriter::write(const Simulation& sim) {
 }
 
 void SnapshotWriter::write_collections() const {
-  for (const char* kind : {"particles", "bonds", "cracks"}) {
+  for (const char* set : {"particles", "bonds", "cracks"}) {
     std::string s =
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
     for (std::size_t k = 0; k < times_.size(); ++k)
-      s += fmt::format("<DataSet timestep=\"{:.9g}\" file=\"{}_{}.vtu\"/>\n", times_[k], kind,
+      s += fmt::format("<DataSet timestep=\"{:.9g}\" file=\"{}_{}.vtu\"/>\n", times_[k], set,
                        names_[k]);
     s += "</Collection>\n</VTKFile>\n";
-    put(fs::path(folder_) / (std::string(kind) + ".pvd"), s);
+    put(fs::path(folder_) / (std::string(set) + ".pvd"), s);
   }
 }
 

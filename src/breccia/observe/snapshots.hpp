@@ -10,22 +10,38 @@
 #include <vector>
 
 #include "breccia/engine/simulation.hpp"
+#include "breccia/observe/recorder.hpp"
 
 namespace breccia {
 
-class SnapshotWriter {
+// Snapshots are taken when loading begins, each time the axial strain passes a multiple of
+// `interval` (output.snapshot_strain_interval; 0 = none in between) and when loading ends.
+class SnapshotWriter : public Recorder {
  public:
-  explicit SnapshotWriter(std::string folder);
+  static constexpr std::string_view kind = "snapshots";
+  static std::unique_ptr<Recorder> create(const RecorderSetup& setup);
+  static std::unique_ptr<Recorder> restore(const RecorderSetup& setup, ArchiveReader& a);
+
+  explicit SnapshotWriter(std::string folder, double interval = 0.0);
   // Resumes the collections of a checkpoint; snapshots taken after it are dropped from them
   // (their files are overwritten by the next ones).
-  SnapshotWriter(std::string folder, ArchiveReader& a, const Simulation& sim);
-  void save_state(ArchiveWriter& a) const;
+  SnapshotWriter(std::string folder, double interval, ArchiveReader& a, const Simulation& sim);
   void write(const Simulation& sim);
   std::size_t count() const noexcept { return times_.size(); }
+
+  std::string_view name() const noexcept override { return kind; }
+  void at_row(const Simulation& sim, const Protocol&, const RecordedRow& row) override;
+  void finish(const Simulation& sim) override { write(sim); }
+  void save_state(ArchiveWriter& a) const override;
+  std::vector<std::string> files() const override {
+    return {"snapshots/particles.pvd", "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
+  }
 
  private:
   void write_collections() const;
   std::string folder_;
+  double interval_ = 0.0;     // axial strain between snapshots
+  double next_strain_ = 0.0;  // the next snapshot is due when the strain reaches it
   std::vector<double> times_;
   std::vector<std::string> names_;
   std::unordered_map<std::uint64_t, int> broken_per_tag_;

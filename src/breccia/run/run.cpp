@@ -65,7 +65,7 @@ json nan_null(double v) {
 // v_S for the event duration (docs/analysis.md §4.1), fixed at the first crack: sqrt(G / rho) with
 // E and nu fitted over the rows recorded so far above 20 % of the current peak (the sample is still
 // intact), and rho the (scaled) grain density times (1 - n0).
-void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
+double estimate_shear_wave_speed(const ExperimentSpec& spec, LoopState& L) {
   const auto& s = L.series;
   double qmax = 0.0;
   for (double q : s.deviatoric) qmax = std::max(qmax, q);
@@ -92,7 +92,7 @@ void configure_ae(const ExperimentSpec& spec, LoopState& L, AeMonitor& ae) {
       "kg/m^3 (simulated grain density x (1 - n0))",
       E, e_ok ? "slope of q over the rows so far" : "bond modulus: too few rows", nu,
       nu_ok ? "lateral/axial strain slope" : "default 0.25", rho);
-  ae.configure(vs);
+  return vs;
 }
 
 // Where the cracks are: shares per quarter along the loading axis (between the platens as they
@@ -187,17 +187,14 @@ struct LoopEnd {
   std::string reason;
 };
 
-// One history row: the tables (flushed, so an interrupted run keeps them), the analysed series,
-// the quality monitors (docs/physics.md §6.1) and the snapshot when its strain is due.
-void record_row(const ExperimentSpec& spec, Session& ss, const AxialState& a) {
+// One history row: the recorders (tables flushed, so an interrupted run keeps them; a snapshot
+// when its strain is due), the analysed series and the quality monitors (docs/physics.md §6.1).
+void record_row(Session& ss, const AxialState& a) {
   const Simulation& sim = ss.sim;
   LoopState& L = ss.loop;
   std::vector<double> extra;
   ss.test->history_values(sim, extra);
-  ss.history.record(sim, a, extra);
-  ss.cracks.record(sim);
-  ss.history.flush();
-  ss.cracks.flush();
+  for (const auto& r : ss.recorders) r->at_row(sim, *ss.test, {a, extra});
   analysis::CompressionSeries& series = L.series;
   series.axial_strain.push_back(a.strain);
   series.deviatoric.push_back(a.deviatoric);
@@ -212,12 +209,6 @@ void record_row(const ExperimentSpec& spec, Session& ss, const AxialState& a) {
   L.ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
   const double sigma3 = ss.test->confining_stress();
   if (sigma3 > 0.0) L.confine_err.push_back(std::abs(a.confining_stress - sigma3) / sigma3);
-  if (spec.snapshot_strain_interval > 0.0 && a.strain >= L.next_snapshot) {
-    ss.snaps.write(sim);
-    // The next multiple of the interval above this strain (one snapshot per row at most).
-    L.next_snapshot = spec.snapshot_strain_interval *
-                      (std::floor(a.strain / spec.snapshot_strain_interval) + 1.0);
-  }
 }
 
 void print_progress_bar(const Session& ss, const AxialState& a, double elapsed) {
@@ -265,16 +256,11 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
     if (sim.step_count() % interval == 0) sim.request_energy_sample();
     test.control(sim);
     sim.step();
-    // Acoustic emission: cheap unless bonds broke in this step or an event is open.
-    if (sim.cracks().size() > ss.ae.cracks_seen() || ss.ae.has_open_events()) {
-      const AxialState now = test.measure(sim);
-      if (!ss.ae.configured()) configure_ae(spec, ss.loop, ss.ae);
-      ss.ae.after_step(sim, now.strain, now.deviatoric);
-    }
+    for (const auto& r : ss.recorders) r->after_step(sim, test);
     if ((sim.step_count() - 1) % interval != 0) continue;
     const AxialState a = test.measure(sim);
     check_finite_state(sim, a);
-    record_row(spec, ss, a);
+    record_row(ss, a);
     if (test.finished(a, sim.cracks().size())) {
       if (opt.progress) opt.progress(progress_of(ss, a, wall()));  // the last word: where it ended
       return {"complete", test.stop_reason()};
@@ -476,7 +462,7 @@ json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult&
                       {"sample_area_m2", test.area0()},
                       {"sample", manifest.value("sample", json::object())},
                       {"energy", ledger_json(sim.ledger())},
-                      {"snapshots", ss.snaps.count()},
+                      {"snapshots", find_recorder<SnapshotWriter>(ss.recorders).count()},
                       {"warnings", warnings}});
   if (manifest.contains("resumed")) summary["resumed"] = manifest["resumed"];
   if (!spec.joint_planes.empty())
@@ -491,14 +477,15 @@ json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult&
 
 // The run folder's files in the manifest; a finished run drops its checkpoint, an interrupted
 // one keeps it for `breccia resume`. Plots and the report are made here when asked for.
-void list_run_files(const ExperimentSpec& spec, const fs::path& folder, const LoopEnd& end,
-                    json& manifest, const std::function<void(const std::string&)>& log) {
-  manifest["files"] = {"experiment.toml",     "history.csv",
-                       "cracks.csv",          "events.csv",
-                       "indicators.csv",      "b_value_windows.csv",
-                       "d2_windows.csv",      "fragments.csv",
-                       "summary.json",        "snapshots/particles.pvd",
-                       "snapshots/bonds.pvd", "snapshots/cracks.pvd"};
+void list_run_files(const ExperimentSpec& spec, const fs::path& folder, const Session& ss,
+                    const LoopEnd& end, json& manifest,
+                    const std::function<void(const std::string&)>& log) {
+  manifest["files"] = {"experiment.toml"};
+  for (const auto& r : ss.recorders)
+    for (const std::string& f : r->files()) manifest["files"].push_back(f);
+  for (const char* f : {"events.csv", "indicators.csv", "b_value_windows.csv", "d2_windows.csv",
+                        "fragments.csv", "summary.json"})
+    manifest["files"].push_back(f);
   if (end.status == "complete") {
     fs::remove(folder / kCheckpointFile);
     manifest.erase("checkpoint");
@@ -534,11 +521,7 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
                        Session& ss, const LoopEnd& end, const std::function<double()>& wall,
                        const std::function<void(const std::string&)>& log) {
   Simulation& sim = ss.sim;
-  ss.ae.finish();
-  ss.cracks.record(sim);
-  ss.cracks.flush();
-  ss.history.flush();
-  ss.snaps.write(sim);
+  for (const auto& r : ss.recorders) r->finish(sim);
   const analysis::CompressionResult an = analysis::analyse_compression(ss.loop.series);
   RunResult result = run_result(folder, ss, end, an, wall());
   const QualityVerdict q = judge_quality(ss.loop, an);
@@ -555,7 +538,7 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   try {
     failure = write_failure_analysis(
         folder,
-        FailureInputs{spec, sim, ss.ae, ss.loop.series, an, ss.loop.volume0, ss.loop.porosity0,
+        FailureInputs{spec, sim, ss.ae(), ss.loop.series, an, ss.loop.volume0, ss.loop.porosity0,
                       ss.loop.length_min, ss.loop.wave_speed_method, ss.test->stress_strain_test(),
                       ss.test->rock_particles(sim), end.status != "interrupted"});
   } catch (const Interrupted& e) {
@@ -568,7 +551,7 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   }
   for (const auto& [key, value] : failure.items()) summary[key] = value;
   write_json(folder / "summary.json", summary);
-  list_run_files(spec, folder, end, manifest, log);
+  list_run_files(spec, folder, ss, end, manifest, log);
   return result;
 }
 
@@ -579,6 +562,7 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
   auto log = [&](const std::string& m) {
     if (opt.log) opt.log(m);
   };
+  ss.ae().set_wave_speed_source([&] { return estimate_shear_wave_speed(spec, ss.loop); });
   auto wall = [&] {
     return ss.loop.wall_seconds +
            std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
@@ -673,12 +657,10 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   Simulation& sim = b.sim;
   Protocol& test = *b.protocol;
   LoopState loop;
-  AeSettings ae_settings;
   loop.warnings = sim.warnings();
   loop.consolidation_steps = b.consolidation_steps;
   loop.bonds_initial = sim.intact_bonds();
   loop.series.confining_stress = test.confining_stress();
-  loop.next_snapshot = spec.snapshot_strain_interval;
   if (test.confining_stress() > 0.0 && !test.consolidated())
     loop.warnings.push_back(fmt::format(
         "consolidation to {} MPa did not settle within {} steps; loading started anyway",
@@ -698,40 +680,24 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
                       ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
                                     test.confining_stress() * 1e-6, b.consolidation_steps)
                       : ""));
-  // Reference state for porosity and D2, and the acoustic-emission monitor.
+  // Reference state for porosity and D2.
   {
     const ParticleStore& p = sim.particles();
-    double solid = 0.0, r_max = 0.0;
-    for (std::size_t i = 0; i < test.rock_particles(sim); ++i) {
-      solid += p.mass[i] / p.density[i];
-      r_max = std::max(r_max, p.pos_rad[i].r);
-    }
+    double solid = 0.0;
+    for (std::size_t i = 0; i < test.rock_particles(sim); ++i) solid += p.mass[i] / p.density[i];
     loop.volume0 = test.length0() * test.area0();
     loop.porosity0 = 1.0 - solid / loop.volume0;
     loop.length_min = spec.dimension == 2
                           ? std::min(test.length0(), test.width0())
                           : std::min({test.length0(), test.width0(), test.depth0()});
-    ae_settings.source_radius =
-        spec.ae_source_radius > 0.0 ? spec.ae_source_radius : 3.0 * (2.0 * r_max);
   }
-  ae_settings.shear_wave_speed = spec.ae_shear_wave_speed;
-  ae_settings.moment_tensors = spec.ae_moment_tensors;
-  ae_settings.moment_interval = static_cast<std::uint64_t>(spec.ae_moment_interval);
-  ae_settings.linkage =
-      spec.ae_clustering == "grain" ? analysis::Linkage::Grain : analysis::Linkage::SourceRadius;
+  if (spec.ae_shear_wave_speed > 0.0)
+    loop.wave_speed_method = "given in the experiment file (ae.shear_wave_speed)";
   std::unique_ptr<Session> ss;
   try {
-    const std::vector<std::string> test_columns = b.protocol->history_columns();
-    ss.reset(new Session{std::move(b.sim), std::move(b.protocol),
-                         HistoryRecorder((folder / "history.csv").string(), test_columns),
-                         CrackRecorder((folder / "cracks.csv").string()),
-                         SnapshotWriter((folder / "snapshots").string()), std::move(loop),
-                         AeMonitor(ae_settings)});
-    if (spec.ae_shear_wave_speed > 0.0) {
-      ss->ae.configure(spec.ae_shear_wave_speed);
-      ss->loop.wave_speed_method = "given in the experiment file (ae.shear_wave_speed)";
-    }
-    ss->snaps.write(ss->sim);
+    RecorderList recorders = make_recorders({folder, spec, sim, test});
+    ss.reset(new Session{std::move(b.sim), std::move(b.protocol), std::move(loop),
+                         std::move(recorders)});
   } catch (const std::exception& e) {
     manifest["status"] = "failed";
     manifest["stop_reason"] = e.what();
@@ -777,11 +743,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   if (!with_lab_test(spec.test_kind, [&]<class T>() { test = T::restore(a); }))
     throw InputError(cpath.string(), "test.kind", spec.test_kind, "not a registered test");
   test->check_restored(sim, cpath.string());
-  HistoryRecorder history((folder / "history.csv").string(), a);
-  CrackRecorder cracks((folder / "cracks.csv").string(), a);
-  SnapshotWriter snaps((folder / "snapshots").string(), a, sim);
-  AeMonitor ae;
-  ae.load(a);
+  RecorderList recorders = restore_recorders({folder, spec, sim, *test}, a);
   a.label("end of checkpoint");
   if (loop.imbalance.size() != loop.series.axial_strain.size())
     throw InputError(cpath.string(), "loop", "", "inconsistent series: the checkpoint is corrupt");
@@ -802,8 +764,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   manifest["status"] = "running";
   manifest.erase("stop_reason");
   write_json(mpath, manifest);
-  Session ss{std::move(sim),   std::move(test), std::move(history), std::move(cracks),
-             std::move(snaps), std::move(loop), std::move(ae)};
+  Session ss{std::move(sim), std::move(test), std::move(loop), std::move(recorders)};
   return execute(spec, folder, manifest, ss, opt, t_start);
 }
 

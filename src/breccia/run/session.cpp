@@ -20,8 +20,9 @@ using json = nlohmann::json;
 
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // 2: commit and trailing hash; 3: strain gauges; 4, 5: brittle-beam and quaternion bond sets;
-// 6: smooth joints; 7: the 2D side-wall servo's integral terms; 8: RICEBAL bond set
-constexpr std::uint32_t kCheckpointFormat = 12;
+// 6: smooth joints; 7: the 2D side-wall servo's integral terms; 8: RICEBAL bond set; 13: the
+// recorders in registry order, the next snapshot's strain with the snapshots
+constexpr std::uint32_t kCheckpointFormat = 13;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
@@ -39,10 +40,7 @@ void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Sessio
     s.loop.save(a);
     s.sim.save_state(a);
     s.test->save_state(a);
-    s.history.save_state(a);
-    s.cracks.save_state(a);
-    s.snaps.save_state(a);
-    s.ae.save(a);
+    save_recorders(s.recorders, a);
     a.label("end of checkpoint");
   }
   const std::string bytes = std::move(body).str();

@@ -1,7 +1,7 @@
 #pragma once
-// A run in progress as a checkpoint holds it: the engine, the lab test, the recorders, the
-// acoustic-emission monitor and the loading loop's own state; and checkpoint.bin, which saves
-// and restores it exactly.
+// A run in progress as a checkpoint holds it: the engine, the lab test, the recorders
+// (observe/registry.hpp) and the loading loop's own state; and checkpoint.bin, which saves and
+// restores it exactly.
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -12,9 +12,7 @@
 #include "breccia/core/error.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/io/experiment.hpp"
-#include "breccia/observe/ae_monitor.hpp"
-#include "breccia/observe/recorders.hpp"
-#include "breccia/observe/snapshots.hpp"
+#include "breccia/observe/registry.hpp"
 #include "breccia/protocol/protocol.hpp"
 
 namespace breccia {
@@ -26,7 +24,6 @@ inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 struct LoopState {
   analysis::CompressionSeries series;
   std::vector<double> imbalance, ke_ratio, confine_err;
-  double next_snapshot = 0.0;
   double wall_seconds = 0.0;  // spent in earlier sessions of this run (updated when saved)
   std::uint64_t consolidation_steps = 0;
   std::uint64_t bonds_initial = 0;
@@ -49,7 +46,6 @@ struct LoopState {
     a.vector(imbalance);
     a.vector(ke_ratio);
     a.vector(confine_err);
-    a.value(next_snapshot);
     a.value(wall_seconds);
     a.value(consolidation_steps);
     a.value(bonds_initial);
@@ -78,11 +74,9 @@ struct LoopState {
 struct Session {
   Simulation sim;
   std::unique_ptr<Protocol> test;
-  HistoryRecorder history;
-  CrackRecorder cracks;
-  SnapshotWriter snaps;
   LoopState loop;
-  AeMonitor ae;
+  RecorderList recorders;  // in registry order
+  AeMonitor& ae() const { return find_recorder<AeMonitor>(recorders); }
 };
 
 // Writes checkpoint.bin atomically (temporary file, then rename): a crash while writing leaves the

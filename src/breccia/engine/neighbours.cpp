@@ -1,0 +1,95 @@
+// The neighbour list: when to rebuild it (the Verlet skin), and the rebuild itself: broken bonds
+// compacted, the cell grid searched, every bonded pair kept, pairs mapped to bonds and contact
+// history carried over.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "breccia/core/error.hpp"
+#include "breccia/core/format.hpp"
+#include "breccia/core/parallel.hpp"
+#include "breccia/engine/neighbour_grid.hpp"
+#include "breccia/engine/pair_lists.hpp"
+#include "breccia/engine/simulation.hpp"
+
+namespace breccia {
+
+using namespace engine_detail;
+
+template <class Law>
+void Simulation::compact_bonds(BondSet<Law>& set) {
+  if (set.broken_since_compaction == 0) return;
+  std::size_t w = 0;
+  for (std::size_t k = 0; k < set.size(); ++k) {
+    if (!set.intact[k]) continue;
+    set.pairs.first[w] = set.pairs.first[k];
+    set.pairs.second[w] = set.pairs.second[k];
+    set.tag[w] = set.tag[k];
+    set.state[w] = set.state[k];
+    ++w;
+  }
+  set.pairs.first.resize(w);
+  set.pairs.second.resize(w);
+  set.tag.resize(w);
+  set.state.resize(w);
+  set.intact.assign(w, 1);
+  set.broken_since_compaction = 0;
+}
+
+bool Simulation::needs_rebuild() const noexcept {
+  const double d = std::sqrt(max_disp2_);
+  double wall = 0.0;
+  for (const Wall& w : walls_) wall = std::max(wall, w.moved);
+  return 2.0 * (d + radius_growth_) > skin_ || d + radius_growth_ + wall > skin_;
+}
+
+template <class CL>
+void Simulation::rebuild_for(ContactSet<CL>& contacts) {
+  std::apply([&](auto&... set) { (compact_bonds(set), ...); }, bonds_);
+  PairList old_pairs = std::move(contacts.pairs);
+  std::vector<typename CL::State> old_state = std::move(contacts.state);
+  contacts.pairs = PairList{};
+  build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs);
+  // Every intact bond must be an interacting pair even if it stretched beyond the search range.
+  std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, bonds_);
+  std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, joints_);
+  contacts.pairs.build_index(p_.size());
+  std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
+  std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
+  merge_history(old_pairs, old_state, contacts.pairs, contacts.state);
+  assign_joints();
+  contacts.slot.assign(contacts.pairs.size(), PairSlot{});
+  // Wall candidates: particles within the skin of each wall, history carried by particle index.
+  auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
+  for (std::size_t wi = 0; wi < walls_.size(); ++wi) {
+    WallContacts<CL>& wc = wall_sets[wi];
+    WallContacts<CL> fresh;
+    std::size_t a = 0;
+    for (std::uint32_t i = 0; i < p_.size(); ++i) {
+      Vec3 nrm;
+      if (walls_[wi].gap(p_.pos_rad[i].x, p_.pos_rad[i].r, nrm) >= skin_) continue;
+      fresh.particle.push_back(i);
+      while (a < wc.particle.size() && wc.particle[a] < i) ++a;
+      fresh.state.push_back(a < wc.particle.size() && wc.particle[a] == i ? wc.state[a]
+                                                                          : typename CL::State{});
+    }
+    fresh.force.assign(fresh.particle.size(), {});
+    fresh.torque.assign(fresh.particle.size(), {});
+    fresh.normal_force.assign(fresh.particle.size(), 0.0);
+    fresh.stiffness.assign(fresh.particle.size(), 0.0);
+    wc = std::move(fresh);
+    walls_[wi].moved = 0.0;
+  }
+  x_at_build_.resize(p_.size());
+  for (std::size_t i = 0; i < p_.size(); ++i) x_at_build_[i] = p_.pos_rad[i].x;
+  max_disp2_ = 0.0;
+  radius_growth_ = 0.0;
+  ++rebuilds_;
+}
+
+void Simulation::rebuild() {
+  std::visit([&](auto& contacts) { rebuild_for(contacts); }, contact_);
+}
+
+}  // namespace breccia

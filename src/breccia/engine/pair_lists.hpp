@@ -1,0 +1,99 @@
+#pragma once
+// Operations on the engine's sorted pair lists, shared by its stages: carrying contact history
+// from one neighbour list to the next, keeping every bonded pair in the list, and the index from
+// pairs to the bonds of a law. Internal to engine/.
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "breccia/core/vec3.hpp"
+#include "breccia/state/bond_set.hpp"
+#include "breccia/state/pair_list.hpp"
+
+namespace breccia::engine_detail {
+
+// A contact that has been in touch carries its previous normal (zero before the first touch).
+inline bool has_history(const Vec3& n_old) noexcept {
+  return n_old.x != 0.0 || n_old.y != 0.0 || n_old.z != 0.0;
+}
+
+// Carries contact history from an old sorted pair list to a new one (same particle indexing).
+template <class State>
+void merge_history(const PairList& old_pairs, const std::vector<State>& old_state,
+                   const PairList& new_pairs, std::vector<State>& new_state) {
+  new_state.assign(new_pairs.size(), State{});
+  if (old_pairs.offsets.empty()) return;
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(new_pairs.offsets.size()) - 1;
+#pragma omp parallel for schedule(static, 1024) if (n > 4096)
+  for (std::ptrdiff_t si = 0; si < n; ++si) {
+    const std::size_t i = static_cast<std::size_t>(si);
+    std::uint32_t a = old_pairs.offsets[i];
+    const std::uint32_t ae = old_pairs.offsets[i + 1];
+    for (std::uint32_t b = new_pairs.offsets[i]; b < new_pairs.offsets[i + 1]; ++b) {
+      while (a < ae && old_pairs.second[a] < new_pairs.second[b]) ++a;
+      if (a < ae && old_pairs.second[a] == new_pairs.second[b]) new_state[b] = old_state[a];
+    }
+  }
+}
+
+// Adds the pairs of `bonds` (sorted) that `pairs` (sorted) lacks. Rare: a bond stretched beyond
+// R1 + R2 + skin. The index of `pairs` must be rebuilt afterwards.
+inline void add_missing_pairs(const PairList& bonds, PairList& pairs) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> missing;
+  std::size_t a = 0;
+  for (std::size_t k = 0; k < bonds.size(); ++k) {
+    const auto key = std::pair(bonds.first[k], bonds.second[k]);
+    while (a < pairs.size() && std::pair(pairs.first[a], pairs.second[a]) < key) ++a;
+    if (a == pairs.size() || std::pair(pairs.first[a], pairs.second[a]) != key)
+      missing.push_back(key);
+  }
+  if (missing.empty()) return;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> all(pairs.size());
+  for (std::size_t k = 0; k < pairs.size(); ++k) all[k] = {pairs.first[k], pairs.second[k]};
+  all.insert(all.end(), missing.begin(), missing.end());
+  std::sort(all.begin(), all.end());
+  pairs.first.resize(all.size());
+  pairs.second.resize(all.size());
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    pairs.first[k] = all[k].first;
+    pairs.second[k] = all[k].second;
+  }
+}
+
+// For each interacting pair, the index of its bond in `set` (or kNoBond). Both lists are sorted.
+template <class Law>
+void map_bonds_to_pairs(BondSet<Law>& set, const PairList& pairs) {
+  set.bond_of_pair.assign(pairs.size(), BondSet<Law>::kNoBond);
+  std::size_t a = 0;
+  for (std::size_t k = 0; k < set.size(); ++k) {
+    const auto key = std::pair(set.pairs.first[k], set.pairs.second[k]);
+    while (std::pair(pairs.first[a], pairs.second[a]) < key) ++a;
+    set.bond_of_pair[a] = static_cast<std::uint32_t>(k);
+  }
+}
+
+// Merges new elements (i < j, tag, state) into a sorted bond-layout set.
+template <class Law>
+void insert_sorted(
+    BondSet<Law>& set,
+    std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint64_t, typename Law::State>>&
+        added) {
+  if (added.empty()) return;
+  for (std::size_t k = 0; k < set.size(); ++k)
+    added.emplace_back(set.pairs.first[k], set.pairs.second[k], set.tag[k], set.state[k]);
+  std::sort(added.begin(), added.end(), [](const auto& a, const auto& b) {
+    return std::pair(std::get<0>(a), std::get<1>(a)) < std::pair(std::get<0>(b), std::get<1>(b));
+  });
+  const std::size_t n = added.size();
+  set.pairs = PairList{};
+  set.pairs.first.resize(n);
+  set.pairs.second.resize(n);
+  set.tag.resize(n);
+  set.state.resize(n);
+  for (std::size_t k = 0; k < n; ++k)
+    std::tie(set.pairs.first[k], set.pairs.second[k], set.tag[k], set.state[k]) = added[k];
+  set.intact.assign(n, 1);
+  added.clear();
+}
+
+}  // namespace breccia::engine_detail

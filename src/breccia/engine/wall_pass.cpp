@@ -1,0 +1,100 @@
+// The pass over wall contacts (docs/physics.md §6.1): forces on the grains in a fixed order,
+// the walls' resultants and their work.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "breccia/core/error.hpp"
+#include "breccia/core/format.hpp"
+#include "breccia/core/parallel.hpp"
+#include "breccia/engine/pair_lists.hpp"
+#include "breccia/engine/simulation.hpp"
+
+namespace breccia {
+
+using namespace engine_detail;
+
+template <class CL>
+void Simulation::compute_walls_for(ContactSet<CL>& c) {
+  auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
+  const double dt = dt_;
+  for (std::size_t wi = 0; wi < walls_.size(); ++wi) {
+    Wall& w = walls_[wi];
+    WallContacts<CL>& wc = wall_sets[wi];
+    const std::size_t n = wc.particle.size();
+    const std::size_t nb = block_count(n);
+    block_dis_.assign(nb, PairDissipation{});
+    for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
+      PairDissipation dis;
+      for (std::size_t k = begin; k < end; ++k) {
+        const std::uint32_t i = wc.particle[k];
+        const PosRad& q = p_.pos_rad[i];
+        Vec3 nrm;
+        const double gap = w.gap(q.x, q.r, nrm);
+        if (gap >= 0.0 && !has_history(wc.state[k].n_old)) {
+          wc.force[k] = {};
+          wc.torque[k] = {};
+          wc.normal_force[k] = 0.0;
+          wc.stiffness[k] = 0.0;
+          continue;
+        }
+        PairGeometry g;
+        g.n = nrm;
+        g.delta = -gap;
+        g.d = q.r - g.delta;
+        g.r2 = nrm * -(q.r - 0.5 * g.delta);
+        g.r1 = {};
+        g.vc = p_.vel[i] + cross(p_.angvel[i], g.r2) - w.surface_velocity(nrm);
+        g.w1 = {};
+        g.w2 = p_.angvel[i];
+        g.R1 = w.convex_radius(p_.planar());
+        g.R2 = q.r;
+        g.m2 = p_.mass[i];
+        g.wall = true;
+        g.planar = p_.planar();
+        g.thickness = p_.thickness();
+        const PairForce pf = CL::compute(c.wall_params, wc.state[k], g, dt, dis);
+        wc.force[k] = pf.force;
+        wc.torque[k] = cross(g.r2, pf.force) + pf.couple;
+        wc.normal_force[k] = dot(pf.force, nrm);
+        double kn = 0.0, ks = 0.0;
+        if (g.delta > 0.0) CL::timestep_stiffness(c.wall_params, g, kn, ks);
+        wc.stiffness[k] = kn;
+      }
+      block_dis_[blk] = dis;
+    });
+    d_pairs_ += ordered_sum(block_dis_);
+    Vec3 total;
+    double radial = 0.0, stiffness = 0.0;
+    std::size_t touching = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t i = wc.particle[k];
+      ext_force_[i] += wc.force[k];
+      ext_torque_[i] += wc.torque[k];
+      total += wc.force[k];
+      radial += wc.normal_force[k];
+      touching += wc.normal_force[k] != 0.0 ? 1 : 0;
+      stiffness += wc.stiffness[k];
+    }
+    // Trapezoidal work over the wall's last displacement (matches the leapfrog kinetic energy):
+    // the motion that made it, not the one a servo has set for the next step.
+    const double dw = w.shape != WallShape::Cylinder
+                          ? 0.5 * dot(w.force_prev + total, w.advanced_velocity) * dt
+                          : 0.5 * (w.radial_force_prev + radial) * w.advanced_radial_speed * dt;
+    w.work += dw;
+    w_walls_ += dw;
+    w.force = total;
+    w.radial_force = radial;
+    w.force_prev = total;
+    w.radial_force_prev = radial;
+    w.contacts = touching;
+    w.contact_stiffness = stiffness;
+  }
+}
+
+void Simulation::compute_walls() {
+  std::visit([&](auto& contacts) { compute_walls_for(contacts); }, contact_);
+}
+
+}  // namespace breccia
