@@ -422,3 +422,65 @@ TEST(Wall, FreeSphereIsRefusedWhenControlledOrOutOfThePlane) {
   EXPECT_THROW(sim.add_wall(both), InputError);
   EXPECT_NO_THROW(sim.add_wall(Wall::sphere("ball", {0, 3e-3, 0}, 1e-3, 1e-3, {0, -1, 0})));
 }
+
+TEST(ParticleStress, AGrainSqueezedBetweenTwoPlatensCarriesTheirForceOverItsVolume) {
+  // A grain pressed by a floor and a lid, each overlapping it by delta: each wall pushes with
+  // F = k_n delta at an arm R - delta / 2 from the centre, so sigma_zz = 2 (R - delta / 2) F / V
+  // (compression-positive) and every other component is zero (docs/physics.md §6.5).
+  ParticleStore ps(Dimension::Three, 1.0);
+  const double r = 0.5e-3, overlap = 1e-7;
+  ps.add({.tag = 1, .position = {0, 0, r - overlap}, .radius = r, .density = 2650});
+  EngineConfig cfg;
+  cfg.time_step = 1e-9;
+  LinearContact::Params lp;
+  lp.modulus = 10e9;
+  lp.friction = 0.0;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  sim.add_wall(Wall::plane("floor", {0, 0, 0}, {0, 0, 1}));
+  sim.add_wall(Wall::plane("lid", {0, 0, 2 * r - 2 * overlap}, {0, 0, -1}));
+  sim.initialise();
+  sim.step();
+  const double k = std::numbers::pi * r * 10e9;  // k_n = pi r^2 E_c / r against a wall
+  const double f = k * overlap;
+  const double volume = 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  const auto stress = sim.particle_stress();
+  ASSERT_EQ(stress.size(), 1u);
+  const double expected = 2.0 * (r - 0.5 * overlap) * f / volume;
+  EXPECT_NEAR(stress[0][8], expected, 1e-9 * expected);
+  for (int c = 0; c < 8; ++c)
+    EXPECT_NEAR(stress[0][static_cast<std::size_t>(c)], 0.0, 1e-12 * expected);
+}
+
+TEST(ParticleStress, GrainStressesAddUpToThePairStressSum) {
+  // Without walls, sum_p V_p sigma_p = sum over pairs of l (x) F (symmetrised): the grains split
+  // each pair's l (x) F between them by their lever arms, r1 - r2 = l. A bonded block set moving
+  // at random, checked after its bonds and contacts have loaded.
+  ParticleStore ps = fcc_block(3, 3, 3, 0.5e-3, 2650);
+  for (std::size_t i = 0; i < ps.size(); ++i)
+    ps.vel[i] = {1e-2 * std::sin(1.3 * static_cast<double>(i)),
+                 1e-2 * std::cos(0.7 * static_cast<double>(i)),
+                 1e-2 * std::sin(2.9 * static_cast<double>(i))};
+  EngineConfig cfg;
+  cfg.local_damping = 0.0;
+  LinearContact::Params lp;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  sim.set_bond_params<ParallelBond>(ParallelBond::Params{});
+  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  sim.initialise();
+  sim.run(200);
+  const PairStress pairs = sim.pair_stress();
+  const auto stress = sim.particle_stress();
+  std::array<double, 9> sum{};
+  double scale = 0.0;
+  for (std::size_t i = 0; i < stress.size(); ++i) {
+    const double r = sim.particles().pos_rad[i].r;
+    const double v = 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    for (std::size_t c = 0; c < 9; ++c) sum[c] += v * stress[i][c];
+  }
+  for (std::size_t c = 0; c < 9; ++c) scale = std::max(scale, std::abs(pairs.lf[c]));
+  ASSERT_GT(scale, 0.0) << "the block must carry loads";
+  for (std::size_t a = 0; a < 3; ++a)
+    for (std::size_t b = 0; b < 3; ++b)
+      EXPECT_NEAR(sum[3 * a + b], 0.5 * (pairs.lf[3 * a + b] + pairs.lf[3 * b + a]), 1e-10 * scale)
+          << a << b;
+}

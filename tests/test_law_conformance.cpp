@@ -262,6 +262,45 @@ TYPED_TEST(JointLawConformance, StretchToFailureReleasesTheStoredEnergy) {
 }
 
 template <class Law>
+void check_assess_agrees_with_the_breaking_step() {
+  // assess() reads a bond's loads against its strength from its state (what snapshots show of
+  // intact bonds): zero at installation, below 1 while the bond holds, and in the breaking step
+  // exactly the failure the step reported.
+  PairStepper<Law> s;
+  s.b.x = {1e-3, 0, 0};
+  s.install();
+  EXPECT_EQ(Law::assess(s.params, s.state).index, 0.0);
+  s.b.v = {1e-2, 0, 0};
+  double last_index = 0.0;
+  int k = 0;
+  for (; k < 1000000 && !s.failure.broken; ++k) {
+    s.evaluate();
+    if (s.failure.broken) break;
+    const BondFailure now = Law::assess(s.params, s.state);
+    ASSERT_FALSE(now.broken) << "step " << k;
+    ASSERT_LT(now.index, 1.0) << "step " << k;
+    EXPECT_GE(now.index, 0.0);
+    last_index = now.index;
+    s.move();
+  }
+  ASSERT_TRUE(s.failure.broken);
+  EXPECT_GT(last_index, 0.9) << "a steady pull approaches the strength step by step";
+  const BondFailure a = Law::assess(s.params, s.state);
+  EXPECT_TRUE(a.broken);
+  EXPECT_GE(a.index, 1.0);
+  EXPECT_EQ(a.mode, s.failure.mode);
+  EXPECT_EQ(a.Fn, s.failure.Fn);
+  EXPECT_EQ(a.Fs, s.failure.Fs);
+  EXPECT_EQ(a.sigma, s.failure.sigma);
+  EXPECT_EQ(a.tau, s.failure.tau);
+  EXPECT_EQ(a.ratio_t, s.failure.ratio_t);
+  EXPECT_EQ(a.bond_radius, s.failure.bond_radius);
+}
+TYPED_TEST(BondLawConformance, AssessAgreesWithTheBreakingStep) {
+  check_assess_agrees_with_the_breaking_step<TypeParam>();
+}
+
+template <class Law>
 void check_rigid_body_motion() {
   // The pair turns and translates as one rigid body (every velocity set from omega x r each
   // step): the bond must stay unloaded. For incremental laws the relative contact velocity is

@@ -56,9 +56,73 @@ def test_snapshots_and_plot_are_readable():
         assert sum(len(c.data) for c in bonds.cells) == summary["bonds_initial"]
         cracks = meshio.read(os.path.join(snaps, last.replace("particles", "cracks")))
         assert len(cracks.points) == summary["bonds_broken"]
+        check_mechanical_fields(final, meshio.read(os.path.join(snaps, last.replace(
+            "particles", "bonds"))), cracks, summary)
+        check_paraview_renders(snaps, summary, out)
         png = os.path.join(folder, "stress_strain.png")
         with open(png, "rb") as f:
             assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def check_mechanical_fields(particles, bonds, cracks, summary):
+    """The fields ParaView users colour and glyph by: grains with their rotation, angular
+    velocity and stress tensor; bonds with their loads and breakage index; cracks with the
+    normal and radius of their plane."""
+    import numpy as np
+    n = summary["particles"]
+    assert particles.point_data["rotation"].shape == (n, 3)
+    assert particles.point_data["angular_velocity"].shape == (n, 3)
+    stress = particles.point_data["stress_pa"]
+    assert stress.shape == (n, 9)
+    tensors = stress.reshape(n, 3, 3)
+    assert np.allclose(tensors, tensors.transpose(0, 2, 1), rtol=0, atol=1e-6 * abs(stress).max())
+    # The sample was loaded along z to past its peak: its grains carry net axial compression, of
+    # the order of the axial stresses the test recorded (volume-weighted mean over the grains).
+    volume = 4.0 / 3.0 * np.pi * particles.point_data["radius"] ** 3
+    mean_zz = (volume * tensors[:, 2, 2]).sum() / volume.sum()
+    assert mean_zz > 0
+    # Rotations are angles in [0, pi] about unit axes.
+    assert (np.linalg.norm(particles.point_data["rotation"], axis=1) <= np.pi + 1e-9).all()
+    intact = sum(len(c.data) for c in bonds.cells)
+    assert intact == summary["bonds_initial"] - summary["bonds_broken"]
+    for name in ("law", "normal_force_n", "shear_force_n", "twisting_moment_nm",
+                 "bending_moment_nm", "sigma_pa", "tau_pa", "breakage_index"):
+        assert name in bonds.cell_data, name
+        assert len(bonds.cell_data[name][0]) == intact, name
+    index = bonds.cell_data["breakage_index"][0]
+    # Intact bonds hold: each is below its strength, and a loaded sample has some close to it.
+    assert (index >= 0).all() and (index < 1).all()
+    assert index.max() > 0.3
+    assert (bonds.cell_data["shear_force_n"][0] >= 0).all()
+    normals = cracks.point_data["normal"]
+    assert np.allclose(np.linalg.norm(normals, axis=1), 1.0)
+    assert (cracks.point_data["radius_m"] > 0).all()
+
+
+def check_paraview_renders(snaps, summary, out):
+    """Debian's ParaView (pvbatch, under a virtual X server) opens the last snapshot, draws the
+    grains by axial stress, the bonds by breakage index and the cracks as discs, and reads the
+    same fields back."""
+    import shutil
+    for tool in ("pvbatch", "xvfb-run"):
+        assert shutil.which(tool), f"{tool} is missing (scripts/bootstrap installs it)"
+    png = os.path.join(out, "paraview.png")
+    r = subprocess.run(["xvfb-run", "-a", "pvbatch", os.path.join(SOURCE, "tests",
+                        "paraview_render.py"), snaps, png],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, (r.stdout + r.stderr)[-3000:]
+    seen = json.loads([line for line in r.stdout.splitlines() if line.startswith("{")][-1])
+    assert seen["bonds"] == summary["bonds_initial"] - summary["bonds_broken"]
+    assert seen["cracks"] == summary["bonds_broken"] > 0
+    assert seen["disc_points"] > seen["cracks"]  # each crack drawn as a disc of many points
+    assert 0.3 < seen["breakage_index"][1] < 1.0
+    assert seen["stress_zz_pa"][1] > 0.0
+    with open(png, "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+    import matplotlib.image
+    picture = matplotlib.image.imread(png)
+    colours = {tuple(p) for p in picture.reshape(-1, picture.shape[-1])[::7].tolist()}
+    assert len(colours) > 50, "the picture shows coloured bonds and grains, not a blank view"
 
 
 def assert_chromium_loads_every_image(folder, count):

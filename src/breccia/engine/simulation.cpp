@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <numeric>
 
 #include "breccia/core/error.hpp"
@@ -318,6 +319,49 @@ PairStress Simulation::pair_stress() const {
         }
       },
       contact_);
+  return out;
+}
+
+std::vector<std::array<double, 9>> Simulation::particle_stress() const {
+  std::vector<std::array<double, 9>> out(p_.size());
+  // -(x_c - x_p) (x) F^{c->p}, with x_c - x_p the lever arm r of the pair geometry.
+  auto add = [&](std::uint32_t i, const Vec3& arm, const Vec3& force) {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) out[i][static_cast<std::size_t>(3 * a + b)] -= arm[a] * force[b];
+  };
+  std::visit(
+      [&]<class CL>(const ContactSet<CL>& c) {
+        for (std::size_t k = 0; k < c.pairs.size(); ++k) {
+          const PairSlot& slot = c.slot[k];
+          if (slot.force.x == 0.0 && slot.force.y == 0.0 && slot.force.z == 0.0) continue;
+          const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
+          const PairGeometry g = geometry(i, j);
+          add(i, g.r1, -slot.force);
+          add(j, g.r2, slot.force);
+        }
+        const auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
+        for (std::size_t wi = 0; wi < walls_.size(); ++wi)
+          for (std::size_t k = 0; k < wall_sets[wi].particle.size(); ++k) {
+            const Vec3& force = wall_sets[wi].force[k];
+            if (force.x == 0.0 && force.y == 0.0 && force.z == 0.0) continue;
+            const std::uint32_t i = wall_sets[wi].particle[k];
+            Vec3 n;
+            const double gap = walls_[wi].gap(p_.pos_rad[i].x, p_.pos_rad[i].r, n);
+            add(i, n * -(p_.pos_rad[i].r + 0.5 * gap), force);
+          }
+      },
+      contact_);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const double r = p_.pos_rad[i].r;
+    const double volume = p_.planar() ? std::numbers::pi * r * r * p_.thickness()
+                                      : 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    auto& t = out[i];
+    for (int a = 0; a < 3; ++a)
+      for (int b = a; b < 3; ++b) {
+        const double v = 0.5 * (t[3 * a + b] + t[3 * b + a]) / volume;
+        t[3 * a + b] = t[3 * b + a] = v;
+      }
+  }
   return out;
 }
 

@@ -218,6 +218,12 @@ class Simulation {
   std::size_t neighbour_pairs() const noexcept;
   // Pair forces of the last step as a stress sum and contact counts (docs/physics.md §6.5, §7.2).
   PairStress pair_stress() const;
+  // Per-particle stress of the last step's forces (docs/physics.md §6.5), compression-positive,
+  // row-major 3x3 in Pa: -(1/V_p) sum (x_c - x_p) (x) F over the particle's pairs and wall
+  // contacts, symmetrised (bond couples only add an antisymmetric part); V_p is the sphere's
+  // volume, or pi R^2 t in 2D. Loads applied at the centres (membranes) have no lever arm and
+  // add nothing.
+  std::vector<std::array<double, 9>> particle_stress() const;
   std::uint64_t neighbour_rebuilds() const noexcept { return rebuilds_; }
   // External per-particle load for the coming step (membranes, follower loads); its work is
   // booked as external work. Allocated on first use; cleared after each step.

@@ -73,11 +73,9 @@ struct BrittleBeam : beam::BeamLaw {
     return beam::install(g, fr, p.modulus, moduli(p).shear, p.bending_factor, p.min_radius);
   }
 
-  static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
-                           double, BondFailure& fail) noexcept {
-    // ESyS's arms: d0 for the shear of the branch rotation and for the rotation-induced shear.
-    const PairForce pf = beam::loads(s, g, fr, s.d0, s.d0);
-    // Peak stresses on the beam's rim (tension-positive sigma).
+  // Mohr-Coulomb on the beam's peak stresses (tension-positive sigma) with the tensile cut-off.
+  static BondFailure assess(const Params& p, const State& s) noexcept {
+    BondFailure f;
     const double sigma =
         -s.normal_force / s.area + p.moment_factor * s.bend_moment * s.radius / s.inertia;
     const double tau =
@@ -87,14 +85,29 @@ struct BrittleBeam : beam::BeamLaw {
     const double shear_limit = p.cohesion - sigma * p.tan_friction;
     const bool tensile = tensile_index > p.tensile_cutoff;
     const bool shear = !tensile && tau > shear_limit;
-    if (tensile || shear) {
+    f.broken = tensile || shear;
+    f.mode = tensile || !shear ? CrackMode::Tensile : CrackMode::Shear;
+    f.Fn = s.normal_force;
+    f.Fs = s.shear_force;
+    f.Mt = s.twist_moment;
+    f.Mb = s.bend_moment;
+    f.sigma = sigma;
+    f.tau = tau;
+    f.ratio_t = tensile_index / p.tensile_cutoff;
+    f.ratio_s = shear_limit > 0.0 ? tau / shear_limit : std::numeric_limits<double>::quiet_NaN();
+    f.index = shear_limit > 0.0 ? std::max(f.ratio_t, f.ratio_s) : std::max(f.ratio_t, 1.0);
+    f.bond_radius = s.radius;
+    return f;
+  }
+
+  static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
+                           double, BondFailure& fail) noexcept {
+    // ESyS's arms: d0 for the shear of the branch rotation and for the rotation-induced shear.
+    const PairForce pf = beam::loads(s, g, fr, s.d0, s.d0);
+    const BondFailure judged = assess(p, s);
+    if (judged.broken) {
+      fail = judged;
       beam::record(s, g, fail);
-      fail.mode = tensile ? CrackMode::Tensile : CrackMode::Shear;
-      fail.sigma = sigma;
-      fail.tau = tau;
-      fail.ratio_t = tensile_index / p.tensile_cutoff;
-      fail.ratio_s =
-          shear_limit > 0.0 ? tau / shear_limit : std::numeric_limits<double>::quiet_NaN();
       return {};
     }
     return pf;

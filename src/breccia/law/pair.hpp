@@ -116,7 +116,9 @@ struct BondModuli {
 
 enum class CrackMode : std::uint8_t { Tensile = 0, Shear = 1 };
 
-// Failure decision of a bond law in one step, with the quantities the crack record needs (§4.0).
+// A bond's loads against its strength, as its law judges them (each bond law's `assess` reads its
+// state after the step's update): the failure decision of one step with the quantities the
+// crack record needs (§4.0), and what snapshots show of intact bonds.
 struct BondFailure {
   bool broken = false;
   CrackMode mode = CrackMode::Tensile;
@@ -126,6 +128,9 @@ struct BondFailure {
   double Mb = 0.0;                      // |bending moment|
   double sigma = 0.0, tau = 0.0;        // peak stresses, sigma tension-positive
   double ratio_t = 0.0, ratio_s = 0.0;  // criterion ratios; NaN where undefined
+  // How close the bond is to its strength: 1 or more when it breaks (the larger criterion ratio;
+  // the quaternion bond's breakage index B).
+  double index = 0.0;
   double bond_radius = 0.0;
   // From the §0.2 contact point to the law's own point on the branch, along n (beam bonds act
   // at x1 + d R1 / (R1 + R2), §4.2 step 8): where the crack record places the crack.

@@ -160,31 +160,42 @@ struct ParallelBond {
     s.bend_moment = mb;
     s.n_old = g.n;
 
-    // Peak stresses on the bond periphery (tension-positive sigma).
-    const double mb_abs = norm(mb);
-    const double fs_abs = norm(fs);
-    const double sigma_avg = -fn * s.inv_area;
-    const double sigma_max = sigma_avg + p.moment_factor * mb_abs * s.bend_coeff;
-    const double tau_max = fs_abs * s.inv_area + p.moment_factor * std::abs(mt) * s.twist_coeff;
-    const double tau_c = s.cohesion - sigma_avg * p.tan_friction;
-    const bool tensile = sigma_max >= s.tensile_strength;
-    const bool shear = !tensile && tau_max >= tau_c;
-    if (tensile || shear) {
-      fail.broken = true;
-      fail.mode = tensile ? CrackMode::Tensile : CrackMode::Shear;
-      fail.Fn = fn;
-      fail.Fs = fs_abs;
-      fail.Mt = mt;
-      fail.Mb = mb_abs;
-      fail.sigma = sigma_max;
-      fail.tau = tau_max;
-      fail.ratio_t = sigma_max / s.tensile_strength;
-      fail.ratio_s = tau_c > 0.0 ? tau_max / tau_c : std::numeric_limits<double>::quiet_NaN();
-      fail.bond_radius = s.bond_radius;
+    const BondFailure judged = assess(p, s);
+    if (judged.broken) {
+      fail = judged;
       fail.energy = energy(s);
       return {};
     }
     return {g.n * fn + fs, g.n * mt + mb};
+  }
+
+  // The failure criterion on the bond's present loads: tensile when the peak normal stress on
+  // the periphery reaches sigma_c (checked first), else shear when the peak shear stress reaches
+  // c - sigma_avg tan(phi) (tension-positive sigma).
+  static BondFailure assess(const Params& p, const State& s) noexcept {
+    BondFailure f;
+    const double mb_abs = norm(s.bend_moment);
+    const double fs_abs = norm(s.shear_force);
+    const double sigma_avg = -s.normal_force * s.inv_area;
+    const double sigma_max = sigma_avg + p.moment_factor * mb_abs * s.bend_coeff;
+    const double tau_max =
+        fs_abs * s.inv_area + p.moment_factor * std::abs(s.twist_moment) * s.twist_coeff;
+    const double tau_c = s.cohesion - sigma_avg * p.tan_friction;
+    const bool tensile = sigma_max >= s.tensile_strength;
+    const bool shear = !tensile && tau_max >= tau_c;
+    f.broken = tensile || shear;
+    f.mode = tensile || !shear ? CrackMode::Tensile : CrackMode::Shear;
+    f.Fn = s.normal_force;
+    f.Fs = fs_abs;
+    f.Mt = s.twist_moment;
+    f.Mb = mb_abs;
+    f.sigma = sigma_max;
+    f.tau = tau_max;
+    f.ratio_t = sigma_max / s.tensile_strength;
+    f.ratio_s = tau_c > 0.0 ? tau_max / tau_c : std::numeric_limits<double>::quiet_NaN();
+    f.index = tau_c > 0.0 ? std::max(f.ratio_t, f.ratio_s) : std::max(f.ratio_t, 1.0);
+    f.bond_radius = s.bond_radius;
+    return f;
   }
 
   // Stored elastic energy by component (§4.0).

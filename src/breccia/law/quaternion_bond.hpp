@@ -59,26 +59,40 @@ struct QuaternionBond : beam::BeamLaw {
     return beam::install(g, fr, p.modulus, moduli(p).shear, 1.0, false, true);
   }
 
-  static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
-                           double, BondFailure& fail) noexcept {
-    // LAMMPS's arms: the present length for both shear terms.
-    const PairForce pf = beam::loads(s, g, fr, g.d, g.d);
+  // The breakage index B of the present loads; its larger part, tensile or shear, names the mode
+  // (the index itself defines none).
+  static BondFailure assess(const Params& p, const State& s) noexcept {
+    BondFailure f;
     const double tension = p.signed_normal ? -s.normal_force : std::max(0.0, -s.normal_force);
     const double tensile_index = tension / (p.tensile_strength * s.area) +
                                  s.bend_moment * s.radius / (p.tensile_strength * s.inertia);
     const double shear_index =
         s.shear_force / (p.shear_strength * s.area) +
         (s.polar > 0.0 ? std::abs(s.twist_moment) * s.radius / (p.shear_strength * s.polar) : 0.0);
-    const double index = std::max(0.0, tensile_index + shear_index);
-    if (index >= 1.0) {
+    f.index = std::max(0.0, tensile_index + shear_index);
+    f.broken = f.index >= 1.0;
+    f.mode = tensile_index >= shear_index ? CrackMode::Tensile : CrackMode::Shear;
+    f.Fn = s.normal_force;
+    f.Fs = s.shear_force;
+    f.Mt = s.twist_moment;
+    f.Mb = s.bend_moment;
+    f.sigma = -s.normal_force / s.area + s.bend_moment * s.radius / s.inertia;
+    f.tau = s.shear_force / s.area +
+            (s.polar > 0.0 ? std::abs(s.twist_moment) * s.radius / s.polar : 0.0);
+    f.ratio_t = tensile_index;
+    f.ratio_s = shear_index;
+    f.bond_radius = s.radius;
+    return f;
+  }
+
+  static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
+                           double, BondFailure& fail) noexcept {
+    // LAMMPS's arms: the present length for both shear terms.
+    const PairForce pf = beam::loads(s, g, fr, g.d, g.d);
+    const BondFailure judged = assess(p, s);
+    if (judged.broken) {
+      fail = judged;
       beam::record(s, g, fail);
-      // The index defines no mode: the larger of its tensile and shear parts names it.
-      fail.mode = tensile_index >= shear_index ? CrackMode::Tensile : CrackMode::Shear;
-      fail.sigma = -s.normal_force / s.area + s.bend_moment * s.radius / s.inertia;
-      fail.tau = s.shear_force / s.area +
-                 (s.polar > 0.0 ? std::abs(s.twist_moment) * s.radius / s.polar : 0.0);
-      fail.ratio_t = tensile_index;
-      fail.ratio_s = shear_index;
       return {};
     }
     return pf;

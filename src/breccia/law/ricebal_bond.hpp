@@ -122,27 +122,42 @@ struct RicebalBond {
   static void judge(const Params& p, const State& s, const PairGeometry& g,
                     const Vec3& contact_force, BondFailure& fail) noexcept {
     const Vec3 t{-g.n.y, g.n.x, 0.0};
-    const double fn = s.normal_force + dot(contact_force, g.n);
-    const double fs = s.shear_force + dot(contact_force, t);
+    const BondFailure judged = envelope(p, s, s.normal_force + dot(contact_force, g.n),
+                                        s.shear_force + dot(contact_force, t));
+    if (!judged.broken) return;
+    fail = judged;
+    fail.energy = energy(s);
+  }
+
+  // The envelope on the bond's own loads, as if the grains were apart (what snapshots show).
+  static BondFailure assess(const Params& p, const State& s) noexcept {
+    return envelope(p, s, s.normal_force, s.shear_force);
+  }
+
+  // Tensile when -f_n / A_b + |M| r_b / I_b >= T_b (checked first), else shear when |f_s| reaches
+  // C_b A_b (1 - f_n / f_n,min) in tension or C_b A_b + mu f_n in compression; f_n and f_s are
+  // the interface's normal (compression-positive) and shear forces.
+  static BondFailure envelope(const Params& p, const State& s, double fn, double fs) noexcept {
+    BondFailure f;
     const double sigma_t = -fn / s.area + std::abs(s.moment) * s.bond_radius / s.inertia;
     const double fn_min = -p.tensile_strength * s.area;
     const double fs_max = fn < 0.0 ? p.cohesion * s.area * (1.0 - fn / fn_min)
                                    : p.cohesion * s.area + p.friction * fn;
     const bool tensile = sigma_t >= p.tensile_strength;
     const bool shear = !tensile && std::abs(fs) >= fs_max;
-    if (!tensile && !shear) return;
-    fail.broken = true;
-    fail.mode = tensile ? CrackMode::Tensile : CrackMode::Shear;
-    fail.Fn = fn;
-    fail.Fs = std::abs(fs);
-    fail.Mt = 0.0;
-    fail.Mb = std::abs(s.moment);
-    fail.sigma = sigma_t;
-    fail.tau = std::abs(fs) / s.area;
-    fail.ratio_t = sigma_t / p.tensile_strength;
-    fail.ratio_s = fs_max > 0.0 ? std::abs(fs) / fs_max : std::numeric_limits<double>::quiet_NaN();
-    fail.bond_radius = s.bond_radius;
-    fail.energy = energy(s);
+    f.broken = tensile || shear;
+    f.mode = tensile || !shear ? CrackMode::Tensile : CrackMode::Shear;
+    f.Fn = fn;
+    f.Fs = std::abs(fs);
+    f.Mt = 0.0;
+    f.Mb = std::abs(s.moment);
+    f.sigma = sigma_t;
+    f.tau = std::abs(fs) / s.area;
+    f.ratio_t = sigma_t / p.tensile_strength;
+    f.ratio_s = fs_max > 0.0 ? std::abs(fs) / fs_max : std::numeric_limits<double>::quiet_NaN();
+    f.index = fs_max > 0.0 ? std::max(f.ratio_t, f.ratio_s) : std::max(f.ratio_t, 1.0);
+    f.bond_radius = s.bond_radius;
+    return f;
   }
 
   // One step of the bond alone (no contact force at the interface): the law's use outside the

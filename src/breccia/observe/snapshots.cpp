@@ -55,6 +55,29 @@ void scalar(std::string& s, const char* name, const char* type, std::size_t n, F
   for (std::size_t i = 0; i < n; ++i) s += fmt::format("{}\n", f(i));
   s += "</DataArray>\n";
 }
+// A symmetric 3x3 tensor per point, row-major (ParaView reads 9 components as a tensor).
+template <class F>
+void tensor(std::string& s, const char* name, std::size_t n, F&& f) {
+  s += fmt::format(
+      "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"9\" format=\"ascii\">\n", name);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::array<double, 9> t = f(i);
+    s += fmt::format("{:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g}\n", t[0], t[1],
+                     t[2], t[3], t[4], t[5], t[6], t[7], t[8]);
+  }
+  s += "</DataArray>\n";
+}
+
+// The rotation of a unit quaternion as its axis times its angle in [0, pi] (docs/physics.md §0.4:
+// q and -q are one rotation, so the sign is made w >= 0 first).
+Vec3 rotation_vector(const Quat& q) {
+  const double sign = q.w < 0.0 ? -1.0 : 1.0;
+  const Vec3 u{sign * q.x, sign * q.y, sign * q.z};
+  const double s = norm(u);
+  if (s == 0.0) return {};
+  return u * (2.0 * std::atan2(s, sign * q.w) / s);
+}
+
 template <class F>
 void vector(std::string& s, const char* name, std::size_t n, F&& f) {
   s += fmt::format(
@@ -124,74 +147,108 @@ void SnapshotWriter::at_row(const Simulation& sim, const Protocol&, const Record
 }
 
 void SnapshotWriter::write(const Simulation& sim) {
-  const ParticleStore& p = sim.particles();
   const auto& cracks = sim.cracks();
   for (; cracks_seen_ < cracks.size(); ++cracks_seen_) {
     ++broken_per_tag_[cracks[cracks_seen_].id1];
     ++broken_per_tag_[cracks[cracks_seen_].id2];
   }
   const std::string name = fmt::format("{:05d}", times_.size());
-  const std::size_t n = p.size();
-  {
-    std::string s = header(n, n);
-    std::vector<Vec3> x(n);
-    for (std::size_t i = 0; i < n; ++i) x[i] = p.pos_rad[i].x;
-    points_block(s, x);
-    cells_block(s, n, 1);
-    s += "<PointData Scalars=\"radius\" Vectors=\"velocity\">\n";
-    scalar(s, "radius", "Float64", n, [&](std::size_t i) { return p.pos_rad[i].r; });
-    scalar(s, "tag", "Int64", n, [&](std::size_t i) { return p.tag[i]; });
-    scalar(s, "broken_bonds", "Int32", n, [&](std::size_t i) {
-      const auto it = broken_per_tag_.find(p.tag[i]);
-      return it == broken_per_tag_.end() ? 0 : it->second;
-    });
-    vector(s, "velocity", n, [&](std::size_t i) { return p.vel[i]; });
-    vector(s, "displacement", n, [&](std::size_t i) { return p.displacement[i]; });
-    s += "</PointData>\n";
-    s += kFooter;
-    put(fs::path(folder_) / ("particles_" + name + ".vtu"), s);
-  }
-  {
-    std::vector<Vec3> x;
-    std::apply(
-        [&](const auto&... set) {
-          auto one = [&](const auto& b) {
-            for (std::size_t k = 0; k < b.size(); ++k) {
-              if (!b.intact[k]) continue;
-              x.push_back(p.pos_rad[b.pairs.first[k]].x);
-              x.push_back(p.pos_rad[b.pairs.second[k]].x);
-            }
-          };
-          (one(set), ...);
-        },
-        sim.bonds());
-    std::string s = header(x.size(), x.size() / 2);
-    points_block(s, x);
-    cells_block(s, x.size() / 2, 2);
-    s += kFooter;
-    put(fs::path(folder_) / ("bonds_" + name + ".vtu"), s);
-  }
-  {
-    const std::size_t m = cracks.size();
-    std::vector<Vec3> x(m);
-    for (std::size_t k = 0; k < m; ++k) x[k] = cracks[k].position;
-    std::string s = header(m, m);
-    points_block(s, x);
-    cells_block(s, m, 1);
-    s += "<PointData Scalars=\"mode\">\n";
-    scalar(s, "mode", "Int32", m,
-           [&](std::size_t k) { return cracks[k].mode == CrackMode::Tensile ? 0 : 1; });
-    scalar(s, "time_s", "Float64", m, [&](std::size_t k) { return cracks[k].time; });
-    scalar(s, "step", "Int64", m, [&](std::size_t k) { return cracks[k].step; });
-    scalar(s, "energy_j", "Float64", m, [&](std::size_t k) { return cracks[k].energy.total(); });
-    vector(s, "normal", m, [&](std::size_t k) { return cracks[k].normal; });
-    s += "</PointData>\n";
-    s += kFooter;
-    put(fs::path(folder_) / ("cracks_" + name + ".vtu"), s);
-  }
+  write_particles(sim, fs::path(folder_) / ("particles_" + name + ".vtu"));
+  write_bonds(sim, fs::path(folder_) / ("bonds_" + name + ".vtu"));
+  write_cracks(sim, fs::path(folder_) / ("cracks_" + name + ".vtu"));
   times_.push_back(sim.time());
   names_.push_back(name);
   write_collections();
+}
+
+// Grains as points: radius, tag, broken bonds so far, velocity, displacement since loading
+// began, angular velocity, rotation (axis times angle, rad) and stress (docs/physics.md §6.5).
+void SnapshotWriter::write_particles(const Simulation& sim, const fs::path& path) const {
+  const ParticleStore& p = sim.particles();
+  const std::size_t n = p.size();
+  std::string s = header(n, n);
+  std::vector<Vec3> x(n);
+  for (std::size_t i = 0; i < n; ++i) x[i] = p.pos_rad[i].x;
+  points_block(s, x);
+  cells_block(s, n, 1);
+  s += "<PointData Scalars=\"radius\" Vectors=\"velocity\" Tensors=\"stress_pa\">\n";
+  scalar(s, "radius", "Float64", n, [&](std::size_t i) { return p.pos_rad[i].r; });
+  scalar(s, "tag", "Int64", n, [&](std::size_t i) { return p.tag[i]; });
+  scalar(s, "broken_bonds", "Int32", n, [&](std::size_t i) {
+    const auto it = broken_per_tag_.find(p.tag[i]);
+    return it == broken_per_tag_.end() ? 0 : it->second;
+  });
+  vector(s, "velocity", n, [&](std::size_t i) { return p.vel[i]; });
+  vector(s, "displacement", n, [&](std::size_t i) { return p.displacement[i]; });
+  vector(s, "angular_velocity", n, [&](std::size_t i) { return p.angvel[i]; });
+  vector(s, "rotation", n, [&](std::size_t i) {
+    return p.planar() ? Vec3{0.0, 0.0, p.angle[i]} : rotation_vector(p.orientation[i]);
+  });
+  const std::vector<std::array<double, 9>> stress = sim.particle_stress();
+  tensor(s, "stress_pa", n, [&](std::size_t i) { return stress[i]; });
+  s += "</PointData>\n";
+  s += kFooter;
+  put(path, s);
+}
+
+// Intact bonds as lines between the grain centres, each with its loads and how close they are
+// to its strength as its law judges them (the law's assess(): docs/physics.md §4.5).
+void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) const {
+  const ParticleStore& p = sim.particles();
+  std::vector<Vec3> x;
+  std::vector<int> law;
+  std::vector<BondFailure> loads;
+  int law_index = 0;
+  auto add_set = [&]<class Law>(const BondSet<Law>& b) {
+    for (std::size_t k = 0; k < b.size(); ++k) {
+      if (!b.intact[k]) continue;
+      x.push_back(p.pos_rad[b.pairs.first[k]].x);
+      x.push_back(p.pos_rad[b.pairs.second[k]].x);
+      law.push_back(law_index);
+      loads.push_back(Law::assess(b.params, b.state[k]));
+    }
+    ++law_index;
+  };
+  std::apply([&](const auto&... set) { (add_set(set), ...); }, sim.bonds());
+  const std::size_t m = loads.size();
+  std::string s = header(x.size(), m);
+  points_block(s, x);
+  cells_block(s, m, 2);
+  s += "<CellData Scalars=\"breakage_index\">\n";
+  scalar(s, "law", "Int32", m, [&](std::size_t k) { return law[k]; });
+  scalar(s, "normal_force_n", "Float64", m, [&](std::size_t k) { return loads[k].Fn; });
+  scalar(s, "shear_force_n", "Float64", m, [&](std::size_t k) { return loads[k].Fs; });
+  scalar(s, "twisting_moment_nm", "Float64", m, [&](std::size_t k) { return loads[k].Mt; });
+  scalar(s, "bending_moment_nm", "Float64", m, [&](std::size_t k) { return loads[k].Mb; });
+  scalar(s, "sigma_pa", "Float64", m, [&](std::size_t k) { return loads[k].sigma; });
+  scalar(s, "tau_pa", "Float64", m, [&](std::size_t k) { return loads[k].tau; });
+  scalar(s, "breakage_index", "Float64", m, [&](std::size_t k) { return loads[k].index; });
+  s += "</CellData>\n";
+  s += kFooter;
+  put(path, s);
+}
+
+// The cracks so far as points at their positions, with the crack plane's normal and radius (a
+// disc glyph oriented by `normal` and scaled by `radius_m` draws each crack).
+void SnapshotWriter::write_cracks(const Simulation& sim, const fs::path& path) const {
+  const auto& cracks = sim.cracks();
+  const std::size_t m = cracks.size();
+  std::vector<Vec3> x(m);
+  for (std::size_t k = 0; k < m; ++k) x[k] = cracks[k].position;
+  std::string s = header(m, m);
+  points_block(s, x);
+  cells_block(s, m, 1);
+  s += "<PointData Scalars=\"mode\" Vectors=\"normal\">\n";
+  scalar(s, "mode", "Int32", m,
+         [&](std::size_t k) { return cracks[k].mode == CrackMode::Tensile ? 0 : 1; });
+  scalar(s, "time_s", "Float64", m, [&](std::size_t k) { return cracks[k].time; });
+  scalar(s, "step", "Int64", m, [&](std::size_t k) { return cracks[k].step; });
+  scalar(s, "energy_j", "Float64", m, [&](std::size_t k) { return cracks[k].energy.total(); });
+  scalar(s, "radius_m", "Float64", m, [&](std::size_t k) { return cracks[k].bond_radius; });
+  vector(s, "normal", m, [&](std::size_t k) { return cracks[k].normal; });
+  s += "</PointData>\n";
+  s += kFooter;
+  put(path, s);
 }
 
 void SnapshotWriter::write_collections() const {

@@ -1,10 +1,12 @@
 #pragma once
 // ParaView snapshots (VTK XML, ASCII): per snapshot one .vtu of particles (radius, velocity,
-// displacement, broken-bond count, tag), one of intact bonds (lines), and one of the cracks so
-// far (points with mode, time, step and energy). Three .pvd collections index them by simulated
-// time, so ParaView opens a whole run as a time series. Each file is written to a temporary name
-// and renamed, and the collections are rewritten after every snapshot: an interrupted run leaves
-// only complete files.
+// displacement, angular velocity, rotation, stress tensor, broken-bond count, tag), one of intact
+// bonds (lines with their loads, peak stresses and breakage index), and one of the cracks so far
+// (points with mode, time, step, energy, radius and the crack plane's normal). Three .pvd
+// collections index them by simulated time, so ParaView opens a whole run as a time series. Each
+// file is written to a temporary name and renamed, and the collections are rewritten after every
+// snapshot: an interrupted run leaves only complete files.
+#include <filesystem>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -39,6 +41,9 @@ class SnapshotWriter : public Recorder {
 
  private:
   void write_collections() const;
+  void write_particles(const Simulation& sim, const std::filesystem::path& path) const;
+  void write_bonds(const Simulation& sim, const std::filesystem::path& path) const;
+  void write_cracks(const Simulation& sim, const std::filesystem::path& path) const;
   std::string folder_;
   double interval_ = 0.0;     // axial strain between snapshots
   double next_strain_ = 0.0;  // the next snapshot is due when the strain reaches it
