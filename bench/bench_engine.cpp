@@ -29,7 +29,7 @@
 #include "breccia/core/rng.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/io/run_folder.hpp"
-#include "breccia/protocol/compression_test.hpp"
+#include "breccia/protocol/compression.hpp"
 #include "breccia/sample/lattice.hpp"
 #include "breccia/sample/packing.hpp"
 #include "breccia/version.hpp"

@@ -1,4 +1,4 @@
-// The 2D flexible membrane (docs/physics.md §6.3, boundary/membrane.hpp): which grains form the
+// The 2D flexible membrane (docs/physics.md §6.3, protocol/membrane.hpp): which grains form the
 // chains, the follower loads against numbers worked by hand, and a biaxial test whose confining
 // stress stays at its target through the peak and the shear band.
 #include <gtest/gtest.h>
@@ -10,8 +10,8 @@
 #include <limits>
 #include <sstream>
 
-#include "breccia/boundary/membrane.hpp"
 #include "breccia/engine/simulation.hpp"
+#include "breccia/protocol/membrane.hpp"
 #include "breccia/sample/lattice.hpp"
 #include "cli_harness.hpp"
 

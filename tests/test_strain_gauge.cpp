@@ -16,7 +16,7 @@
 
 #include "breccia/analysis/compression.hpp"
 #include "breccia/engine/simulation.hpp"
-#include "breccia/protocol/compression_test.hpp"
+#include "breccia/protocol/compression.hpp"
 
 using namespace breccia;
 

@@ -18,6 +18,7 @@
 #include <variant>
 #include <vector>
 
+#include "breccia/analysis/compression.hpp"
 #include "breccia/engine/simulation.hpp"
 
 namespace breccia {
@@ -157,6 +158,11 @@ class Protocol {
   virtual void history_values(const Simulation&, std::vector<double>&) const {}
   // The test's own results, written under its kind in summary.json when it ends.
   virtual void summarise(const Simulation&, nlohmann::json&) const {}
+  // What a stress-strain test adds to summary.json from its curve's analysis (the Brazilian
+  // test reads its peak as the tensile strength), and to the crack pattern from the cracks
+  // (where they lie for its geometry). The run calls these for every test; most add nothing.
+  virtual void summarise_curve(const analysis::CompressionResult&, nlohmann::json&) const {}
+  virtual void describe_crack_pattern(const Simulation&, nlohmann::json&) const {}
   // The grains that are rock: the first rock_particles() of the store. A test may append
   // grains of its own apparatus after them (the abrasion test's grit), which fragments, wear and
   // porosity leave out.

@@ -8,12 +8,12 @@
 #include <utility>
 
 #include "breccia/law/registry.hpp"
-#include "breccia/protocol/abrasion_test.hpp"
-#include "breccia/protocol/brazilian_test.hpp"
-#include "breccia/protocol/cantilever_test.hpp"
-#include "breccia/protocol/compression_test.hpp"
-#include "breccia/protocol/impact_test.hpp"
-#include "breccia/protocol/vibration_test.hpp"
+#include "breccia/protocol/abrasion.hpp"
+#include "breccia/protocol/brazilian.hpp"
+#include "breccia/protocol/cantilever.hpp"
+#include "breccia/protocol/compression.hpp"
+#include "breccia/protocol/impact.hpp"
+#include "breccia/protocol/vibration.hpp"
 
 namespace breccia {
 

@@ -96,14 +96,13 @@ double estimate_shear_wave_speed(const ExperimentSpec& spec, LoopState& L) {
 }
 
 // Where the cracks are: shares per quarter along the loading axis (between the platens as they
-// stood when loading began) and, for a Brazilian disc, how close they lie to the loaded diameter.
+// stood when loading began), the failure plane, and what the test adds for its geometry (a
+// Brazilian disc: how close they lie to the loaded diameter).
 json crack_pattern_json(const Protocol& test, const Simulation& sim) {
-  std::vector<double> axial, offset;
-  std::vector<bool> tensile;
+  std::vector<double> axial;
   std::vector<Vec3> midpoints;
   for (const CrackRecord& c : sim.cracks()) {
     axial.push_back(c.position[test.axis()]);
-    tensile.push_back(c.mode == CrackMode::Tensile);
     midpoints.push_back(c.position);
   }
   const auto q = analysis::quarter_shares(axial, test.origin0(), test.origin0() + test.length0());
@@ -125,20 +124,7 @@ json crack_pattern_json(const Protocol& test, const Simulation& sim) {
        "its angle to the plane normal to the load (90 = axial splitting; Coulomb: 45 + phi/2); "
        "planarity 1 - least/next spread (0 isotropic, 1 one plane); a conjugate or cone-shaped "
        "failure gives a low planarity and an angle between its branches"}};
-  if (const auto* b = dynamic_cast<const BrazilianTest*>(&test)) {
-    for (const CrackRecord& c : sim.cracks()) offset.push_back(c.position.x - b->centre().x);
-    const analysis::SplitPattern sp = analysis::split_pattern(offset, tensile, 0.5 * b->diameter());
-    j["brazilian"] = {
-        {"band_half_width_fraction_of_radius", sp.band},
-        {"early_cracks", sp.early},
-        {"early_tensile_share", sp.early_tensile_share},
-        {"early_in_band_share", sp.early_in_band},
-        {"all_in_band_share", sp.all_in_band},
-        {"early_mean_offset_fraction_of_radius", sp.early_mean_offset},
-        {"note",
-         "cracks within +-band x R of the loaded diameter (x = disc centre); the first 20 % "
-         "by time are the early ones; a uniform scatter would put 31 % in the band"}};
-  }
+  test.describe_crack_pattern(sim, j);
   return j;
 }
 
@@ -407,21 +393,6 @@ json quality_fields(const QualityVerdict& q) {
             {"max_relative_overall", q.confine_err_all}}}};
 }
 
-// The Brazilian test reads its peak as the tensile strength.
-void add_brazilian_fields(json& summary, const Protocol& test,
-                          const analysis::CompressionResult& an) {
-  const auto* b = dynamic_cast<const BrazilianTest*>(&test);
-  if (!b) return;
-  summary["tensile_strength_pa"] = an.peak_deviatoric;
-  summary["tensile_strength_mpa"] = an.peak_deviatoric * 1e-6;
-  summary["tensile_strength_method"] =
-      "sigma_t = 2 F / (pi D t) at the largest mean platen force F (ISRM Brazilian test)";
-  summary["peak_force_n"] =
-      0.5 * an.peak_deviatoric * std::numbers::pi * b->diameter() * b->thickness();
-  summary["disc_diameter_m"] = b->diameter();
-  summary["disc_thickness_m"] = b->thickness();
-}
-
 // summary.json: the run, the test, the analysis, the quality verdict and the warnings.
 json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult& r,
                  const analysis::CompressionResult& an, const QualityVerdict& q,
@@ -471,7 +442,7 @@ json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult&
                          {"elements", sim.joint_count()},
                          {"bonded_at_end", sim.bonded_joints()}};
   summary["crack_pattern"] = crack_pattern_json(test, sim);
-  add_brazilian_fields(summary, test, an);
+  test.summarise_curve(an, summary);
   return summary;
 }
 

@@ -1,4 +1,4 @@
-#include "breccia/protocol/impact_test.hpp"
+#include "breccia/protocol/impact.hpp"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "breccia/boundary/membrane.hpp"
+#include "breccia/protocol/membrane.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "breccia/protocol/compression_test.hpp"
+#include "breccia/protocol/compression.hpp"
 
 #include <algorithm>
 #include <cmath>

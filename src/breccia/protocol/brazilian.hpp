@@ -74,6 +74,11 @@ class BrazilianTest final : public Protocol {
   // The loaded diameter: the line x = centre.x (3D: the plane), along y.
   Vec3 centre() const noexcept { return centre_; }
 
+  // sigma_t = 2 F / (pi D t) at the peak (docs/analysis.md §1.10), and how close the cracks lie
+  // to the loaded diameter.
+  void summarise_curve(const analysis::CompressionResult& an, nlohmann::json& out) const override;
+  void describe_crack_pattern(const Simulation& sim, nlohmann::json& pattern) const override;
+
   void save_state(ArchiveWriter& a) const override;
   void check_restored(const Simulation& sim, const std::string& where) const override;
 

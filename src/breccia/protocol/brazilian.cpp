@@ -1,10 +1,12 @@
-#include "breccia/protocol/brazilian_test.hpp"
+#include "breccia/protocol/brazilian.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <numbers>
 
+#include "breccia/analysis/crack_pattern.hpp"
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
@@ -173,6 +175,41 @@ void BrazilianTest::check_restored(const Simulation& sim, const std::string& whe
     throw InputError(
         where, "brazilian test", "wall or particle index",
         "refers to a wall or particle the simulation lacks: the checkpoint is corrupt");
+}
+
+}  // namespace breccia
+
+namespace breccia {
+
+void BrazilianTest::summarise_curve(const analysis::CompressionResult& an,
+                                    nlohmann::json& out) const {
+  out["tensile_strength_pa"] = an.peak_deviatoric;
+  out["tensile_strength_mpa"] = an.peak_deviatoric * 1e-6;
+  out["tensile_strength_method"] =
+      "sigma_t = 2 F / (pi D t) at the largest mean platen force F (ISRM Brazilian test)";
+  out["peak_force_n"] = 0.5 * an.peak_deviatoric * std::numbers::pi * d0_ * t_;
+  out["disc_diameter_m"] = d0_;
+  out["disc_thickness_m"] = t_;
+}
+
+void BrazilianTest::describe_crack_pattern(const Simulation& sim, nlohmann::json& pattern) const {
+  std::vector<double> offset;
+  std::vector<bool> tensile;
+  for (const CrackRecord& c : sim.cracks()) {
+    offset.push_back(c.position.x - centre_.x);
+    tensile.push_back(c.mode == CrackMode::Tensile);
+  }
+  const analysis::SplitPattern sp = analysis::split_pattern(offset, tensile, 0.5 * d0_);
+  pattern["brazilian"] = {
+      {"band_half_width_fraction_of_radius", sp.band},
+      {"early_cracks", sp.early},
+      {"early_tensile_share", sp.early_tensile_share},
+      {"early_in_band_share", sp.early_in_band},
+      {"all_in_band_share", sp.all_in_band},
+      {"early_mean_offset_fraction_of_radius", sp.early_mean_offset},
+      {"note",
+       "cracks within +-band x R of the loaded diameter (x = disc centre); the first 20 % by time "
+       "are the early ones; a uniform scatter would put 31 % in the band"}};
 }
 
 }  // namespace breccia

@@ -1,4 +1,4 @@
-#include "breccia/protocol/abrasion_test.hpp"
+#include "breccia/protocol/abrasion.hpp"
 
 #include <fmt/format.h>
 

@@ -2,7 +2,7 @@
 // Compression between two rigid platens (docs/physics.md §6.1): unconfined (UCS), or confined at a
 // constant confining stress: triaxial in 3D by servo-controlled lateral walls (§6.2; four plane
 // walls around a prism, or a cylindrical wall around a cylinder) and biaxial in 2D by flexible
-// membranes on the outermost grain chains (§6.3, boundary/membrane.hpp) or two servo walls.
+// membranes on the outermost grain chains (§6.3, protocol/membrane.hpp) or two servo walls.
 // Stages: consolidation (platens and lateral walls servo to sigma_3 until steady), then axial
 // loading at a prescribed platen speed reached through a cosine ramp, stopping at a maximum strain
 // or once the stress has fallen to a fraction of the peak. Axis: z in 3D, y in 2D.
@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "breccia/boundary/membrane.hpp"
 #include "breccia/boundary/servo.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/law/param_table.hpp"
+#include "breccia/protocol/membrane.hpp"
 #include "breccia/protocol/protocol.hpp"
 
 namespace breccia {

@@ -1,4 +1,4 @@
-#include "breccia/protocol/vibration_test.hpp"
+#include "breccia/protocol/vibration.hpp"
 
 #include <fmt/format.h>
 

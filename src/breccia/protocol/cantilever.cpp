@@ -1,4 +1,4 @@
-#include "breccia/protocol/cantilever_test.hpp"
+#include "breccia/protocol/cantilever.hpp"
 
 #include <fmt/format.h>
 
