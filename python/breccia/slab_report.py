@@ -5,7 +5,7 @@ tables and returns the rows of the report's table; breccia.report calls it for r
 import numpy as np
 import matplotlib.pyplot as plt
 
-from breccia import report as R
+from breccia import report_kit as R
 
 
 def _time_us(hist):
