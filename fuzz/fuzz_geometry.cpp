@@ -1,5 +1,5 @@
 // Fuzz target: the breccia-geometry reader and the checks every sample passes.
-#include "breccia/io/geometry_file.hpp"
+#include "breccia/sample/geometry_file.hpp"
 #include "fuzz_target.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

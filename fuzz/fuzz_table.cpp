@@ -1,7 +1,7 @@
 // Fuzz target: the x-y-z-r table reader (YADE / PFC exports), 3D and 2D.
 #include <sstream>
 
-#include "breccia/io/sample_import.hpp"
+#include "breccia/sample/sample_import.hpp"
 #include "fuzz_target.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

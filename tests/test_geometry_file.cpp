@@ -9,8 +9,8 @@
 
 #include "breccia/core/error.hpp"
 #include "breccia/engine/simulation.hpp"
-#include "breccia/io/geometry_file.hpp"
-#include "breccia/io/sample_import.hpp"
+#include "breccia/sample/geometry_file.hpp"
+#include "breccia/sample/sample_import.hpp"
 
 using namespace breccia;
 

@@ -10,7 +10,7 @@
 #include "breccia/core/error.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
 #include "breccia/engine/simulation.hpp"
-#include "breccia/io/geometry_file.hpp"
+#include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/packing.hpp"
 #include "breccia/sample/structure.hpp"
 #include "breccia/sample/tangent_fit.hpp"

@@ -10,9 +10,9 @@
 
 #include "breccia/analysis/compression.hpp"
 #include "breccia/core/error.hpp"
-#include "breccia/io/geometry_file.hpp"
-#include "breccia/io/sample_import.hpp"
+#include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/packing.hpp"
+#include "breccia/sample/sample_import.hpp"
 
 namespace fs = std::filesystem;
 using namespace breccia;

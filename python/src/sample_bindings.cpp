@@ -3,8 +3,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
-#include "breccia/io/geometry_file.hpp"
 #include "breccia/run/sample_build.hpp"
+#include "breccia/sample/geometry_file.hpp"
 #include "module.hpp"
 
 namespace py = pybind11;

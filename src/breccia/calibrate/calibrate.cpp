@@ -19,9 +19,9 @@
 #include "breccia/calibrate/laboratory.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
+#include "breccia/core/text_file.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
-#include "breccia/io/text_file.hpp"
 #include "breccia/version.hpp"
 
 namespace breccia {

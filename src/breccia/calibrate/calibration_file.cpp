@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "breccia/core/error.hpp"
-#include "breccia/io/text_file.hpp"
+#include "breccia/core/text_file.hpp"
 #include "breccia/io/toml_node.hpp"
 
 namespace breccia {

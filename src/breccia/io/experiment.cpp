@@ -12,7 +12,7 @@
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
-#include "breccia/io/text_file.hpp"
+#include "breccia/core/text_file.hpp"
 #include "breccia/io/toml_node.hpp"
 #include "breccia/material/library.hpp"
 

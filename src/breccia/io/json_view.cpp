@@ -4,7 +4,7 @@
 #include <fstream>
 
 #include "breccia/core/error.hpp"
-#include "breccia/io/text_file.hpp"
+#include "breccia/core/text_file.hpp"
 
 namespace breccia {
 

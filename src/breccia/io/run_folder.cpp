@@ -18,8 +18,8 @@
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 #include "breccia/core/parallel.hpp"
+#include "breccia/core/text_file.hpp"
 #include "breccia/io/json_view.hpp"
-#include "breccia/io/text_file.hpp"
 
 namespace breccia {
 

@@ -6,7 +6,7 @@
 
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
-#include "breccia/io/text_file.hpp"
+#include "breccia/core/text_file.hpp"
 
 namespace breccia {
 

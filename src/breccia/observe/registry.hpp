@@ -11,10 +11,12 @@
 #include "breccia/observe/recorder.hpp"
 #include "breccia/observe/recorders.hpp"
 #include "breccia/observe/snapshots.hpp"
+#include "breccia/observe/wall_table.hpp"
 
 namespace breccia {
 
-using RecorderTypes = TypeList<HistoryRecorder, CrackRecorder, SnapshotWriter, AeMonitor>;
+using RecorderTypes =
+    TypeList<HistoryRecorder, CrackRecorder, SnapshotWriter, AeMonitor, WallTable>;
 
 using RecorderList = std::vector<std::unique_ptr<Recorder>>;
 

@@ -8,8 +8,8 @@
 
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/core/text_file.hpp"
 #include "breccia/io/experiment.hpp"
-#include "breccia/io/text_file.hpp"
 
 namespace breccia {
 

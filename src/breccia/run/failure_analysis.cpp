@@ -17,7 +17,7 @@
 #include "breccia/analysis/stages.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
-#include "breccia/io/text_file.hpp"
+#include "breccia/core/text_file.hpp"
 #include "breccia/observe/recorders.hpp"
 
 namespace breccia {

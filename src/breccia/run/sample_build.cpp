@@ -11,12 +11,12 @@
 #include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
-#include "breccia/io/geometry_checks.hpp"
-#include "breccia/io/geometry_file.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
-#include "breccia/io/sample_import.hpp"
+#include "breccia/sample/geometry_checks.hpp"
+#include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/lattice.hpp"
+#include "breccia/sample/sample_import.hpp"
 #include "breccia/version.hpp"
 
 namespace breccia {

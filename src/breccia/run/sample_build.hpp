@@ -10,8 +10,8 @@
 
 #include "breccia/engine/simulation.hpp"
 #include "breccia/io/experiment.hpp"
-#include "breccia/io/geometry_file.hpp"
 #include "breccia/protocol/protocol.hpp"
+#include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/packing.hpp"
 
 namespace breccia {

@@ -10,7 +10,7 @@
 
 #include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
-#include "breccia/io/text_file.hpp"
+#include "breccia/core/text_file.hpp"
 #include "breccia/version.hpp"
 
 namespace breccia {
@@ -21,8 +21,10 @@ using json = nlohmann::json;
 constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // 2: commit and trailing hash; 3: strain gauges; 4, 5: brittle-beam and quaternion bond sets;
 // 6: smooth joints; 7: the 2D side-wall servo's integral terms; 8: RICEBAL bond set; 13: the
-// recorders in registry order, the next snapshot's strain with the snapshots
-constexpr std::uint32_t kCheckpointFormat = 13;
+// recorders in registry order, the next snapshot's strain with the snapshots; 14: the contact law
+// and the bond and joint sets by law name. A new law, lab test or recorder needs no new number:
+// laws and tests are found by name, and each recorder checks its own label.
+constexpr std::uint32_t kCheckpointFormat = 14;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of

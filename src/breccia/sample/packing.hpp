@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "breccia/engine/simulation.hpp"
-#include "breccia/io/geometry_file.hpp"
+#include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/radius_distribution.hpp"
 #include "breccia/sample/region.hpp"
 #include "breccia/sample/structure.hpp"

@@ -1,4 +1,4 @@
-#include "breccia/io/geometry_file.hpp"
+#include "breccia/sample/geometry_file.hpp"
 
 #include <fmt/format.h>
 #include <fmt/os.h>
@@ -10,8 +10,8 @@
 #include <sstream>
 
 #include "breccia/core/error.hpp"
-#include "breccia/io/geometry_checks.hpp"
-#include "breccia/io/text_file.hpp"
+#include "breccia/core/text_file.hpp"
+#include "breccia/sample/geometry_checks.hpp"
 
 namespace breccia {
 

@@ -1,4 +1,4 @@
-#include "breccia/io/sample_import.hpp"
+#include "breccia/sample/sample_import.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -8,8 +8,8 @@
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
-#include "breccia/io/geometry_checks.hpp"
-#include "breccia/io/text_file.hpp"
+#include "breccia/core/text_file.hpp"
+#include "breccia/sample/geometry_checks.hpp"
 
 namespace breccia {
 

@@ -43,7 +43,7 @@ struct GeometryData {
 };
 
 // Reads a geometry file. Throws InputError naming the file, line, key, value and what is allowed,
-// also when the sample fails check_geometry (io/geometry_checks.hpp) or holds more than
+// also when the sample fails check_geometry (sample/geometry_checks.hpp) or holds more than
 // `max_particles`.
 GeometryData read_geometry(const std::string& path,
                            std::uint64_t max_particles = kMaxFileParticles);

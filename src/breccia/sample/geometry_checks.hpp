@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <string>
 
-#include "breccia/io/geometry_file.hpp"
+#include "breccia/sample/geometry_file.hpp"
 
 namespace breccia {
 

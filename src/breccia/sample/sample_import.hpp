@@ -13,12 +13,12 @@
 #include <istream>
 #include <string>
 
-#include "breccia/io/geometry_file.hpp"
+#include "breccia/sample/geometry_file.hpp"
 
 namespace breccia {
 
 // Both readers refuse more than `max_particles` rows and samples that fail check_geometry
-// (io/geometry_checks.hpp).
+// (sample/geometry_checks.hpp).
 GeometryData read_xyzr_table(const std::string& path, Dimension dim, double density,
                              double thickness, std::uint64_t max_particles = kMaxFileParticles);
 GeometryData read_gengeo(const std::string& path, double density, double thickness,

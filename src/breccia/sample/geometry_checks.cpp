@@ -1,4 +1,4 @@
-#include "breccia/io/geometry_checks.hpp"
+#include "breccia/sample/geometry_checks.hpp"
 
 #include <fmt/format.h>
 
