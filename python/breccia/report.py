@@ -67,13 +67,14 @@ def crack_maps(summary, cracks, outdir, figures):
     if not cracks:
         return
     dim = 2 if summary.get("test", "").startswith("biaxial") else 3
-    brazilian = summary.get("test_kind") == "brazilian"
+    # A test on a disc reports it (disc_diameter_m): its face is drawn whole, loaded along y.
+    disc = "disc_diameter_m" in summary
     x = col(cracks, "x_m", 1e3)
     y = col(cracks, "y_m", 1e3)
     z = col(cracks, "z_m", 1e3)
     stage = col(cracks, "stage")
     mode = [c["mode"] for c in cracks]
-    if brazilian:
+    if disc:
         # The disc's face (x-y), loaded along y; every crack through the thickness projected.
         keep = np.ones(len(x), bool)
         horiz, vert = x, y
@@ -95,7 +96,7 @@ def crack_maps(summary, cracks, outdir, figures):
             idx = [i for i in range(len(mode)) if sel[i] and mode[i] == m]
             ax.scatter(horiz[idx], vert[idx], s=4, c=MODE_COLOURS[m], label=m)
         ax.set_title(f"{STAGE_NAMES[k]} ({int(sel.sum())})", fontsize=8)
-        if brazilian:  # the disc's outline, centred on the cracks' mid-range
+        if disc:  # the disc's outline, centred on the cracks' mid-range
             r = 0.5e3 * summary.get("disc_diameter_m", 0.0)
             xc = 0.5 * (np.nanmin(x) + np.nanmax(x))
             yc = 0.5 * (np.nanmin(y) + np.nanmax(y))
@@ -113,7 +114,7 @@ def crack_maps(summary, cracks, outdir, figures):
 def crack_field_3d(summary, cracks, outdir, figures):
     """Every microcrack of a 3D run in perspective from two sides, tensile and shear apart, so
     a shear band or axial splitting shows as a surface (the crack maps show one section)."""
-    if not cracks or summary.get("test_kind") == "brazilian" or \
+    if not cracks or "disc_diameter_m" in summary or \
             summary.get("test", "").startswith("biaxial") or not any(col(cracks, "z_m")):
         return
     x, y, z = col(cracks, "x_m", 1e3), col(cracks, "y_m", 1e3), col(cracks, "z_m", 1e3)
