@@ -95,7 +95,7 @@ struct BrittleBeam : beam::BeamLaw {
     f.tau = tau;
     f.ratio_t = tensile_index / p.tensile_cutoff;
     f.ratio_s = shear_limit > 0.0 ? tau / shear_limit : std::numeric_limits<double>::quiet_NaN();
-    f.index = shear_limit > 0.0 ? std::max(f.ratio_t, f.ratio_s) : std::max(f.ratio_t, 1.0);
+    f.index = larger_ratio(f.ratio_t, f.ratio_s);
     f.bond_radius = s.radius;
     return f;
   }

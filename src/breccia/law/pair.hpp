@@ -3,6 +3,7 @@
 // a pair once (docs/physics.md §0.2); a law turns it into a force on particle 2 and a pure couple
 // on particle 2 (§0.3). Particle 1 receives the opposite force and couple; torques about the
 // centres follow from the lever arms, which conserves linear and angular momentum exactly.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -137,5 +138,12 @@ struct BondFailure {
   double point_shift = 0.0;
   BondEnergy energy;  // released energy by component
 };
+
+// The breakage index of a criterion tested as "tensile, else shear": the larger of its two ratios.
+// A shear ratio of NaN means the shear limit is used up (no strength left), so the bond is at or
+// beyond its strength whatever the tensile ratio says.
+inline double larger_ratio(double ratio_t, double ratio_s) noexcept {
+  return std::isnan(ratio_s) ? std::max(ratio_t, 1.0) : std::max(ratio_t, ratio_s);
+}
 
 }  // namespace breccia

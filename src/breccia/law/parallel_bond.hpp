@@ -193,7 +193,7 @@ struct ParallelBond {
     f.tau = tau_max;
     f.ratio_t = sigma_max / s.tensile_strength;
     f.ratio_s = tau_c > 0.0 ? tau_max / tau_c : std::numeric_limits<double>::quiet_NaN();
-    f.index = tau_c > 0.0 ? std::max(f.ratio_t, f.ratio_s) : std::max(f.ratio_t, 1.0);
+    f.index = larger_ratio(f.ratio_t, f.ratio_s);
     f.bond_radius = s.bond_radius;
     return f;
   }

@@ -155,7 +155,7 @@ struct RicebalBond {
     f.tau = std::abs(fs) / s.area;
     f.ratio_t = sigma_t / p.tensile_strength;
     f.ratio_s = fs_max > 0.0 ? std::abs(fs) / fs_max : std::numeric_limits<double>::quiet_NaN();
-    f.index = fs_max > 0.0 ? std::max(f.ratio_t, f.ratio_s) : std::max(f.ratio_t, 1.0);
+    f.index = larger_ratio(f.ratio_t, f.ratio_s);
     f.bond_radius = s.bond_radius;
     return f;
   }
