@@ -160,39 +160,53 @@ struct ParallelBond {
     s.bend_moment = mb;
     s.n_old = g.n;
 
-    const BondFailure judged = assess(p, s);
-    if (judged.broken) {
-      fail = judged;
+    // The decision needs only the peak stresses; the record's ratios are made when it breaks.
+    const PeakStresses k = peak_stresses(p, s);
+    if (k.tensile(s) || k.shear()) {
+      fail = record(p, s, k);
       fail.energy = energy(s);
       return {};
     }
     return {g.n * fn + fs, g.n * mt + mb};
   }
 
-  // The failure criterion on the bond's present loads: tensile when the peak normal stress on
-  // the periphery reaches sigma_c (checked first), else shear when the peak shear stress reaches
-  // c - sigma_avg tan(phi) (tension-positive sigma).
-  static BondFailure assess(const Params& p, const State& s) noexcept {
-    BondFailure f;
-    const double mb_abs = norm(s.bend_moment);
-    const double fs_abs = norm(s.shear_force);
+  // The peak stresses on the periphery of the cement (tension-positive sigma) and the shear
+  // strength at the present mean normal stress: tensile when sigma_max reaches sigma_c (tested
+  // first), else shear when tau_max reaches c - sigma_avg tan(phi).
+  struct PeakStresses {
+    double mb_abs, fs_abs, sigma_max, tau_max, tau_c;
+    bool tensile(const State& s) const noexcept { return sigma_max >= s.tensile_strength; }
+    bool shear() const noexcept { return tau_max >= tau_c; }
+  };
+  static PeakStresses peak_stresses(const Params& p, const State& s) noexcept {
+    PeakStresses k;
+    k.mb_abs = norm(s.bend_moment);
+    k.fs_abs = norm(s.shear_force);
     const double sigma_avg = -s.normal_force * s.inv_area;
-    const double sigma_max = sigma_avg + p.moment_factor * mb_abs * s.bend_coeff;
-    const double tau_max =
-        fs_abs * s.inv_area + p.moment_factor * std::abs(s.twist_moment) * s.twist_coeff;
-    const double tau_c = s.cohesion - sigma_avg * p.tan_friction;
-    const bool tensile = sigma_max >= s.tensile_strength;
-    const bool shear = !tensile && tau_max >= tau_c;
-    f.broken = tensile || shear;
-    f.mode = tensile || !shear ? CrackMode::Tensile : CrackMode::Shear;
+    k.sigma_max = sigma_avg + p.moment_factor * k.mb_abs * s.bend_coeff;
+    k.tau_max = k.fs_abs * s.inv_area + p.moment_factor * std::abs(s.twist_moment) * s.twist_coeff;
+    k.tau_c = s.cohesion - sigma_avg * p.tan_friction;
+    return k;
+  }
+
+  // The failure criterion on the bond's present loads, as the crack record and snapshots give it.
+  static BondFailure assess(const Params& p, const State& s) noexcept {
+    return record(p, s, peak_stresses(p, s));
+  }
+
+  static BondFailure record(const Params&, const State& s, const PeakStresses& k) noexcept {
+    BondFailure f;
+    const bool tensile = k.tensile(s);
+    f.broken = tensile || k.shear();
+    f.mode = tensile || !k.shear() ? CrackMode::Tensile : CrackMode::Shear;
     f.Fn = s.normal_force;
-    f.Fs = fs_abs;
+    f.Fs = k.fs_abs;
     f.Mt = s.twist_moment;
-    f.Mb = mb_abs;
-    f.sigma = sigma_max;
-    f.tau = tau_max;
-    f.ratio_t = sigma_max / s.tensile_strength;
-    f.ratio_s = tau_c > 0.0 ? tau_max / tau_c : std::numeric_limits<double>::quiet_NaN();
+    f.Mb = k.mb_abs;
+    f.sigma = k.sigma_max;
+    f.tau = k.tau_max;
+    f.ratio_t = k.sigma_max / s.tensile_strength;
+    f.ratio_s = k.tau_c > 0.0 ? k.tau_max / k.tau_c : std::numeric_limits<double>::quiet_NaN();
     f.index = larger_ratio(f.ratio_t, f.ratio_s);
     f.bond_radius = s.bond_radius;
     return f;
