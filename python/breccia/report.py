@@ -63,10 +63,15 @@ def stress_strain(folder, summary, hist, outdir, figures):
     save(fig, outdir, "stress_strain.png", figures)
 
 
+def run_dimension(summary):
+    """2 or 3, as the run's summary records it (older summaries: 2 for a biaxial test only)."""
+    return summary.get("dimension", 2 if summary.get("test", "").startswith("biaxial") else 3)
+
+
 def crack_maps(summary, cracks, outdir, figures):
     if not cracks:
         return
-    dim = 2 if summary.get("test", "").startswith("biaxial") else 3
+    dim = run_dimension(summary)
     # A test on a disc reports it (disc_diameter_m): its face is drawn whole, loaded along y.
     disc = "disc_diameter_m" in summary
     x = col(cracks, "x_m", 1e3)
@@ -114,8 +119,8 @@ def crack_maps(summary, cracks, outdir, figures):
 def crack_field_3d(summary, cracks, outdir, figures):
     """Every microcrack of a 3D run in perspective from two sides, tensile and shear apart, so
     a shear band or axial splitting shows as a surface (the crack maps show one section)."""
-    if not cracks or "disc_diameter_m" in summary or \
-            summary.get("test", "").startswith("biaxial") or not any(col(cracks, "z_m")):
+    if not cracks or "disc_diameter_m" in summary or run_dimension(summary) == 2 or \
+            not any(col(cracks, "z_m")):
         return
     x, y, z = col(cracks, "x_m", 1e3), col(cracks, "y_m", 1e3), col(cracks, "z_m", 1e3)
     tensile = np.array([c["mode"] == "tensile" for c in cracks])

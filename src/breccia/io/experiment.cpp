@@ -623,6 +623,10 @@ std::string law_key_list() {
   return s;
 }
 
+// The registered test a confining-stress sweep (or the old [loading] table) runs at sigma_3 in
+// `dimension` ("" when none does).
+std::string confinable_test_at(double sigma3, int dimension);
+
 // The layout before the test registry: [loading] with platen_speed, ramp_time, max_strain,
 // stop_fraction, confining_stress and servo_relaxation. Still read, as the test "ucs" when
 // confining_stress is 0 (or absent), else "triaxial" (3D) or "biaxial" (2D); its keys keep their
@@ -650,7 +654,7 @@ std::string legacy_loading_kind(const toml::table& root, const std::string& sour
   std::int64_t dim = 3;
   if (const auto* e = root["engine"]["dimension"].node(); e && e->is_integer())
     dim = e->as_integer()->get();
-  return sigma3 > 0.0 ? (dim == 2 ? "biaxial" : "triaxial") : "ucs";
+  return confinable_test_at(sigma3, static_cast<int>(dim));
 }
 
 // The keys of an old [loading] table onto the test it maps to (see legacy_loading_kind).
@@ -671,10 +675,9 @@ void apply_legacy_loading(ExperimentSpec& spec, const toml::table& tbl, const st
     with_lab_test(spec.test_kind, [&]<class T>() {
       set_law_key<T>(std::get<typename T::Params>(spec.test), item, item_node, where, full, found);
     });
-    // A UCS has no confinement: its confining_stress (0) and servo gain are not used.
-    if (!found && spec.test_kind == "ucs" &&
-        (item == "confining_stress" || item == "servo_relaxation"))
-      continue;
+    // The test was chosen for this confining stress: one without confinement (sigma_3 = 0)
+    // has no use for it or its servo gain.
+    if (!found && (item == "confining_stress" || item == "servo_relaxation")) continue;
     if (!found)
       throw InputError(where, full, show(value),
                        "not a key of test kind \"" + spec.test_kind + "\"");
@@ -1017,57 +1020,93 @@ double confining_stress(const ExperimentSpec& spec) {
 
 namespace {
 
-template <class P>
-constexpr bool kCompressionParams =
-    std::is_same_v<P, UcsTest::Params> || std::is_same_v<P, TriaxialTest::Params> ||
-    std::is_same_v<P, BiaxialTest::Params>;
+// A test whose loading a strain-rate sweep can vary, and one a confining-stress sweep can choose
+// (protocol/compression.hpp).
+template <class T>
+concept PlatenLoaded = requires(typename T::Params& p, const PlatenLoading& l) {
+  { T::loading(p) } -> std::same_as<PlatenLoading>;
+  T::set_loading(p, l);
+};
+template <class T>
+concept Confinable = PlatenLoaded<T> && requires(double sigma3, int dim) {
+  { T::runs_at(sigma3, dim) } -> std::same_as<bool>;
+};
 
-// Sweeps vary a compression test: any other test kind is refused, naming the sweep.
-void require_compression(const ExperimentSpec& spec, const std::string& where, const char* sweep) {
-  const bool compression = std::visit(
-      [](const auto& p) { return kCompressionParams<std::decay_t<decltype(p)>>; }, spec.test);
-  if (!compression)
+// The registered tests a sweep can vary, for messages: "\"ucs\", \"triaxial\" or \"biaxial\"".
+template <bool Confining>
+std::string sweepable_tests() {
+  std::vector<std::string> names;
+  for_each_lab_test([&]<class T>() {
+    if constexpr (Confining ? Confinable<T> : PlatenLoaded<T>)
+      names.push_back("\"" + std::string(T::name) + "\"");
+  });
+  std::string s;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    s += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  return s;
+}
+
+// The loading of the experiment's test; InputError naming the sweep unless it can be swept.
+template <bool Confining>
+PlatenLoading sweepable_loading(const ExperimentSpec& spec, const std::string& where,
+                                const char* sweep) {
+  std::optional<PlatenLoading> loading;
+  visit_lab_test(spec.test, [&]<class T>(const typename T::Params& p) {
+    if constexpr (Confining ? Confinable<T> : PlatenLoaded<T>) loading = T::loading(p);
+  });
+  if (!loading)
     throw InputError(where, "test.kind", "\"" + spec.test_kind + "\"",
-                     std::string("a ") + sweep +
-                         " sweep needs a compression test (\"ucs\", \"triaxial\" or "
-                         "\"biaxial\")");
+                     std::string("a ") + sweep + " sweep needs a test loaded by platens (" +
+                         sweepable_tests<Confining>() + ")");
+  return *loading;
 }
 
 }  // namespace
 
+namespace {
+std::string confinable_test_at(double sigma3, int dimension) {
+  std::string kind;
+  for_each_lab_test([&]<class T>() {
+    if constexpr (Confinable<T>)
+      if (kind.empty() && T::runs_at(sigma3, dimension)) kind = T::name;
+  });
+  return kind;
+}
+}  // namespace
+
 void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string& where) {
-  require_compression(spec, where, "confining-stress");
-  double speed = 0, ramp = 0, strain = 0, stop = 0, relax = 0.5;
-  std::visit(
-      [&](const auto& p) {
-        if constexpr (kCompressionParams<std::decay_t<decltype(p)>>) {
-          speed = p.platen_speed;
-          ramp = p.ramp_time;
-          strain = p.max_strain;
-          stop = p.stop_fraction;
-          if constexpr (requires { p.servo_relaxation; }) relax = p.servo_relaxation;
-        }
-      },
-      spec.test);
-  if (!(sigma3 > 0.0)) {
-    spec.test_kind = "ucs";
-    spec.test = UcsTest::Params{speed, ramp, strain, stop};
-  } else if (spec.dimension == 2) {
-    spec.test_kind = "biaxial";
-    spec.test = BiaxialTest::Params{speed, ramp, strain, stop, sigma3, relax};
-  } else {
-    spec.test_kind = "triaxial";
-    spec.test = TriaxialTest::Params{speed, ramp, strain, stop, sigma3, relax};
-  }
+  PlatenLoading loading = sweepable_loading<true>(spec, where, "confining-stress");
+  loading.confining_stress = sigma3 > 0.0 ? sigma3 : 0.0;
+  bool found = false;
+  for_each_lab_test([&]<class T>() {
+    if constexpr (Confinable<T>) {
+      if (found || !T::runs_at(sigma3, static_cast<int>(spec.dimension))) return;
+      // The same test keeps its other keys (a biaxial test's membranes); another starts from
+      // its defaults.
+      auto* same = std::get_if<typename T::Params>(&spec.test);
+      typename T::Params p = same ? *same : typename T::Params{};
+      T::set_loading(p, loading);
+      spec.test = p;
+      spec.test_kind = std::string(T::name);
+      found = true;
+    }
+  });
+  if (!found)
+    throw InputError(where, "confining_stress", fmt::format("{}", sigma3),
+                     fmt::format("no registered test runs at this confining stress in {}D ({})",
+                                 spec.dimension, sweepable_tests<true>()));
 }
 
 void set_platen_speed(ExperimentSpec& spec, double speed, const std::string& where) {
-  require_compression(spec, where, "strain-rate");
-  std::visit(
-      [&](auto& p) {
-        if constexpr (kCompressionParams<std::decay_t<decltype(p)>>) p.platen_speed = speed;
-      },
-      spec.test);
+  PlatenLoading loading = sweepable_loading<false>(spec, where, "strain-rate");
+  loading.platen_speed = speed;
+  visit_lab_test(spec.test, [&]<class T>(const typename T::Params& p) {
+    if constexpr (PlatenLoaded<T>) {
+      typename T::Params q = p;
+      T::set_loading(q, loading);
+      spec.test = q;
+    }
+  });
 }
 
 SampleInfo sample_info(const ExperimentSpec& s) {

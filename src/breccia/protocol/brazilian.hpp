@@ -19,7 +19,7 @@
 
 namespace breccia {
 
-class BrazilianTest final : public Protocol {
+class BrazilianTest final : public Protocol, public StressStrainTest {
  public:
   static constexpr std::string_view name = "brazilian";
   static constexpr std::string_view summary =
@@ -57,18 +57,20 @@ class BrazilianTest final : public Protocol {
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 
+  double progress(const AxialState& s, const Simulation&) const override {
+    return s.strain / p_.max_strain;
+  }
+  // The area is such that length x area is the disc's volume (pi D^2 t / 4).
+  TestFrame frame() const noexcept override {
+    return {1, y0_, d0_, 0.25 * 3.141592653589793 * d0_ * t_, d0_, t_};
+  }
+  const StressStrainTest* stress_strain() const noexcept override { return this; }
+
   double confining_stress() const noexcept override { return 0.0; }
   bool consolidated() const noexcept override { return true; }
   double max_strain() const noexcept override { return p_.max_strain; }
   double platen_speed() const noexcept override { return p_.platen_speed; }
-  double length0() const noexcept override { return d0_; }
-  // Such that length x area is the disc's volume (pi D^2 t / 4).
-  double area0() const noexcept override { return 0.25 * 3.141592653589793 * d0_ * t_; }
-  double width0() const noexcept override { return d0_; }
-  double depth0() const noexcept override { return t_; }
   std::string lateral_boundary() const override { return "none"; }
-  int axis() const noexcept override { return 1; }
-  double origin0() const noexcept override { return y0_; }
   double thickness() const noexcept { return t_; }
   double diameter() const noexcept { return d0_; }
   // The loaded diameter: the line x = centre.x (3D: the plane), along y.

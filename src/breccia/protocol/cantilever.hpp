@@ -70,19 +70,13 @@ class CantileverTest final : public Protocol {
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 
-  double confining_stress() const noexcept override { return 0.0; }
-  bool consolidated() const noexcept override { return true; }
-  double max_strain() const noexcept override { return p_.max_deflection / free_length_; }
-  double platen_speed() const noexcept override { return 0.0; }
-  double length0() const noexcept override { return thickness_; }
-  double area0() const noexcept override { return length_ * width_; }
-  double width0() const noexcept override { return length_; }
-  double depth0() const noexcept override { return width_; }
-  std::string lateral_boundary() const override { return "none"; }
-  int axis() const noexcept override { return axis_; }
-  double origin0() const noexcept override { return bottom0_; }
+  double progress(const AxialState& s, const Simulation&) const override {
+    return s.strain * free_length_ / p_.max_deflection;
+  }
+  TestFrame frame() const noexcept override {
+    return {axis_, bottom0_, thickness_, length_ * width_, length_, width_};
+  }
 
-  bool stress_strain_test() const noexcept override { return false; }
   std::vector<std::string> history_columns() const override;
   void history_values(const Simulation& sim, std::vector<double>& out) const override;
   void summarise(const Simulation& sim, nlohmann::json& out) const override;

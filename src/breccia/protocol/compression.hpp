@@ -38,7 +38,7 @@ struct PlatenCompressionSettings {
   std::uint64_t max_consolidation_steps = 200000;
 };
 
-class PlatenCompression final : public Protocol {
+class PlatenCompression final : public Protocol, public StressStrainTest {
  public:
   // Adds the platens (and lateral walls when confined) around the sample's extremes. Call before
   // Simulation::initialise(). `kind` is the registry name it runs as.
@@ -59,21 +59,21 @@ class PlatenCompression final : public Protocol {
 
   const char* kind() const noexcept override;
   std::string label() const override;
+  double progress(const AxialState& s, const Simulation&) const override {
+    return s.strain / st_.max_strain;
+  }
+  TestFrame frame() const noexcept override { return {axis_, z0_, h0_, area0_, w0_[0], w0_[1]}; }
+  const StressStrainTest* stress_strain() const noexcept override { return this; }
+
   bool confined() const noexcept { return st_.confining_stress > 0.0; }
   double confining_stress() const noexcept override { return st_.confining_stress; }
+  bool consolidated() const noexcept override { return consolidated_; }
   double max_strain() const noexcept override { return st_.max_strain; }
   double platen_speed() const noexcept override { return st_.platen_speed; }
-  double length0() const noexcept override { return h0_; }
-  double area0() const noexcept override { return area0_; }
-  double width0() const noexcept override { return w0_[0]; }
-  double depth0() const noexcept override { return w0_[1]; }  // 2D: the thickness
   std::string lateral_boundary() const override;
-  int axis() const noexcept override { return axis_; }
-  double origin0() const noexcept override { return z0_; }
   double height0() const noexcept { return h0_; }
   double area() const noexcept { return area0_; }
   double peak_stress() const noexcept { return peak_; }
-  bool consolidated() const noexcept override { return consolidated_; }
   LateralBoundary lateral() const noexcept { return lateral_; }
   const PlatenCompressionSettings& settings() const noexcept { return st_; }
 
@@ -165,6 +165,37 @@ constexpr std::array<ParamField<P>, 2> confining_fields(std::string_view walls) 
             "alpha_s of the wall servo (docs/physics.md §6.2)"}}};
 }
 
+// What the sweeps vary in a test loaded by two platens: its loading and its confinement. A
+// registered test takes part in strain-rate sweeps when its type reads and writes its loading
+// (`loading`, `set_loading`), and in confining-stress sweeps when it also says at which sigma_3
+// and dimension it is the test to run (`runs_at`); io/experiment.cpp finds them in the registry.
+struct PlatenLoading {
+  double platen_speed = 0.0, ramp_time = 0.0, max_strain = 0.0, stop_fraction = 0.0;
+  double confining_stress = 0.0, servo_relaxation = 0.5;
+};
+
+template <class P>
+PlatenLoading platen_loading(const P& p) {
+  PlatenLoading l{p.platen_speed, p.ramp_time, p.max_strain, p.stop_fraction};
+  if constexpr (requires { p.confining_stress; }) {
+    l.confining_stress = p.confining_stress;
+    l.servo_relaxation = p.servo_relaxation;
+  }
+  return l;
+}
+
+template <class P>
+void set_platen_loading(P& p, const PlatenLoading& l) {
+  p.platen_speed = l.platen_speed;
+  p.ramp_time = l.ramp_time;
+  p.max_strain = l.max_strain;
+  p.stop_fraction = l.stop_fraction;
+  if constexpr (requires { p.confining_stress; }) {
+    p.confining_stress = l.confining_stress;
+    p.servo_relaxation = l.servo_relaxation;
+  }
+}
+
 struct UcsTest {
   static constexpr std::string_view name = "ucs";
   static constexpr std::string_view summary =
@@ -178,6 +209,9 @@ struct UcsTest {
     return compression_fields<Params>();
   }
   static void check(const Params&, const SampleInfo&, const std::string&) {}
+  static PlatenLoading loading(const Params& p) { return platen_loading(p); }
+  static void set_loading(Params& p, const PlatenLoading& l) { set_platen_loading(p, l); }
+  static bool runs_at(double sigma3, int) { return !(sigma3 > 0.0); }  // unconfined
   static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s);
   static std::unique_ptr<Protocol> restore(ArchiveReader& a) {
     return PlatenCompression::restore(a);
@@ -231,6 +265,9 @@ struct ConfinedCompressionTest {
                        Dim == 3 ? "a triaxial test needs a 3D sample; 2D samples take \"biaxial\""
                                 : "a biaxial test needs a 2D sample; 3D samples take \"triaxial\"");
   }
+  static PlatenLoading loading(const Params& p) { return platen_loading(p); }
+  static void set_loading(Params& p, const PlatenLoading& l) { set_platen_loading(p, l); }
+  static bool runs_at(double sigma3, int dimension) { return sigma3 > 0.0 && dimension == Dim; }
   static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s) {
     return std::make_unique<PlatenCompression>(sim, confined_settings(p), lateral_of(p, s),
                                                name.data());

@@ -69,19 +69,10 @@ class ImpactTest final : public Protocol {
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 
-  double confining_stress() const noexcept override { return 0.0; }
-  bool consolidated() const noexcept override { return true; }
-  double max_strain() const noexcept override { return 1.0; }
-  double platen_speed() const noexcept override { return 0.0; }
-  double length0() const noexcept override { return thickness_; }
-  double area0() const noexcept override { return width_[0] * width_[1]; }
-  double width0() const noexcept override { return width_[0]; }
-  double depth0() const noexcept override { return width_[1]; }
-  std::string lateral_boundary() const override { return "none"; }
-  int axis() const noexcept override { return axis_; }
-  double origin0() const noexcept override { return top0_ - thickness_; }
+  TestFrame frame() const noexcept override {
+    return {axis_, top0_ - thickness_, thickness_, width_[0] * width_[1], width_[0], width_[1]};
+  }
 
-  bool stress_strain_test() const noexcept override { return false; }
   double progress(const AxialState&, const Simulation& sim) const override;
   // At least 1,000 rows over the test.
   double row_time() const noexcept override { return 1e-3 * duration_; }

@@ -5,10 +5,11 @@
 // (protocol/registry.hpp) is a type with a `Params` table that drives parsing, validation and the
 // generated docs, and `create` / `restore` functions that make one of these.
 //
-// Compression-type tests (UCS, triaxial, biaxial, Brazilian) are read as stress-strain curves:
-// moduli, strengths, quasi-static checks. Slab and dynamic tests (impact, cantilever, ...) are
-// not: they say so with `stress_strain_test()`, add their own history columns and their own
-// block of summary.json, and report their progress in their own measure (time, displacement).
+// Every test has the small core below. Compression-type tests (UCS, triaxial, biaxial,
+// Brazilian) add the StressStrainTest part: their rows are read as stress-strain curves (moduli,
+// strengths, quasi-static checks). Slab and dynamic tests (impact, cantilever, ...) do not: they
+// add their own history columns and their own block of summary.json, and report their progress
+// in their own measure (time, displacement).
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -113,6 +114,36 @@ struct TestBudget {
   std::string remedy = "raise the platen speed, lower the strain or the ramp";
 };
 
+// Where the sample stood when loading began, in the test's own frame: every test has one. The
+// loading axis (2: z in 3D, 1: y; a slab's normal), where the sample's bottom face stood along it,
+// the length along the load, the loaded area (length x area is the sample's volume) and the
+// extents across the load (2D: depth is the thickness). Porosity, the fractal dimension's box,
+// the crack pattern's quarters and the summary read it.
+struct TestFrame {
+  int axis = 2;
+  double origin = 0.0;              // m
+  double length = 0.0;              // m
+  double area = 0.0;                // m^2
+  double width = 0.0, depth = 0.0;  // m
+};
+
+// The optional part of a test whose rows are a stress-strain curve (compression and the
+// Brazilian test): the run reads moduli, strengths and the quasi-static checks from its rows, and
+// reports its loading. Tests without it (slab and dynamic tests) report their own results through
+// Protocol::summarise.
+class StressStrainTest {
+ public:
+  virtual ~StressStrainTest() = default;
+  virtual double confining_stress() const noexcept = 0;  // target sigma_3; 0 when unconfined
+  virtual bool consolidated() const noexcept = 0;        // the consolidation settled
+  virtual double max_strain() const noexcept = 0;        // where the test stops at the latest
+  virtual double platen_speed() const noexcept = 0;      // m/s, each platen
+  virtual std::string lateral_boundary() const = 0;      // "none", "walls", "membranes", ...
+  // What the test adds to summary.json from its curve's analysis (the Brazilian test reads its
+  // peak as the tensile strength); most add nothing.
+  virtual void summarise_curve(const analysis::CompressionResult&, nlohmann::json&) const {}
+};
+
 class Protocol {
  public:
   virtual ~Protocol() = default;
@@ -121,35 +152,18 @@ class Protocol {
   virtual std::string label() const = 0;          // "uniaxial compression (UCS)", ...
   // After Simulation::initialise(): consolidation and the loading ramp. Returns the steps taken.
   virtual std::uint64_t start(Simulation& sim, double bar_wave_speed) = 0;
-  // Before every loading step (servo walls).
+  // Before every loading step (servo walls, driven grips).
   virtual void control(Simulation& sim) = 0;
   virtual AxialState measure(const Simulation& sim) const = 0;
   // Updates the peak tracking; true when the test should stop.
   virtual bool finished(const AxialState& s, std::size_t broken_bonds) = 0;
   virtual const std::string& stop_reason() const noexcept = 0;
-
-  virtual double confining_stress() const noexcept = 0;  // target sigma_3; 0 when unconfined
-  virtual bool consolidated() const noexcept = 0;
-  virtual double max_strain() const noexcept = 0;
-  virtual double platen_speed() const noexcept = 0;  // m/s, each platen
-  // Reference geometry at the start of loading: length along the load, loaded area, and the
-  // extents across it (2D: depth is the thickness).
-  virtual double length0() const noexcept = 0;
-  virtual double area0() const noexcept = 0;
-  virtual double width0() const noexcept = 0;
-  virtual double depth0() const noexcept = 0;
-  virtual std::string lateral_boundary() const = 0;
-  // The loading axis (2: z in 3D, 1: y) and where the bottom platen stood when loading began.
-  virtual int axis() const noexcept = 0;
-  virtual double origin0() const noexcept = 0;
-
-  // Whether the rows are a stress-strain curve to read moduli, strengths and the quasi-static
-  // checks from (compression tests), or a test that reports its own results (summarise()).
-  virtual bool stress_strain_test() const noexcept { return true; }
   // How far the test has gone (0-1), for progress bars.
-  virtual double progress(const AxialState& s, const Simulation&) const {
-    return max_strain() > 0.0 ? s.strain / max_strain() : 0.0;
-  }
+  virtual double progress(const AxialState& s, const Simulation& sim) const = 0;
+  virtual TestFrame frame() const noexcept = 0;
+
+  // The stress-strain part, or null for a test that reports its own results.
+  virtual const StressStrainTest* stress_strain() const noexcept { return nullptr; }
   // Simulated time between history rows that the test needs to be resolved (an impact lasts
   // microseconds), or 0: the experiment's output settings alone decide.
   virtual double row_time() const noexcept { return 0.0; }
@@ -158,10 +172,7 @@ class Protocol {
   virtual void history_values(const Simulation&, std::vector<double>&) const {}
   // The test's own results, written under its kind in summary.json when it ends.
   virtual void summarise(const Simulation&, nlohmann::json&) const {}
-  // What a stress-strain test adds to summary.json from its curve's analysis (the Brazilian
-  // test reads its peak as the tensile strength), and to the crack pattern from the cracks
-  // (where they lie for its geometry). The run calls these for every test; most add nothing.
-  virtual void summarise_curve(const analysis::CompressionResult&, nlohmann::json&) const {}
+  // What the test adds to the crack pattern from the cracks (where they lie for its geometry).
   virtual void describe_crack_pattern(const Simulation&, nlohmann::json&) const {}
   // The grains that are rock: the first rock_particles() of the store. A test may append
   // grains of its own apparatus after them (the abrasion test's grit), which fragments, wear and
@@ -175,5 +186,17 @@ class Protocol {
   // Throws InputError naming `where` unless the restored walls and particles exist in `sim`.
   virtual void check_restored(const Simulation& sim, const std::string& where) const = 0;
 };
+
+// The target sigma_3 of a confined stress-strain test; 0 for every other test.
+inline double confining_stress(const Protocol& test) noexcept {
+  const StressStrainTest* s = test.stress_strain();
+  return s ? s->confining_stress() : 0.0;
+}
+
+// The axial strain rate a stress-strain test loads at, 2 v / L0; 0 for other tests.
+inline double strain_rate(const Protocol& test) noexcept {
+  const StressStrainTest* s = test.stress_strain();
+  return s ? 2.0 * s->platen_speed() / test.frame().length : 0.0;
+}
 
 }  // namespace breccia

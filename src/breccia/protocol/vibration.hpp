@@ -74,19 +74,10 @@ class VibrationTest final : public Protocol {
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 
-  double confining_stress() const noexcept override { return 0.0; }
-  bool consolidated() const noexcept override { return true; }
-  double max_strain() const noexcept override { return 1.0; }
-  double platen_speed() const noexcept override { return 0.0; }
-  double length0() const noexcept override { return thickness_; }
-  double area0() const noexcept override { return face_area_; }
-  double width0() const noexcept override { return length_; }
-  double depth0() const noexcept override { return width_; }
-  std::string lateral_boundary() const override { return "none"; }
-  int axis() const noexcept override { return axis_; }
-  double origin0() const noexcept override { return bottom0_; }
+  TestFrame frame() const noexcept override {
+    return {axis_, bottom0_, thickness_, face_area_, length_, width_};
+  }
 
-  bool stress_strain_test() const noexcept override { return false; }
   double progress(const AxialState&, const Simulation& sim) const override;
   // At least 40 rows per cycle.
   double row_time() const noexcept override { return 1.0 / (40.0 * p_.frequency); }

@@ -99,13 +99,14 @@ double estimate_shear_wave_speed(const ExperimentSpec& spec, LoopState& L) {
 // stood when loading began), the failure plane, and what the test adds for its geometry (a
 // Brazilian disc: how close they lie to the loaded diameter).
 json crack_pattern_json(const Protocol& test, const Simulation& sim) {
+  const TestFrame f = test.frame();
   std::vector<double> axial;
   std::vector<Vec3> midpoints;
   for (const CrackRecord& c : sim.cracks()) {
-    axial.push_back(c.position[test.axis()]);
+    axial.push_back(c.position[f.axis]);
     midpoints.push_back(c.position);
   }
-  const auto q = analysis::quarter_shares(axial, test.origin0(), test.origin0() + test.length0());
+  const auto q = analysis::quarter_shares(axial, f.origin, f.origin + f.length);
   json j{{"quarter_shares_along_axis", {q[0], q[1], q[2], q[3]}},
          {"largest_end_quarter_share", std::max(q[0], q[3])},
          {"quarters",
@@ -113,7 +114,7 @@ json crack_pattern_json(const Protocol& test, const Simulation& sim) {
           "bottom platen; a test that fails through its body has no end quarter "
           "above 0.40"}};
   const analysis::FailurePlane fp =
-      analysis::failure_plane(midpoints, test.axis(), sim.particles().planar());
+      analysis::failure_plane(midpoints, f.axis, sim.particles().planar());
   j["failure_plane"] = {
       {"valid", fp.valid},
       {"cracks", fp.cracks},
@@ -159,10 +160,10 @@ void check_finite_state(const Simulation& sim, const AxialState& a) {
 // test's own row time.
 std::uint64_t history_step_interval(const ExperimentSpec& spec, const Protocol& test,
                                     const Simulation& sim) {
-  const double strain_rate = 2.0 * test.platen_speed() / test.length0();
+  const double rate = strain_rate(test);
   double steps = static_cast<double>(spec.history_interval);
-  if (spec.history_strain_interval > 0.0 && strain_rate > 0.0)
-    steps = spec.history_strain_interval / (strain_rate * sim.time_step());
+  if (spec.history_strain_interval > 0.0 && rate > 0.0)
+    steps = spec.history_strain_interval / (rate * sim.time_step());
   if (test.row_time() > 0.0) steps = std::min(steps, test.row_time() / sim.time_step());
   return static_cast<std::uint64_t>(std::clamp(std::round(steps), 1.0, 1e9));
 }
@@ -193,7 +194,7 @@ void record_row(Session& ss, const AxialState& a) {
   const double stored = sim.ledger().bond.total() + sim.ledger().contact;
   L.imbalance.push_back(fbar > 0.0 ? std::abs(a.force_top - a.force_bottom) / fbar : 0.0);
   L.ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
-  const double sigma3 = ss.test->confining_stress();
+  const double sigma3 = confining_stress(*ss.test);
   if (sigma3 > 0.0) L.confine_err.push_back(std::abs(a.confining_stress - sigma3) / sigma3);
 }
 
@@ -299,7 +300,8 @@ QualityVerdict judge_quality(const LoopState& L, const analysis::CompressionResu
 
 std::vector<std::string> quality_warnings(const QualityVerdict& q, const Protocol& test) {
   std::vector<std::string> w;
-  if (!test.stress_strain_test()) return w;  // dynamic by design
+  const StressStrainTest* curve = test.stress_strain();
+  if (!curve) return w;  // dynamic by design
   if (!q.quasi_static())
     w.push_back(fmt::format(
         "the test was not quasi-static before the peak: platen force imbalance {:.3g} (limit "
@@ -310,7 +312,7 @@ std::vector<std::string> quality_warnings(const QualityVerdict& q, const Protoco
             ? "the loading was quasi-static until bonds broke: the excess comes from bursts of "
               "breaking bonds near the peak, which a lower platen speed does not remove"
             : "lower test.platen_speed"));
-  if (test.confining_stress() > 0.0 && q.confine_err_pre > 0.02)
+  if (curve->confining_stress() > 0.0 && q.confine_err_pre > 0.02)
     w.push_back(fmt::format(
         "the confining stress left its 2 % band before the peak (largest error {:.3g} %)",
         100 * q.confine_err_pre));
@@ -327,7 +329,7 @@ RunResult run_result(const fs::path& folder, const Session& ss, const LoopEnd& e
   r.stop_reason = end.reason;
   r.particles = sim.particles().size();
   r.bonds = ss.loop.bonds_initial;
-  r.confining_stress = ss.test->confining_stress();
+  r.confining_stress = confining_stress(*ss.test);
   r.wall_seconds = wall_seconds;
   r.steps = sim.step_count();
   r.peak_stress = an.peak_deviatoric;
@@ -404,8 +406,7 @@ json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult&
                {"experiment", spec.name},
                {"test", test.label()},
                {"test_kind", test.kind()},
-               {"confining_stress_pa", test.confining_stress()},
-               {"lateral_boundary", test.lateral_boundary()},
+               {"dimension", spec.dimension},
                {"particles", r.particles},
                {"bonds_initial", r.bonds},
                {"bonds_broken", r.cracks},
@@ -419,18 +420,21 @@ json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult&
                {"wall_seconds", r.wall_seconds},
                {"particle_steps_per_second",
                 static_cast<double>(r.particles) * static_cast<double>(r.steps) / r.wall_seconds}};
-  if (test.stress_strain_test()) {
+  if (const StressStrainTest* curve = test.stress_strain()) {
+    summary.update(json{{"confining_stress_pa", curve->confining_stress()},
+                        {"lateral_boundary", curve->lateral_boundary()},
+                        {"platen_speed_m_per_s", curve->platen_speed()},
+                        {"strain_rate_per_s", strain_rate(test)}});
     summary.update(compression_fields(an));
     summary.update(quality_fields(q));
-    summary.update(json{{"platen_speed_m_per_s", test.platen_speed()},
-                        {"strain_rate_per_s", 2.0 * test.platen_speed() / test.length0()}});
+    curve->summarise_curve(an, summary);
   } else {
     json own = json::object();
     test.summarise(sim, own);
     summary[test.kind()] = std::move(own);
   }
-  summary.update(json{{"sample_height_m", test.length0()},
-                      {"sample_area_m2", test.area0()},
+  summary.update(json{{"sample_height_m", test.frame().length},
+                      {"sample_area_m2", test.frame().area},
                       {"sample", manifest.value("sample", json::object())},
                       {"energy", ledger_json(sim.ledger())},
                       {"snapshots", find_recorder<SnapshotWriter>(ss.recorders).count()},
@@ -442,7 +446,6 @@ json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult&
                          {"elements", sim.joint_count()},
                          {"bonded_at_end", sim.bonded_joints()}};
   summary["crack_pattern"] = crack_pattern_json(test, sim);
-  test.summarise_curve(an, summary);
   return summary;
 }
 
@@ -508,10 +511,10 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   json failure;
   try {
     failure = write_failure_analysis(
-        folder,
-        FailureInputs{spec, sim, ss.ae(), ss.loop.series, an, ss.loop.volume0, ss.loop.porosity0,
-                      ss.loop.length_min, ss.loop.wave_speed_method, ss.test->stress_strain_test(),
-                      ss.test->rock_particles(sim), end.status != "interrupted"});
+        folder, FailureInputs{spec, sim, ss.ae(), ss.loop.series, an, ss.loop.volume0,
+                              ss.loop.porosity0, ss.loop.length_min, ss.loop.wave_speed_method,
+                              ss.test->stress_strain() != nullptr, ss.test->rock_particles(sim),
+                              end.status != "interrupted"});
   } catch (const Interrupted& e) {
     log(std::string(e.what()) + ": the loading had ended (" + result.stop_reason +
         "); its tables are whole, summary.json is not written");
@@ -631,36 +634,36 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   loop.warnings = sim.warnings();
   loop.consolidation_steps = b.consolidation_steps;
   loop.bonds_initial = sim.intact_bonds();
-  loop.series.confining_stress = test.confining_stress();
-  if (test.confining_stress() > 0.0 && !test.consolidated())
+  const double sigma3 = confining_stress(test);
+  loop.series.confining_stress = sigma3;
+  if (sigma3 > 0.0 && !test.stress_strain()->consolidated())
     loop.warnings.push_back(fmt::format(
         "consolidation to {} MPa did not settle within {} steps; loading started anyway",
-        test.confining_stress() * 1e-6, b.consolidation_steps));
+        sigma3 * 1e-6, b.consolidation_steps));
   for (const std::string& w : loop.warnings) log("warning: " + w);
   manifest["time_step_s"] = sim.time_step();
   manifest["critical_time_step_s"] = sim.critical_time_step();
   manifest["particles"] = sim.particles().size();
   manifest["bonds"] = sim.intact_bonds();
   manifest["consolidation_steps"] = b.consolidation_steps;
-  manifest["strain_rate_per_s"] = 2.0 * test.platen_speed() / test.length0();
+  manifest["strain_rate_per_s"] = strain_rate(test);
   write_json(folder / "manifest.json", manifest);
   log(fmt::format("sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s){}",
                   sim.particles().size(), sim.intact_bonds(), sim.time_step(),
                   sim.critical_time_step(),
-                  test.confining_stress() > 0.0
-                      ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
-                                    test.confining_stress() * 1e-6, b.consolidation_steps)
-                      : ""));
+                  sigma3 > 0.0 ? fmt::format("; consolidated to {:.3g} MPa in {} steps",
+                                             sigma3 * 1e-6, b.consolidation_steps)
+                               : ""));
   // Reference state for porosity and D2.
   {
     const ParticleStore& p = sim.particles();
     double solid = 0.0;
     for (std::size_t i = 0; i < test.rock_particles(sim); ++i) solid += p.mass[i] / p.density[i];
-    loop.volume0 = test.length0() * test.area0();
+    const TestFrame f = test.frame();
+    loop.volume0 = f.length * f.area;
     loop.porosity0 = 1.0 - solid / loop.volume0;
-    loop.length_min = spec.dimension == 2
-                          ? std::min(test.length0(), test.width0())
-                          : std::min({test.length0(), test.width0(), test.depth0()});
+    loop.length_min =
+        spec.dimension == 2 ? std::min(f.length, f.width) : std::min({f.length, f.width, f.depth});
   }
   if (spec.ae_shear_wave_speed > 0.0)
     loop.wave_speed_method = "given in the experiment file (ae.shear_wave_speed)";
