@@ -18,11 +18,11 @@
 #include "breccia/calibrate/calibrate.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
-#include "breccia/io/experiment.hpp"
 #include "breccia/io/run_folder.hpp"
 #include "breccia/material/library.hpp"
 #include "breccia/run/run.hpp"
 #include "breccia/run/sample_build.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "breccia/version.hpp"
 
 namespace {

@@ -3,7 +3,7 @@
 // rely on it).
 #include <cstdlib>
 
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "fuzz_target.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

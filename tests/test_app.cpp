@@ -14,7 +14,7 @@
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/calibrate/calibration_file.hpp"
 #include "breccia/core/error.hpp"
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "cli_harness.hpp"
 
 namespace fs = std::filesystem;

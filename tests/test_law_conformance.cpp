@@ -13,7 +13,7 @@
 
 #include "breccia/core/quat.hpp"
 #include "breccia/core/rng.hpp"
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "pair_harness.hpp"
 
 using namespace breccia;

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "breccia/core/error.hpp"
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "cli_harness.hpp"
 
 namespace fs = std::filesystem;
@@ -155,7 +155,7 @@ TEST(Protocols, EveryRegisteredTestIsDocumentedRunsATinyCaseAndResumesExactly) {
       EXPECT_EQ(s.value(key, nlohmann::json()), r.value(key, nlohmann::json())) << name << key;
     // The resolved experiment names the test and reads back as the same kind.
     const ExperimentSpec spec = parse_experiment(tiny_experiment(T::name), "tiny", {});
-    EXPECT_EQ(spec.test_kind, name);
+    EXPECT_EQ(spec.test_kind(), name);
     EXPECT_NE(to_toml(spec).find("kind = \"" + name + "\""), std::string::npos);
   });
   fs::remove_all(dir);
@@ -390,17 +390,17 @@ TEST(Impact, DensityScalingAndOtherShapesAreRefused) {
 
 TEST(Protocols, OldLoadingTableStillReadsAsTheTestItMeant) {
   const ExperimentSpec ucs = parse_experiment("[loading]\nplaten_speed = 0.07\n", "old.toml", {});
-  EXPECT_EQ(ucs.test_kind, "ucs");
+  EXPECT_EQ(ucs.test_kind(), "ucs");
   EXPECT_EQ(std::get<UcsTest::Params>(ucs.test).platen_speed, 0.07);
   const ExperimentSpec tri =
       parse_experiment("[loading]\nconfining_stress = 5e6\nmax_strain = 0.01\n", "old.toml", {});
-  EXPECT_EQ(tri.test_kind, "triaxial");
+  EXPECT_EQ(tri.test_kind(), "triaxial");
   EXPECT_EQ(std::get<TriaxialTest::Params>(tri.test).confining_stress, 5e6);
   EXPECT_EQ(confining_stress(tri), 5e6);
   const ExperimentSpec bi = parse_experiment(
       "[engine]\ndimension = 2\n[contact]\nlaw = \"linear\"\n[sample]\nshape = \"rectangle\"\n",
       "old.toml", {"loading.confining_stress=2e6"});
-  EXPECT_EQ(bi.test_kind, "biaxial");
+  EXPECT_EQ(bi.test_kind(), "biaxial");
   // Both layouts at once, a key of another kind, a test on the wrong sample: refused, by name.
   EXPECT_THROW(parse_experiment("[loading]\nplaten_speed = 1\n[test]\nkind = \"ucs\"\n", "x", {}),
                InputError);

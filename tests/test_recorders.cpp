@@ -8,9 +8,9 @@
 #include <sstream>
 #include <string>
 
-#include "breccia/io/experiment.hpp"
 #include "breccia/observe/registry.hpp"
 #include "breccia/run/sample_build.hpp"
+#include "breccia/spec/experiment.hpp"
 
 namespace fs = std::filesystem;
 using namespace breccia;
@@ -103,7 +103,7 @@ TEST(Recorders, EveryRegisteredKindContinuesExactlyFromItsCheckpoint) {
   ArchiveReader reader(in, "checkpoint");
   Simulation sim2 = Simulation::restore(reader);
   std::unique_ptr<Protocol> test2;
-  ASSERT_TRUE(with_lab_test(spec.test_kind, [&]<class T>() { test2 = T::restore(reader); }));
+  ASSERT_TRUE(with_lab_test(spec.test_kind(), [&]<class T>() { test2 = T::restore(reader); }));
   const RecorderList restored = restore_recorders({dir, spec, sim2, *test2}, reader);
   ASSERT_EQ(restored.size(), list.size());
   find_recorder<AeMonitor>(restored).set_wave_speed_source(wave_speed);

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "breccia/engine/simulation.hpp"
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "pair_harness.hpp"
 
 using namespace breccia;

@@ -17,8 +17,8 @@
 #include "block_fixture.hpp"
 #include "breccia/core/archive.hpp"
 #include "breccia/engine/simulation.hpp"
-#include "breccia/io/experiment.hpp"
 #include "breccia/law/smooth_joint.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "pair_harness.hpp"
 
 using namespace breccia;

@@ -10,8 +10,8 @@
 #include <string>
 
 #include "breccia/core/interrupt.hpp"
-#include "breccia/io/experiment.hpp"
 #include "breccia/run/run.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "cli_harness.hpp"
 
 namespace fs = std::filesystem;

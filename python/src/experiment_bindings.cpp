@@ -2,7 +2,7 @@
 // same validation, the same messages.
 #include <pybind11/stl.h>
 
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "module.hpp"
 
 namespace py = pybind11;
@@ -15,7 +15,8 @@ void bind_experiment(py::module_& m) {
       .def_readonly("source", &ExperimentSpec::source)
       .def_readonly("name", &ExperimentSpec::name)
       .def_readonly("dimension", &ExperimentSpec::dimension)
-      .def_readonly("test_kind", &ExperimentSpec::test_kind)
+      .def_property_readonly("test_kind",
+                             [](const ExperimentSpec& s) { return std::string(s.test_kind()); })
       .def_readonly("output_directory", &ExperimentSpec::output_directory)
       .def_property_readonly("seed", [](const ExperimentSpec& s) { return s.engine.seed; });
   m.def("load_experiment", &load_experiment, py::arg("path"), py::arg("overrides"),

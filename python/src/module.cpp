@@ -5,7 +5,7 @@
 #include "breccia/analysis/rate_dependence.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "breccia/version.hpp"
 
 namespace py = pybind11;

@@ -23,114 +23,145 @@ bool has_gauges(const CompressionSeries& s) {
   return true;
 }
 
-CompressionResult analyse_compression(const CompressionSeries& s) {
-  CompressionResult r;
-  const auto& e = s.axial_strain;
+namespace {
+
+// The strains the moduli are measured with: the sample gauges when every row has them.
+const std::vector<double>& moduli_strain(const CompressionSeries& s, const CompressionResult& r) {
+  return r.moduli_from_gauges ? s.gauge_axial_strain : s.axial_strain;
+}
+
+// E_t50 with the window widening of docs/analysis.md §1.3, the platen reading over the same
+// window, E_av and E_s50.
+void read_moduli(const CompressionSeries& s, const PeakResult& peak, CompressionResult& r) {
   const auto& q = s.deviatoric;
-  const std::size_t n = std::min(e.size(), q.size());
-  const PeakResult peak = find_peak(e, q);
-  if (!peak.found || !(peak.stress > 0.0)) {
-    r.flags.push_back("no_positive_stress");
-    r.e_s50 = r.poisson = r.crack_initiation = r.crack_damage = r.residual = r.brittleness = kNaN;
-    return r;
-  }
-  const std::size_t ip = peak.index;
-  r.peak_reached = ip + 1 < n;
-  if (!r.peak_reached) r.flags.push_back("peak_not_reached");
-  r.peak_deviatoric = peak.stress;
-  r.sigma1_at_peak = peak.stress + s.confining_stress;
-  r.strain_at_peak = peak.strain;
-  // The strains the moduli are measured with: the sample gauges when every row has them.
-  r.moduli_from_gauges = has_gauges(s);
-  const auto& em = r.moduli_from_gauges ? s.gauge_axial_strain : e;
-  const auto& lateral = r.moduli_from_gauges ? s.gauge_lateral_strain : s.lateral_strain;
-  // E_t50 with the window widening of §1.3.
+  const auto& em = moduli_strain(s, r);
   for (double w = 0.1; w <= 0.25 + 1e-12; w += 0.05) {
     r.e_t50_lo = 0.5 - w;
     r.e_t50_hi = 0.5 + w;
     r.e_t50 = tangent_modulus(em, q, r.e_t50_lo, r.e_t50_hi);
     if (r.e_t50.points >= 5) break;
   }
-  r.e_t50_platen = tangent_modulus(e, q, r.e_t50_lo, r.e_t50_hi);
+  r.e_t50_platen = tangent_modulus(s.axial_strain, q, r.e_t50_lo, r.e_t50_hi);
   r.e_av = tangent_modulus(em, q, 0.25, 0.75);
   r.e_s50 = kNaN;
-  for (std::size_t k = 1; k <= ip; ++k)
+  for (std::size_t k = 1; k <= peak.index; ++k)
     if (q[k] >= 0.5 * peak.stress && q[k - 1] < 0.5 * peak.stress) {
       const double e50 =
           em[k - 1] + (em[k] - em[k - 1]) * (0.5 * peak.stress - q[k - 1]) / (q[k] - q[k - 1]);
       r.e_s50 = e50 > 0.0 ? 0.5 * peak.stress / e50 : kNaN;
       break;
     }
-  // Poisson's ratio over the same window.
+}
+
+// Poisson's ratio over the E_t50 window.
+void read_poisson(const CompressionSeries& s, const PeakResult& peak, CompressionResult& r) {
+  const auto& q = s.deviatoric;
+  const auto& em = moduli_strain(s, r);
+  const auto& lateral = r.moduli_from_gauges ? s.gauge_lateral_strain : s.lateral_strain;
   r.poisson = kNaN;
-  if (!lateral.empty()) {
-    std::vector<double> x, y;
-    for (std::size_t k = 0; k <= ip; ++k)
-      if (q[k] >= r.e_t50_lo * peak.stress && q[k] <= r.e_t50_hi * peak.stress) {
-        x.push_back(em[k]);
-        y.push_back(lateral[k]);
-      }
-    const LinearFit l = fit_line(x, y);
-    // Lateral strain is compression-positive, so expansion makes the slope negative.
-    if (l.valid && x.size() >= 3) r.poisson = -l.slope;
-  }
-  // Crack initiation: 5 % of the cracks at peak (§1.5 method 1).
+  if (lateral.empty()) return;
+  std::vector<double> x, y;
+  for (std::size_t k = 0; k <= peak.index; ++k)
+    if (q[k] >= r.e_t50_lo * peak.stress && q[k] <= r.e_t50_hi * peak.stress) {
+      x.push_back(em[k]);
+      y.push_back(lateral[k]);
+    }
+  const LinearFit l = fit_line(x, y);
+  // Lateral strain is compression-positive, so expansion makes the slope negative.
+  if (l.valid && x.size() >= 3) r.poisson = -l.slope;
+}
+
+// Crack initiation: 5 % of the cracks at peak (§1.5 method 1).
+void read_crack_initiation(const CompressionSeries& s, const PeakResult& peak,
+                           CompressionResult& r) {
+  const std::size_t ip = peak.index;
   r.crack_initiation = kNaN;
-  if (s.broken_bonds.size() > ip && s.broken_bonds[ip] > 0.0) {
-    for (std::size_t k = 0; k <= ip; ++k)
-      if (s.broken_bonds[k] >= 0.05 * s.broken_bonds[ip]) {
-        r.crack_initiation = q[k];
-        break;
-      }
-  } else {
+  if (s.broken_bonds.size() <= ip || !(s.broken_bonds[ip] > 0.0)) {
     r.flags.push_back("no_cracks_before_peak");
+    return;
   }
-  // Crack damage: maximum of the 5-sample moving average of the volumetric strain (§1.6).
+  for (std::size_t k = 0; k <= ip; ++k)
+    if (s.broken_bonds[k] >= 0.05 * s.broken_bonds[ip]) {
+      r.crack_initiation = s.deviatoric[k];
+      return;
+    }
+}
+
+// Crack damage: maximum of the 5-sample moving average of the volumetric strain (§1.6).
+void read_crack_damage(const CompressionSeries& s, const PeakResult& peak, CompressionResult& r) {
+  const std::size_t ip = peak.index;
   r.crack_damage = kNaN;
-  if (s.volumetric_strain.size() > ip) {
-    double best = -std::numeric_limits<double>::infinity();
-    std::size_t icd = 0;
-    for (std::size_t k = 0; k <= ip; ++k) {
-      // Centred window of up to 5 samples, narrowed symmetrically near the ends (a lopsided
-      // window would shift the maximum).
-      const std::size_t h = std::min({std::size_t{2}, k, ip - k});
-      const std::size_t a = k - h, b = k + h;
-      double m = 0.0;
-      for (std::size_t j = a; j <= b; ++j) m += s.volumetric_strain[j];
-      m /= static_cast<double>(b - a + 1);
-      if (m > best) {
-        best = m;
-        icd = k;
-      }
-    }
-    r.crack_damage = q[icd];
-    if (icd == ip) {
-      r.no_reversal = true;
-      r.crack_damage = peak.stress;
-      r.flags.push_back("no_reversal");
+  if (s.volumetric_strain.size() <= ip) return;
+  double best = -std::numeric_limits<double>::infinity();
+  std::size_t icd = 0;
+  for (std::size_t k = 0; k <= ip; ++k) {
+    // Centred window of up to 5 samples, narrowed symmetrically near the ends (a lopsided
+    // window would shift the maximum).
+    const std::size_t h = std::min({std::size_t{2}, k, ip - k});
+    const std::size_t a = k - h, b = k + h;
+    double m = 0.0;
+    for (std::size_t j = a; j <= b; ++j) m += s.volumetric_strain[j];
+    m /= static_cast<double>(b - a + 1);
+    if (m > best) {
+      best = m;
+      icd = k;
     }
   }
-  // Residual strength: median over the last 10 % of the strain record if flat (§1.7).
+  r.crack_damage = s.deviatoric[icd];
+  if (icd == ip) {
+    r.no_reversal = true;
+    r.crack_damage = peak.stress;
+    r.flags.push_back("no_reversal");
+  }
+}
+
+// Residual strength: median over the last 10 % of the strain record if flat (§1.7).
+void read_residual(const CompressionSeries& s, const PeakResult& peak, std::size_t n,
+                   CompressionResult& r) {
+  const auto& e = s.axial_strain;
   r.residual = r.brittleness = kNaN;
-  if (r.peak_reached && r.e_t50.valid) {
-    const double e_end = e[n - 1], e_start = e_end - 0.1 * (e_end - e[0]);
-    std::vector<double> xs, ys;
-    for (std::size_t k = ip + 1; k < n; ++k)
-      if (e[k] >= e_start) {
-        xs.push_back(e[k]);
-        ys.push_back(q[k]);
-      }
-    const LinearFit l = fit_line(xs, ys);
-    if (xs.size() >= 3 && l.valid && std::abs(l.slope) < 0.05 * r.e_t50.slope) {
-      std::vector<double> sorted = ys;
-      std::sort(sorted.begin(), sorted.end());
-      const std::size_t m = sorted.size();
-      r.residual = m % 2 ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
-      r.brittleness = (peak.stress - r.residual) / peak.stress;
-    } else {
-      r.flags.push_back("no_residual_plateau");
+  if (!r.peak_reached || !r.e_t50.valid) return;
+  const double e_end = e[n - 1], e_start = e_end - 0.1 * (e_end - e[0]);
+  std::vector<double> xs, ys;
+  for (std::size_t k = peak.index + 1; k < n; ++k)
+    if (e[k] >= e_start) {
+      xs.push_back(e[k]);
+      ys.push_back(s.deviatoric[k]);
     }
+  const LinearFit l = fit_line(xs, ys);
+  if (xs.size() >= 3 && l.valid && std::abs(l.slope) < 0.05 * r.e_t50.slope) {
+    std::vector<double> sorted = ys;
+    std::sort(sorted.begin(), sorted.end());
+    const std::size_t m = sorted.size();
+    r.residual = m % 2 ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
+    r.brittleness = (peak.stress - r.residual) / peak.stress;
+  } else {
+    r.flags.push_back("no_residual_plateau");
   }
+}
+
+}  // namespace
+
+CompressionResult analyse_compression(const CompressionSeries& s) {
+  CompressionResult r;
+  const std::size_t n = std::min(s.axial_strain.size(), s.deviatoric.size());
+  const PeakResult peak = find_peak(s.axial_strain, s.deviatoric);
+  if (!peak.found || !(peak.stress > 0.0)) {
+    r.flags.push_back("no_positive_stress");
+    r.e_s50 = r.poisson = r.crack_initiation = r.crack_damage = r.residual = r.brittleness = kNaN;
+    return r;
+  }
+  r.peak_reached = peak.index + 1 < n;
+  if (!r.peak_reached) r.flags.push_back("peak_not_reached");
+  r.peak_deviatoric = peak.stress;
+  r.sigma1_at_peak = peak.stress + s.confining_stress;
+  r.strain_at_peak = peak.strain;
+  r.moduli_from_gauges = has_gauges(s);
+  read_moduli(s, peak, r);
+  read_poisson(s, peak, r);
+  read_crack_initiation(s, peak, r);
+  read_crack_damage(s, peak, r);
+  read_residual(s, peak, n, r);
   return r;
 }
 

@@ -11,7 +11,7 @@
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/text_file.hpp"
-#include "breccia/io/toml_node.hpp"
+#include "breccia/spec/toml_node.hpp"
 
 namespace breccia {
 

@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 
 namespace breccia {
 

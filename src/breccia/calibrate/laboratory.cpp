@@ -151,7 +151,6 @@ ExperimentSpec Laboratory::trial_spec(const std::string& set, const std::vector<
                           fs::absolute(test == "brazilian" ? sp.disc : sp.prism).string()));
   ExperimentSpec spec = parse_experiment_table(c_.text, c_.path, "experiment", o);
   if (test == "brazilian") {
-    spec.test_kind = "brazilian";
     BrazilianTest::Params p;
     p.platen_speed = c_.disc_platen_speed;
     spec.test = p;

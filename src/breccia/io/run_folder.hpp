@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 
 namespace breccia {
 

@@ -8,7 +8,7 @@
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 
 namespace breccia {
 

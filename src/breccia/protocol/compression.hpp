@@ -168,7 +168,7 @@ constexpr std::array<ParamField<P>, 2> confining_fields(std::string_view walls) 
 // What the sweeps vary in a test loaded by two platens: its loading and its confinement. A
 // registered test takes part in strain-rate sweeps when its type reads and writes its loading
 // (`loading`, `set_loading`), and in confining-stress sweeps when it also says at which sigma_3
-// and dimension it is the test to run (`runs_at`); io/experiment.cpp finds them in the registry.
+// and dimension it is the test to run (`runs_at`); spec/experiment.cpp finds them in the registry.
 struct PlatenLoading {
   double platen_speed = 0.0, ramp_time = 0.0, max_strain = 0.0, stop_fraction = 0.0;
   double confining_stress = 0.0, servo_relaxation = 0.5;

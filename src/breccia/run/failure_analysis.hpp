@@ -11,8 +11,8 @@
 
 #include "breccia/analysis/compression.hpp"
 #include "breccia/engine/simulation.hpp"
-#include "breccia/io/experiment.hpp"
 #include "breccia/observe/ae_monitor.hpp"
+#include "breccia/spec/experiment.hpp"
 
 namespace breccia {
 

@@ -714,8 +714,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   loop.load(a);
   Simulation sim = Simulation::restore(a);
   std::unique_ptr<Protocol> test;
-  if (!with_lab_test(spec.test_kind, [&]<class T>() { test = T::restore(a); }))
-    throw InputError(cpath.string(), "test.kind", spec.test_kind, "not a registered test");
+  visit_lab_test(spec.test, [&]<class T>(const typename T::Params&) { test = T::restore(a); });
   test->check_restored(sim, cpath.string());
   RecorderList recorders = restore_recorders({folder, spec, sim, *test}, a);
   a.label("end of checkpoint");

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "breccia/io/experiment.hpp"
+#include "breccia/spec/experiment.hpp"
 
 namespace breccia {
 

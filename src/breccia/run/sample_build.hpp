@@ -9,10 +9,10 @@
 #include <string>
 
 #include "breccia/engine/simulation.hpp"
-#include "breccia/io/experiment.hpp"
 #include "breccia/protocol/protocol.hpp"
 #include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/packing.hpp"
+#include "breccia/spec/experiment.hpp"
 
 namespace breccia {
 

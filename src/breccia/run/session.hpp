@@ -11,9 +11,9 @@
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/engine/simulation.hpp"
-#include "breccia/io/experiment.hpp"
 #include "breccia/observe/registry.hpp"
 #include "breccia/protocol/protocol.hpp"
+#include "breccia/spec/experiment.hpp"
 
 namespace breccia {
 

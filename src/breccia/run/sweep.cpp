@@ -616,7 +616,7 @@ SweepJob parameter_job(const ExperimentSpec& spec, const std::string& key,
     }
     return json{{"experiment", spec.name},
                 {"variable", key},
-                {"test_kind", spec.test_kind},
+                {"test_kind", spec.test_kind()},
                 {"cracks_scaled_note",
                  "cracks over the most any run of the sweep had (seed 001, "
                  "figure 16: N_frac / N_frac,max)"},

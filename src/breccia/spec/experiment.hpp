@@ -1,6 +1,7 @@
 #pragma once
-// The experiment file (TOML, SI units) and its validation. One table of keys drives parsing,
-// validation, defaults and the generated docs (docs/experiment.md). The spec is plain data; the
+// The experiment file (TOML, SI units) and its validation. The key tables of spec/sections.cpp
+// (and the laws' and tests' own) drive parsing, validation, defaults, `--set` and the generated
+// docs (docs/experiment.md). The spec is plain data; the
 // runner builds a Simulation from it.
 #include <array>
 #include <cstdint>
@@ -76,7 +77,6 @@ struct ExperimentSpec {
   JointParams joint = SmoothJoint::Params{};
   std::vector<JointPlaneSpec> joint_planes;
   // [test] (the old [loading] table is still read and mapped onto it)
-  std::string test_kind = "ucs";
   TestParams test = UcsTest::Params{};
   // [output]
   std::string output_directory = "runs";
@@ -109,6 +109,7 @@ struct ExperimentSpec {
   std::string_view contact_law() const { return name_of_params<ContactLaws>(contact); }
   std::string_view bond_law() const { return name_of_params<BondLaws>(bond); }
   std::string_view joint_law() const { return name_of_params<JointLaws>(joint); }
+  std::string_view test_kind() const { return name_of_params<LabTests>(test); }
 };
 
 // The unit normal of a joint plane (from `normal`, or from dip and dip direction: docs/physics.md
