@@ -248,9 +248,11 @@ void set_wall_velocity(Scripted& s, const std::string& name, const std::array<do
 
 }  // namespace
 
-void bind_simulation(py::module_& m) {
-  py::class_<Scripted>(m, "Simulation")
-      .def(py::init(&make), py::arg("spec"), py::arg("log") = py::none())
+namespace {
+
+// The run's state and the boundaries a script adds and drives.
+void bind_control(py::class_<Scripted>& c) {
+  c.def(py::init(&make), py::arg("spec"), py::arg("log") = py::none())
       .def("step", &step, py::arg("steps") = 1)
       .def("measure", &measure)
       .def("add_wall", &add_wall, py::arg("name"), py::arg("point"), py::arg("normal"),
@@ -287,13 +289,16 @@ void bind_simulation(py::module_& m) {
                              [](const Scripted& s) { return s.sim().active_contacts(); })
       .def_property_readonly("energy", [](const Scripted& s) { return energy(s.sim()); })
       .def_property_readonly("crack_columns", [](const Scripted& s) { return cracks(s.sim()); })
-      .def_property_readonly("walls", [](const Scripted& s) { return walls(s.sim()); })
-      .def_property_readonly("positions",
-                             [](py::object self) {
-                               const auto& p = self.cast<const Scripted&>().sim().particles();
-                               return view(&p.pos_rad.front().x.x, p.size(), 3, sizeof(PosRad),
-                                           self);
-                             })
+      .def_property_readonly("walls", [](const Scripted& s) { return walls(s.sim()); });
+}
+
+// Numpy views of the particle arrays (no copies: each keeps the simulation alive).
+void bind_particle_arrays(py::class_<Scripted>& c) {
+  c.def_property_readonly("positions",
+                          [](py::object self) {
+                            const auto& p = self.cast<const Scripted&>().sim().particles();
+                            return view(&p.pos_rad.front().x.x, p.size(), 3, sizeof(PosRad), self);
+                          })
       .def_property_readonly("radii",
                              [](py::object self) {
                                const auto& p = self.cast<const Scripted&>().sim().particles();
@@ -328,6 +333,14 @@ void bind_simulation(py::module_& m) {
         const auto& t = s.sim().particles().tag;
         return py::array_t<std::uint64_t>(static_cast<py::ssize_t>(t.size()), t.data());
       });
+}
+
+}  // namespace
+
+void bind_simulation(py::module_& m) {
+  py::class_<Scripted> c(m, "Simulation");
+  bind_control(c);
+  bind_particle_arrays(c);
 }
 
 }  // namespace breccia::python

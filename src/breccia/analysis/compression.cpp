@@ -198,40 +198,16 @@ MohrCoulombFit fit_mohr_coulomb(const std::vector<double>& sigma3,
   return f;
 }
 
-HoekBrownFit fit_hoek_brown(const std::vector<double>& sigma3, const std::vector<double>& sigma1) {
-  HoekBrownFit f;
-  const std::size_t n = std::min(sigma3.size(), sigma1.size());
-  if (n < 2) {
-    f.flag = "fewer_than_two_tests";
-    return f;
-  }
-  std::vector<double> x(n), y(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    x[k] = sigma3[k];
-    y[k] = (sigma1[k] - sigma3[k]) * (sigma1[k] - sigma3[k]);
-  }
-  const LinearFit l = fit_line(x, y);
-  double sc = 0.0, mi = 10.0;
-  if (l.valid && l.intercept > 0.0) {
-    f.sigma_ci_linear = std::sqrt(l.intercept);
-    f.m_i_linear = l.slope / f.sigma_ci_linear;
-    sc = f.sigma_ci_linear;
-    mi = f.m_i_linear > 0.0 ? f.m_i_linear : 10.0;
-  } else {
-    f.flag = "linear_step_skipped";
-    std::size_t kmin = 0;
-    for (std::size_t k = 1; k < n; ++k)
-      if (sigma3[k] < sigma3[kmin]) kmin = k;
-    sc = sigma1[kmin] - sigma3[kmin];
-  }
-  // Levenberg-Marquardt on the sigma_1 residuals, in MPa for conditioning.
-  auto model = [&](double s3, double c, double m) { return s3 + c * std::sqrt(m * s3 / c + 1.0); };
-  std::vector<double> s3(n), s1(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    s3[k] = sigma3[k] * 1e-6;
-    s1[k] = sigma1[k] * 1e-6;
-  }
-  double c = sc * 1e-6, m = mi, lambda = 1e-3;
+namespace {
+
+// Levenberg-Marquardt of sigma_1 = sigma_3 + c sqrt(m sigma_3 / c + 1) (the Hoek-Brown envelope
+// of intact rock, docs/analysis.md §1.9) over (c, m) from their start values; stresses in MPa.
+// Returns the sum of squared residuals at the end.
+double refine_hoek_brown(const std::vector<double>& s3, const std::vector<double>& s1, double& c,
+                         double& m) {
+  auto model = [](double x, double cc, double mm) { return x + cc * std::sqrt(mm * x / cc + 1.0); };
+  const std::size_t n = s3.size();
+  double lambda = 1e-3;
   auto cost = [&](double cc, double mm) {
     double e = 0.0;
     for (std::size_t k = 0; k < n; ++k) {
@@ -273,6 +249,45 @@ HoekBrownFit fit_hoek_brown(const std::vector<double>& sigma3, const std::vector
       if (lambda > 1e12) break;
     }
   }
+  return err;
+}
+
+}  // namespace
+
+HoekBrownFit fit_hoek_brown(const std::vector<double>& sigma3, const std::vector<double>& sigma1) {
+  HoekBrownFit f;
+  const std::size_t n = std::min(sigma3.size(), sigma1.size());
+  if (n < 2) {
+    f.flag = "fewer_than_two_tests";
+    return f;
+  }
+  std::vector<double> x(n), y(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    x[k] = sigma3[k];
+    y[k] = (sigma1[k] - sigma3[k]) * (sigma1[k] - sigma3[k]);
+  }
+  const LinearFit l = fit_line(x, y);
+  double sc = 0.0, mi = 10.0;
+  if (l.valid && l.intercept > 0.0) {
+    f.sigma_ci_linear = std::sqrt(l.intercept);
+    f.m_i_linear = l.slope / f.sigma_ci_linear;
+    sc = f.sigma_ci_linear;
+    mi = f.m_i_linear > 0.0 ? f.m_i_linear : 10.0;
+  } else {
+    f.flag = "linear_step_skipped";
+    std::size_t kmin = 0;
+    for (std::size_t k = 1; k < n; ++k)
+      if (sigma3[k] < sigma3[kmin]) kmin = k;
+    sc = sigma1[kmin] - sigma3[kmin];
+  }
+  // Levenberg-Marquardt on the sigma_1 residuals, in MPa for conditioning.
+  std::vector<double> s3(n), s1(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    s3[k] = sigma3[k] * 1e-6;
+    s1[k] = sigma1[k] * 1e-6;
+  }
+  double c = sc * 1e-6, m = mi;
+  const double err = refine_hoek_brown(s3, s1, c, m);
   f.sigma_ci = c * 1e6;
   f.m_i = m;
   f.rms = std::sqrt(err / static_cast<double>(n)) * 1e6;

@@ -130,6 +130,80 @@ CorrelationDimension correlation_dimension_fixed(const std::vector<Vec3>& points
   return fit(lr, lc, points.size());
 }
 
+namespace {
+
+// The smallest positive distance between two points: all pairs up to 5,000 points, else a scan
+// of the points sorted along x (the nearest distance without the quadratic cost).
+double smallest_distance(const std::vector<Vec3>& points) {
+  double r_lo = std::numeric_limits<double>::infinity();
+  const std::size_t n = points.size();
+  if (n <= 5000) {
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = i + 1; j < n; ++j) {
+        const double d = norm(points[j] - points[i]);
+        if (d > 0.0) r_lo = std::min(r_lo, d);
+      }
+    return r_lo;
+  }
+  std::vector<Vec3> p = points;
+  std::sort(p.begin(), p.end(), [](const Vec3& a, const Vec3& b) { return a.x < b.x; });
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n && p[j].x - p[i].x < r_lo; ++j) {
+      const double d = norm(p[j] - p[i]);
+      if (d > 0.0) r_lo = std::min(r_lo, d);
+    }
+  return r_lo;
+}
+
+// The correlation integral C(r) on the radius grid, and which radii may bound a scaling range
+// (enough pairs, C <= 0.5).
+struct CorrelationIntegral {
+  std::vector<double> radii, c;
+  std::vector<std::size_t> counts;
+  std::vector<char> keep;
+  std::size_t points = 0;
+};
+
+// The best straight run of log C over log r spanning at least `decades`: the smallest rms
+// residual, the longer span among near-equal ones.
+CorrelationDimension best_scaling_range(const CorrelationIntegral& ci, const D2Settings& s,
+                                        double decades) {
+  CorrelationDimension best;
+  double best_rms = std::numeric_limits<double>::infinity(), best_span = 0.0;
+  const auto& radii = ci.radii;
+  for (std::size_t a = 0; a < radii.size(); ++a) {
+    if (!ci.keep[a]) continue;
+    for (std::size_t b = a; b < radii.size() && ci.keep[b]; ++b) {
+      const std::size_t len = b - a + 1;
+      const double span = std::log10(radii[b] / radii[a]);
+      if (len < static_cast<std::size_t>(s.min_run) || span < decades - 1e-12) continue;
+      std::vector<double> lr, lc;
+      for (std::size_t k = a; k <= b; ++k) {
+        lr.push_back(std::log10(radii[k]));
+        lc.push_back(std::log10(ci.c[k]));
+      }
+      CorrelationDimension f = fit(lr, lc, ci.points);
+      if (!f.valid()) continue;
+      double ss = 0.0;
+      const LinearFit line = fit_line(lr, lc, 3);
+      for (std::size_t k = 0; k < lr.size(); ++k) {
+        const double e = lc[k] - (line.slope * lr[k] + line.intercept);
+        ss += e * e;
+      }
+      const double rms = std::sqrt(ss / static_cast<double>(lr.size()));
+      if (rms < best_rms - 1e-4 || (std::abs(rms - best_rms) <= 1e-4 && span > best_span)) {
+        best_rms = std::min(rms, best_rms);
+        best_span = span;
+        f.pairs_at_r_min = ci.counts[a];
+        best = f;
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 CorrelationDimension correlation_dimension(const std::vector<Vec3>& points, const D2Settings& s) {
   CorrelationDimension out;
   out.points = points.size();
@@ -137,82 +211,29 @@ CorrelationDimension correlation_dimension(const std::vector<Vec3>& points, cons
     out.flags.push_back("too_few_points");
     return out;
   }
-  // r_lo: smallest positive nearest-neighbour distance (a radius grid needs it first).
-  double r_lo = std::numeric_limits<double>::infinity();
-  {
-    // Pairs closer than r_hi are enough to find it; fall back to all pairs when none is.
-    std::vector<double> probe{s.r_hi};
-    const std::size_t n = points.size();
-    if (n <= 5000) {
-      for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t j = i + 1; j < n; ++j) {
-          const double d = norm(points[j] - points[i]);
-          if (d > 0.0) r_lo = std::min(r_lo, d);
-        }
-    } else {
-      // Sort along x and scan a window: nearest distance without the quadratic cost.
-      std::vector<Vec3> p = points;
-      std::sort(p.begin(), p.end(), [](const Vec3& a, const Vec3& b) { return a.x < b.x; });
-      for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t j = i + 1; j < n && p[j].x - p[i].x < r_lo; ++j) {
-          const double d = norm(p[j] - p[i]);
-          if (d > 0.0) r_lo = std::min(r_lo, d);
-        }
-    }
-  }
+  // r_lo: the smallest positive nearest-neighbour distance; the radius grid starts there.
+  const double r_lo = smallest_distance(points);
   if (!(r_lo < s.r_hi) || !(s.r_hi > 0.0)) {
     out.flags.push_back("no_scaling_range");
     return out;
   }
-  std::vector<double> radii(static_cast<std::size_t>(s.radii));
+  CorrelationIntegral ci;
+  ci.points = points.size();
+  ci.radii.resize(static_cast<std::size_t>(s.radii));
   for (int k = 0; k < s.radii; ++k)
-    radii[static_cast<std::size_t>(k)] =
+    ci.radii[static_cast<std::size_t>(k)] =
         r_lo * std::pow(s.r_hi / r_lo, static_cast<double>(k) / (s.radii - 1));
-  const std::vector<std::size_t> counts = pair_counts(points, radii);
+  ci.counts = pair_counts(points, ci.radii);
   const double n = static_cast<double>(points.size());
-  std::vector<char> keep(radii.size());
-  std::vector<double> c(radii.size());
-  for (std::size_t k = 0; k < radii.size(); ++k) {
-    c[k] = 2.0 * static_cast<double>(counts[k]) / (n * (n - 1.0));
-    keep[k] = counts[k] >= s.min_pairs && c[k] <= 0.5;
+  ci.keep.resize(ci.radii.size());
+  ci.c.resize(ci.radii.size());
+  for (std::size_t k = 0; k < ci.radii.size(); ++k) {
+    ci.c[k] = 2.0 * static_cast<double>(ci.counts[k]) / (n * (n - 1.0));
+    ci.keep[k] = ci.counts[k] >= s.min_pairs && ci.c[k] <= 0.5;
   }
-  // Candidate ranges: contiguous runs (and their sub-runs) of kept radii.
-  auto search = [&](double decades) {
-    CorrelationDimension best;
-    double best_rms = std::numeric_limits<double>::infinity(), best_span = 0.0;
-    for (std::size_t a = 0; a < radii.size(); ++a) {
-      if (!keep[a]) continue;
-      for (std::size_t b = a; b < radii.size() && keep[b]; ++b) {
-        const std::size_t len = b - a + 1;
-        const double span = std::log10(radii[b] / radii[a]);
-        if (len < static_cast<std::size_t>(s.min_run) || span < decades - 1e-12) continue;
-        std::vector<double> lr, lc;
-        for (std::size_t k = a; k <= b; ++k) {
-          lr.push_back(std::log10(radii[k]));
-          lc.push_back(std::log10(c[k]));
-        }
-        CorrelationDimension f = fit(lr, lc, points.size());
-        if (!f.valid()) continue;
-        double ss = 0.0;
-        const LinearFit line = fit_line(lr, lc, 3);
-        for (std::size_t k = 0; k < lr.size(); ++k) {
-          const double e = lc[k] - (line.slope * lr[k] + line.intercept);
-          ss += e * e;
-        }
-        const double rms = std::sqrt(ss / static_cast<double>(lr.size()));
-        if (rms < best_rms - 1e-4 || (std::abs(rms - best_rms) <= 1e-4 && span > best_span)) {
-          best_rms = std::min(rms, best_rms);
-          best_span = span;
-          f.pairs_at_r_min = counts[a];
-          best = f;
-        }
-      }
-    }
-    return best;
-  };
-  CorrelationDimension best = search(s.min_decades);
+  CorrelationDimension best = best_scaling_range(ci, s, s.min_decades);
   if (!best.valid()) {
-    best = search(0.5 * s.min_decades);
+    best = best_scaling_range(ci, s, 0.5 * s.min_decades);
     if (best.valid()) best.flags.push_back("short_scaling_range");
   }
   if (!best.valid()) {

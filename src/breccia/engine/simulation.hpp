@@ -285,6 +285,12 @@ class Simulation {
   template <class Law>
   void compact_bonds(BondSet<Law>& set);
   void estimate_time_step();
+  // Its stages: the stiffness each particle sees from its bonds and joints, then from its
+  // contacts and walls (returning the Rayleigh bound of Hertz contacts, or infinity), then the
+  // step taken from the critical one.
+  void add_bond_stiffness(std::vector<double>& k_tr, std::vector<double>& k_rot);
+  double add_contact_stiffness(std::vector<double>& k_tr, std::vector<double>& k_rot);
+  void adopt_time_step(double crit, double dt_rayleigh);
   bool needs_rebuild() const noexcept;
   // Orientations for the bond laws that need them (2D: rotations about z by the angles).
   Quat body_orientation(std::uint32_t i) const noexcept {

@@ -15,11 +15,9 @@ namespace breccia {
 
 using namespace engine_detail;
 
-void Simulation::estimate_time_step() {
-  const std::size_t n = p_.size();
-  std::vector<double> k_tr(n, 0.0), k_rot(n, 0.0);
-  // Bonds and joints (§1.5, §5): translational max(K_n, K_s); rotational max(K_b, K_t) +
-  // K_s |r|^2 (a joint has no couple: its max_moment_stiffness is 0).
+// Bonds and joints (§1.5, §5): translational max(K_n, K_s); rotational max(K_b, K_t) + K_s |r|^2
+// (a joint has no couple: its max_moment_stiffness is 0).
+void Simulation::add_bond_stiffness(std::vector<double>& k_tr, std::vector<double>& k_rot) {
   auto add_set = [&]<class Law>(BondSet<Law>& s) {
     for (std::size_t k = 0; k < s.size(); ++k) {
       const auto i = s.pairs.first[k], j = s.pairs.second[k];
@@ -35,9 +33,12 @@ void Simulation::estimate_time_step() {
   };
   std::apply([&](auto&... sets) { (add_set(sets), ...); }, bonds_);
   std::apply([&](auto&... sets) { (add_set(sets), ...); }, joints_);
-  // Contacts: every neighbour pair that touches or nearly touches (gap < 0.1 R_min) may carry a
-  // contact during loading; so does a particle near a wall. Each particle also gets at least one
-  // contact of its own size, so that free particles have a finite estimate.
+}
+
+// Contacts: every neighbour pair that touches or nearly touches (gap < 0.1 R_min) may carry a
+// contact during loading; so does a particle near a wall. Each particle also gets at least one
+// contact of its own size, so that free particles have a finite estimate.
+double Simulation::add_contact_stiffness(std::vector<double>& k_tr, std::vector<double>& k_rot) {
   double dt_rayleigh = std::numeric_limits<double>::infinity();
   std::visit(
       [&]<class CL>(ContactSet<CL>& c) {
@@ -52,7 +53,7 @@ void Simulation::estimate_time_step() {
           k_rot[i] += ks * g.R1 * g.R1;
           k_rot[j] += ks * g.R2 * g.R2;
         }
-        for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t i = 0; i < p_.size(); ++i) {
           const PosRad& q = p_.pos_rad[i];
           PairGeometry g = pair_geometry({}, q.r, {2.0 * q.r, 0, 0}, q.r, {}, {}, {}, {}, 1, 1,
                                          p_.planar(), p_.thickness());
@@ -79,11 +80,12 @@ void Simulation::estimate_time_step() {
         }
       },
       contact_);
-  double crit = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (k_tr[i] > 0.0) crit = std::min(crit, std::sqrt(p_.mass[i] / k_tr[i]));
-    if (k_rot[i] > 0.0) crit = std::min(crit, std::sqrt(p_.inertia[i] / k_rot[i]));
-  }
+  return dt_rayleigh;
+}
+
+// The configured step, or the critical one times the safety factor (at most the Rayleigh
+// bound); a configured step above that is kept with a warning.
+void Simulation::adopt_time_step(double crit, double dt_rayleigh) {
   dt_crit_ = crit;
   const double recommended = std::min(cfg_.safety_factor * crit, dt_rayleigh);
   if (!std::isfinite(recommended) || !(recommended > 0.0))
@@ -98,6 +100,19 @@ void Simulation::estimate_time_step() {
   } else {
     dt_ = recommended;
   }
+}
+
+void Simulation::estimate_time_step() {
+  const std::size_t n = p_.size();
+  std::vector<double> k_tr(n, 0.0), k_rot(n, 0.0);
+  add_bond_stiffness(k_tr, k_rot);
+  const double dt_rayleigh = add_contact_stiffness(k_tr, k_rot);
+  double crit = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (k_tr[i] > 0.0) crit = std::min(crit, std::sqrt(p_.mass[i] / k_tr[i]));
+    if (k_rot[i] > 0.0) crit = std::min(crit, std::sqrt(p_.inertia[i] / k_rot[i]));
+  }
+  adopt_time_step(crit, dt_rayleigh);
 }
 
 void Simulation::refresh_time_step() {

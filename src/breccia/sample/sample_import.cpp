@@ -122,27 +122,27 @@ GeometryData read_gengeo(const std::string& path, double density, double thickne
   return parse_gengeo(in, path, density, thickness, max_particles);
 }
 
-GeometryData parse_gengeo(std::istream& in, const std::string& path, double density,
-                          double thickness, std::uint64_t max_particles) {
-  GeometryData g;
-  std::string line;
-  std::size_t n = 0;
-  auto next = [&](std::vector<std::string>& tok) {
-    while (std::getline(in, line)) {
-      ++n;
-      tok = split(line);
+namespace {
+
+// The lines of a GenGeo file, blank ones skipped, with the number of the last one read.
+class GengeoReader {
+ public:
+  GengeoReader(std::istream& in, const std::string& path) : in_(in), path_(path) {}
+  // The next non-blank line's tokens into `tok`; false at the end of the file.
+  bool next(std::vector<std::string>& tok) {
+    while (std::getline(in_, line_)) {
+      ++n_;
+      tok = split(line_);
       if (!tok.empty()) return true;
     }
     return false;
-  };
-  auto where = [&] { return path + ":" + std::to_string(n); };
-  std::vector<std::string> tok;
-  if (!next(tok) || tok.size() < 2 || tok[0] != "LSMGeometry")
-    throw InputError(where(), "header", tok.empty() ? "(empty)" : "'" + tok[0] + "'",
-                     "expected 'LSMGeometry 1.2' (a GenGeo geometry file)");
-  if (tok[1] != "1.2")
-    throw InputError(where(), "version", tok[1], "only LSMGeometry 1.2 is supported");
-  auto count = [&](const char* what, std::uint64_t limit) {
+  }
+  std::string where() const { return path_ + ":" + std::to_string(n_); }
+  const std::string& line() const noexcept { return line_; }
+  std::size_t number() const noexcept { return n_; }
+  // A line holding one count, at most `limit`.
+  std::size_t count(const char* what, std::uint64_t limit) {
+    std::vector<std::string> tok;
     if (!next(tok) || tok.size() != 1)
       throw InputError(where(), what, tok.empty() ? "" : tok[0], "expected a count");
     std::uint64_t v = 0;
@@ -150,59 +150,93 @@ GeometryData parse_gengeo(std::istream& in, const std::string& path, double dens
       throw InputError(where(), what, tok[0], "expected a non-negative integer");
     check_announced_count(v, limit, where(), what);
     return static_cast<std::size_t>(v);
-  };
+  }
+  // The line that closes a section.
+  void expect_end(const char* end, const char* allowed) {
+    std::vector<std::string> tok;
+    if (!next(tok) || tok[0] != end)
+      throw InputError(where(), end, tok.empty() ? "" : tok[0], allowed);
+  }
+
+ private:
+  std::istream& in_;
+  std::string path_, line_;
+  std::size_t n_ = 0;
+};
+
+// BeginParticles ... EndParticles: "x y z radius id tag" rows (ids from 0; tags are id + 1).
+void read_gengeo_particles(GengeoReader& rd, GeometryData& g, double density,
+                           std::uint64_t max_particles) {
+  std::vector<std::string> tok;
+  if (!rd.next(tok) || tok[0] != "Simple")
+    throw InputError(rd.where(), "particle type", tok.empty() ? "" : tok[0],
+                     "only 'Simple' particles are supported");
+  const std::size_t np = rd.count("particle count", max_particles);
+  for (std::size_t k = 0; k < np; ++k) {
+    if (!rd.next(tok) || tok.size() < 5)
+      throw InputError(rd.where(), "particle", rd.line(), "expected x y z radius id tag");
+    double v[4];
+    for (int c = 0; c < 4; ++c)
+      if (!parse_real(tok[static_cast<std::size_t>(c)], v[c]))
+        throw InputError(rd.where(), "particle", "'" + tok[static_cast<std::size_t>(c)] + "'",
+                         "expected a finite number");
+    if (!(v[3] > 0.0)) throw InputError(rd.where(), "radius", num(v[3]), "must be > 0");
+    std::uint64_t id = 0;
+    if (!parse_id(tok[4], id))
+      throw InputError(rd.where(), "id", "'" + tok[4] + "'",
+                       "expected a non-negative whole number below 2^53");
+    ParticleSpec p;
+    p.position = {v[0], v[1], g.dimension == Dimension::Two ? 0.0 : v[2]};
+    p.radius = v[3];
+    p.tag = id + 1;
+    p.density = density;
+    g.particles.push_back(p);
+    g.particle_lines.push_back(rd.number());
+  }
+  rd.expect_end("EndParticles", "the particle count does not match the rows");
+}
+
+// BeginConnect ... EndConnect: "id1 id2 tag" rows.
+void read_gengeo_bonds(GengeoReader& rd, GeometryData& g, std::uint64_t max_particles) {
+  std::vector<std::string> tok;
+  const std::size_t nb = rd.count("bond count", kMaxBondsPerParticle * max_particles);
+  for (std::size_t k = 0; k < nb; ++k) {
+    std::uint64_t a = 0, b = 0;
+    if (!rd.next(tok) || tok.size() < 2)
+      throw InputError(rd.where(), "bond", "'" + rd.line() + "'", "expected id1 id2 tag");
+    if (!parse_id(tok[0], a) || !parse_id(tok[1], b))
+      throw InputError(rd.where(), "bond", "'" + rd.line() + "'",
+                       "particle ids are non-negative whole numbers below 2^53");
+    g.bonds.emplace_back(a + 1, b + 1);
+    g.bond_lines.push_back(rd.number());
+  }
+  rd.expect_end("EndConnect", "the bond count does not match the rows");
+}
+
+}  // namespace
+
+GeometryData parse_gengeo(std::istream& in, const std::string& path, double density,
+                          double thickness, std::uint64_t max_particles) {
+  GeometryData g;
+  GengeoReader rd(in, path);
+  std::vector<std::string> tok;
+  if (!rd.next(tok) || tok.size() < 2 || tok[0] != "LSMGeometry")
+    throw InputError(rd.where(), "header", tok.empty() ? "(empty)" : "'" + tok[0] + "'",
+                     "expected 'LSMGeometry 1.2' (a GenGeo geometry file)");
+  if (tok[1] != "1.2")
+    throw InputError(rd.where(), "version", tok[1], "only LSMGeometry 1.2 is supported");
   bool dim_seen = false;
-  while (next(tok)) {
+  while (rd.next(tok)) {
     if (tok[0] == "Dimension") {
       dim_seen = true;
       if (tok.size() < 2 || (tok[1] != "3D" && tok[1] != "2D"))
-        throw InputError(where(), "Dimension", tok.size() > 1 ? tok[1] : "", "allowed: 3D, 2D");
+        throw InputError(rd.where(), "Dimension", tok.size() > 1 ? tok[1] : "", "allowed: 3D, 2D");
       g.dimension = tok[1] == "2D" ? Dimension::Two : Dimension::Three;
       g.thickness = g.dimension == Dimension::Two ? thickness : 1.0;
     } else if (tok[0] == "BeginParticles") {
-      if (!next(tok) || tok[0] != "Simple")
-        throw InputError(where(), "particle type", tok.empty() ? "" : tok[0],
-                         "only 'Simple' particles are supported");
-      const std::size_t np = count("particle count", max_particles);
-      for (std::size_t k = 0; k < np; ++k) {
-        if (!next(tok) || tok.size() < 5)
-          throw InputError(where(), "particle", line, "expected x y z radius id tag");
-        double v[4];
-        for (int c = 0; c < 4; ++c)
-          if (!parse_real(tok[static_cast<std::size_t>(c)], v[c]))
-            throw InputError(where(), "particle", "'" + tok[static_cast<std::size_t>(c)] + "'",
-                             "expected a finite number");
-        if (!(v[3] > 0.0)) throw InputError(where(), "radius", num(v[3]), "must be > 0");
-        std::uint64_t id = 0;
-        if (!parse_id(tok[4], id))
-          throw InputError(where(), "id", "'" + tok[4] + "'",
-                           "expected a non-negative whole number below 2^53");
-        ParticleSpec p;
-        p.position = {v[0], v[1], g.dimension == Dimension::Two ? 0.0 : v[2]};
-        p.radius = v[3];
-        p.tag = id + 1;
-        p.density = density;
-        g.particles.push_back(p);
-        g.particle_lines.push_back(n);
-      }
-      if (!next(tok) || tok[0] != "EndParticles")
-        throw InputError(where(), "EndParticles", tok.empty() ? "" : tok[0],
-                         "the particle count does not match the rows");
+      read_gengeo_particles(rd, g, density, max_particles);
     } else if (tok[0] == "BeginConnect") {
-      const std::size_t nb = count("bond count", kMaxBondsPerParticle * max_particles);
-      for (std::size_t k = 0; k < nb; ++k) {
-        std::uint64_t a = 0, b = 0;
-        if (!next(tok) || tok.size() < 2)
-          throw InputError(where(), "bond", "'" + line + "'", "expected id1 id2 tag");
-        if (!parse_id(tok[0], a) || !parse_id(tok[1], b))
-          throw InputError(where(), "bond", "'" + line + "'",
-                           "particle ids are non-negative whole numbers below 2^53");
-        g.bonds.emplace_back(a + 1, b + 1);
-        g.bond_lines.push_back(n);
-      }
-      if (!next(tok) || tok[0] != "EndConnect")
-        throw InputError(where(), "EndConnect", tok.empty() ? "" : tok[0],
-                         "the bond count does not match the rows");
+      read_gengeo_bonds(rd, g, max_particles);
     }
   }
   if (!dim_seen) throw InputError(path, "Dimension", "", "the file has no Dimension line");

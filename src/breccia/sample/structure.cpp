@@ -28,25 +28,13 @@ HomogeneityCheck check_homogeneity(const std::vector<ProfileSlice>& profile) {
   return h;
 }
 
-SampleStructure describe_structure(
-    const std::vector<PosRad>& p, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
-    const Region& region, double gap_tolerance, int floater_contacts, int slices) {
-  SampleStructure s;
+namespace {
+
+// Porosity (the overlaps' lenses taken off the solid) and the contact and bond coordinations.
+void describe_packing(const std::vector<PosRad>& p, std::size_t bonds, const Region& region,
+                      SampleStructure& s) {
   const bool planar = region.planar();
   const double t = region.thickness;
-  const int axis = region.profile_axis();
-  const std::size_t n = p.size();
-  s.particles = n;
-  s.bonds = bonds.size();
-  s.floater_contacts = floater_contacts;
-  if (n == 0) return s;
-
-  std::vector<std::uint32_t> degree(n, 0);
-  for (auto [i, j] : bonds) {
-    ++degree[i];
-    ++degree[j];
-  }
-  // Overlaps: contact coordination and the lens corrections of the porosity.
   PairList touching;
   build_neighbour_pairs(p, 0.0, planar, touching);
   double overlap = 0.0;
@@ -59,19 +47,25 @@ SampleStructure describe_structure(
     overlap += lens_volume(a.r, b.r, d, planar, t);
     ++contacts;
   }
-  double solid = 0.0, r_max = 0.0;
-  for (const PosRad& q : p) {
+  double solid = 0.0;
+  for (const PosRad& q : p)
     solid +=
         planar ? std::numbers::pi * q.r * q.r * t : 4.0 / 3.0 * std::numbers::pi * q.r * q.r * q.r;
-    r_max = std::max(r_max, q.r);
-  }
+  const double n = static_cast<double>(p.size());
   s.porosity = 1.0 - (solid - overlap) / region.volume();
-  s.contact_coordination = 2.0 * static_cast<double>(contacts) / static_cast<double>(n);
-  s.bond_coordination = 2.0 * static_cast<double>(bonds.size()) / static_cast<double>(n);
+  s.contact_coordination = 2.0 * static_cast<double>(contacts) / n;
+  s.bond_coordination = 2.0 * static_cast<double>(bonds) / n;
+}
 
+// Floaters, grains with few or no bonds, and the bonds per grain away from the vessel walls.
+void describe_bonding(const std::vector<PosRad>& p, const std::vector<std::uint32_t>& degree,
+                      const Region& region, double gap_tolerance, int floater_contacts,
+                      SampleStructure& s) {
+  double r_max = 0.0;
+  for (const PosRad& q : p) r_max = std::max(r_max, q.r);
   double interior_bonds = 0.0;
   std::size_t interior = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < p.size(); ++i) {
     const int walls = region.walls_touched(p[i].x, p[i].r, gap_tolerance);
     s.floaters += static_cast<int>(degree[i]) + walls < floater_contacts ? 1 : 0;
     s.few_bonds += static_cast<int>(degree[i]) < floater_contacts ? 1 : 0;
@@ -83,8 +77,15 @@ SampleStructure describe_structure(
   }
   s.bonds_per_interior_particle =
       interior ? interior_bonds / static_cast<double>(interior) : s.bond_coordination;
+}
 
-  // Profile along the profile axis: equal slices of the vessel's length along it.
+// Profile along the profile axis: equal slices of the vessel's length along it, with their
+// grains, bonds per grain and solid fraction.
+void describe_profile(const std::vector<PosRad>& p, const std::vector<std::uint32_t>& degree,
+                      const Region& region, int slices, SampleStructure& s) {
+  const bool planar = region.planar();
+  const double t = region.thickness;
+  const int axis = region.profile_axis();
   s.profile_axis = axis;
   const double h = region.profile_length(), dz = h / slices, z0 = region.lower()[axis];
   s.profile.resize(static_cast<std::size_t>(slices));
@@ -93,7 +94,7 @@ SampleStructure describe_structure(
     s.profile[static_cast<std::size_t>(k)].lo = z0 + k * dz;
     s.profile[static_cast<std::size_t>(k)].hi = z0 + (k + 1) * dz;
   }
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < p.size(); ++i) {
     const double c = p[i].x[axis] - z0;
     const int k = std::clamp(static_cast<int>(std::floor(c / dz)), 0, slices - 1);
     ++s.profile[static_cast<std::size_t>(k)].grains;
@@ -109,6 +110,26 @@ SampleStructure describe_structure(
     sl.bonds_per_grain = sl.grains ? degree_sum[k] / static_cast<double>(sl.grains) : 0.0;
     sl.solid_fraction = slab_solid[k] / region.slab_volume(sl.lo, sl.hi);
   }
+}
+
+}  // namespace
+
+SampleStructure describe_structure(
+    const std::vector<PosRad>& p, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
+    const Region& region, double gap_tolerance, int floater_contacts, int slices) {
+  SampleStructure s;
+  s.particles = p.size();
+  s.bonds = bonds.size();
+  s.floater_contacts = floater_contacts;
+  if (p.empty()) return s;
+  std::vector<std::uint32_t> degree(p.size(), 0);
+  for (auto [i, j] : bonds) {
+    ++degree[i];
+    ++degree[j];
+  }
+  describe_packing(p, bonds.size(), region, s);
+  describe_bonding(p, degree, region, gap_tolerance, floater_contacts, s);
+  describe_profile(p, degree, region, slices, s);
   s.homogeneity = check_homogeneity(s.profile);
   return s;
 }
