@@ -24,6 +24,8 @@ constexpr std::uint32_t kNoHeldBond = 0xffffffffu;  // no bond of the pair await
 // One pass over all interacting pairs: the bond(s) of the pair, then its contact, summed into one
 // slot. Each pair's geometry is computed once; bonded pairs that overlap get the contact force in
 // parallel (docs/physics.md §4.0). Breaks are collected per block and processed in pair order.
+// It stays one function: split into member stages (bonds, joints, contact, the held bond) it ran
+// 7-17 % slower on bench_engine's 100k-grain elastic case, whatever was inlined.
 template <class CL>
 void Simulation::compute_pairs_for(ContactSet<CL>& c) {
   const std::size_t n = c.pairs.size();
