@@ -1,8 +1,7 @@
 #pragma once
 // The experiment file (TOML, SI units) and its validation. The key tables of spec/sections.cpp
 // (and the laws' and tests' own) drive parsing, validation, defaults, `--set` and the generated
-// docs (docs/experiment.md). The spec is plain data; the
-// runner builds a Simulation from it.
+// docs (docs/experiment.md). The spec is plain data; the runner builds a Simulation from it.
 #include <array>
 #include <cstdint>
 #include <string>
