@@ -388,6 +388,35 @@ TEST(Impact, DensityScalingAndOtherShapesAreRefused) {
   }
 }
 
+// A confining-stress sweep picks the registered test that runs at each sigma_3 and carries the
+// loading across; a biaxial test kept at its kind keeps its other keys; a test without platens
+// is refused, naming the tests that can be swept.
+TEST(Protocols, ConfiningSweepChoosesTheTestFromItsTraits) {
+  ExperimentSpec s = parse_experiment("[test]\nkind = \"ucs\"\nplaten_speed = 0.07\n", "x", {});
+  set_confining_stress(s, 3e6, "sweep");
+  EXPECT_EQ(s.test_kind(), "triaxial");
+  EXPECT_EQ(std::get<TriaxialTest::Params>(s.test).platen_speed, 0.07);
+  EXPECT_EQ(confining_stress(s), 3e6);
+  set_confining_stress(s, 0.0, "sweep");
+  EXPECT_EQ(s.test_kind(), "ucs");
+  EXPECT_EQ(std::get<UcsTest::Params>(s.test).platen_speed, 0.07);
+  ExperimentSpec bi = parse_experiment(
+      "[engine]\ndimension = 2\n[sample]\nshape = \"rectangle\"\n[test]\nkind = \"biaxial\"\n"
+      "membrane = false\n",
+      "x", {});
+  set_confining_stress(bi, 7e6, "sweep");
+  EXPECT_FALSE(std::get<BiaxialTest::Params>(bi.test).membrane);
+  EXPECT_EQ(confining_stress(bi), 7e6);
+  ExperimentSpec slab = parse_experiment(tiny_experiment("impact"), "x", {});
+  try {
+    set_confining_stress(slab, 1e6, "sweep");
+    ADD_FAILURE() << "impact accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("\"ucs\", \"triaxial\" or \"biaxial\""), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Protocols, OldLoadingTableStillReadsAsTheTestItMeant) {
   const ExperimentSpec ucs = parse_experiment("[loading]\nplaten_speed = 0.07\n", "old.toml", {});
   EXPECT_EQ(ucs.test_kind(), "ucs");
