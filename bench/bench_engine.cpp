@@ -6,7 +6,8 @@
 // Samples: "block", an FCC (3D) or hexagonal (2D) lattice of equal grains; "cylinder" (3D), a
 // GenGeo-style random cylinder twice as tall as wide, packed by insertion (radii 0.25-1 mm, the
 // 1:4 range of ESyS-Particle's GenGeo examples), the kind of sample the ESyS-Particle, YADE and
-// LAMMPS BPM figures are quoted on. Bonds: "parallel_bond" or "brittle_beam" (ESyS conventions).
+// LAMMPS BPM figures are quoted on. Bonds: "parallel_bond", "brittle_beam" (ESyS conventions) or
+// "quaternion_bond" (LAMMPS bpm/rotational, no contact between bonded grains).
 //
 // Phases: "elastic" loads intact bonds (strong bonds, slow platens); "broken" measures the
 // contact-dominated phase after breakage: weak bonds (10 kPa) are broken by random particle
@@ -32,6 +33,7 @@
 #include "breccia/protocol/compression.hpp"
 #include "breccia/sample/lattice.hpp"
 #include "breccia/sample/packing.hpp"
+#include "breccia/sample/spatial_order.hpp"
 #include "breccia/version.hpp"
 
 using namespace breccia;
@@ -71,7 +73,9 @@ ParticleStore random_cylinder(long target) {
   s.height = 2.0 * s.diameter;
   s.insertion_failures = 1000;  // GenGeo's example value
   s.max_particles = static_cast<std::size_t>(3 * target + 1000);
-  return pack_sample(s).geometry.make_store();
+  GeometryData g = pack_sample(s).geometry;
+  sort_spatially(g);  // as a run does
+  return g.make_store();
 }
 
 template <class Bond>
@@ -79,6 +83,9 @@ void bond_sample(Simulation& sim, bool broken, double gap_tolerance) {
   typename Bond::Params bp;
   if constexpr (std::is_same_v<Bond, ParallelBond>) {
     if (broken) bp.tensile_strength = bp.cohesion = 1e4;
+  } else if constexpr (std::is_same_v<Bond, QuaternionBond>) {
+    bp.contact_while_bonded = false;  // as LAMMPS bpm/rotational without overlay/pair
+    if (broken) bp.tensile_strength = bp.shear_strength = 1e4;
   } else {
     bp.bending_factor = 0.5;  // ESyS-Particle's conventions
     bp.contact_while_bonded = false;
@@ -97,7 +104,8 @@ int main(int argc, char** argv) {
   std::string phase = "elastic", sample = "block", bond = "parallel_bond";
   app.add_option("--dim", dim)->check(CLI::IsMember({2, 3}));
   app.add_option("--sample", sample)->check(CLI::IsMember({"block", "cylinder"}));
-  app.add_option("--bond", bond)->check(CLI::IsMember({"parallel_bond", "brittle_beam"}));
+  app.add_option("--bond", bond)
+      ->check(CLI::IsMember({"parallel_bond", "brittle_beam", "quaternion_bond"}));
   app.add_option("--particles", particles, "approximate particle count");
   app.add_option("--phase", phase)->check(CLI::IsMember({"elastic", "broken"}));
   app.add_option("--threads", threads);
@@ -133,6 +141,8 @@ int main(int argc, char** argv) {
   const double gap_tolerance = sample == "cylinder" ? 1e-8 : 1e-9;
   if (bond == "parallel_bond")
     bond_sample<ParallelBond>(sim, broken, gap_tolerance);
+  else if (bond == "quaternion_bond")
+    bond_sample<QuaternionBond>(sim, broken, gap_tolerance);
   else
     bond_sample<BrittleBeam>(sim, broken, gap_tolerance);
   PlatenCompressionSettings ls;
@@ -165,7 +175,8 @@ int main(int argc, char** argv) {
   // Block and parallel-bond cases keep their historical names ("3d-99k-elastic").
   std::string name = fmt::format("{}d-{}k-{}", dim, (sim.particles().size() + 500) / 1000, phase);
   if (sample == "cylinder") name = "cyl-" + name;
-  if (bond != "parallel_bond") name += "-beam";
+  if (bond == "brittle_beam") name += "-beam";
+  if (bond == "quaternion_bond") name += "-quat";
   std::fprintf(stderr,
                "%-16s threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts; "
                "%.3g particle-steps/s (%.3g per thread), %.3g bond-steps/s, %.0f B/particle peak\n",

@@ -2,6 +2,7 @@
 // error that names the file and line, the key, the value and what is allowed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +12,7 @@
 #include "breccia/engine/simulation.hpp"
 #include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/sample_import.hpp"
+#include "breccia/sample/spatial_order.hpp"
 
 using namespace breccia;
 
@@ -148,4 +150,44 @@ TEST(GeometryFile, AByteOrderMarkIsDroppedInEveryFormat) {
   ASSERT_EQ(t.particles.size(), 2u);
   EXPECT_EQ(t.particles[0].radius, 1e-3);
   std::filesystem::remove_all(dir);
+}
+
+// The run sorts particles along a Morton curve: neighbours in space sit near each other in the
+// arrays, tags and bonds are kept, and the order is a permutation of the input.
+TEST(GeometryFile, SpatialOrderIsAMortonPermutationThatKeepsTags) {
+  GeometryData g;
+  // A 4 x 4 x 4 lattice listed in a scrambled order (i -> 37 i mod 64 is a bijection).
+  for (int k = 0; k < 64; ++k) {
+    const int c = (37 * k) % 64;
+    ParticleSpec p;
+    p.tag = static_cast<std::uint64_t>(100 + c);
+    p.position = {1e-3 * (c % 4), 1e-3 * ((c / 4) % 4), 1e-3 * (c / 16)};
+    p.radius = 0.5e-3;
+    p.density = 2650;
+    g.particles.push_back(p);
+    g.particle_lines.push_back(static_cast<std::size_t>(10 + k));
+  }
+  g.bonds = {{100, 101}};
+  const std::vector<ParticleSpec> before = g.particles;
+  sort_spatially(g);
+  ASSERT_EQ(g.particles.size(), 64u);
+  std::vector<std::uint64_t> tags;
+  for (std::size_t k = 0; k < 64; ++k) {
+    tags.push_back(g.particles[k].tag);
+    // Each line number still belongs to its particle.
+    const std::size_t was = g.particle_lines[k] - 10;
+    EXPECT_EQ(before[was].tag, g.particles[k].tag);
+  }
+  std::sort(tags.begin(), tags.end());
+  for (std::size_t k = 0; k < 64; ++k) EXPECT_EQ(tags[k], 100 + k);
+  // Z-order of a 4^3 lattice: x varies fastest, then y, then z within each 2^3 octant, so the
+  // first eight are the octant at the origin, in the order (0,0,0), (1,0,0), (0,1,0), (1,1,0)...
+  const int first_octant[8] = {0, 1, 4, 5, 16, 17, 20, 21};
+  for (int k = 0; k < 8; ++k) EXPECT_EQ(g.particles[k].tag, 100u + first_octant[k]) << k;
+  // Keys increase along the sorted order.
+  const Vec3 lo{0, 0, 0}, hi{3e-3, 3e-3, 3e-3};
+  for (std::size_t k = 1; k < 64; ++k)
+    EXPECT_LT(morton_key(g.particles[k - 1].position, lo, hi),
+              morton_key(g.particles[k].position, lo, hi));
+  EXPECT_EQ(g.bonds.size(), 1u);
 }

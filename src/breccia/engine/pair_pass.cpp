@@ -41,7 +41,17 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
     for (std::size_t k = begin; k < end; ++k) {
       const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
       PairGeometry g;
-      bool have_geometry = false;
+      bool have_geometry = false, have_motion = false;
+      // The shape first; the motion when a law reads it.
+      auto need = [&](bool motion) {
+        if (!have_geometry) {
+          g = motion ? geometry(i, j) : shape(i, j);
+        } else if (motion && !have_motion) {
+          add_motion(g, i, j);
+        }
+        have_geometry = true;
+        have_motion = have_motion || motion;
+      };
       Vec3 force, couple;
       std::uint32_t law_index = 0;
       bool contact_off = false;  // an intact bond whose law excludes the contact (§4.0)
@@ -52,8 +62,7 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
         // A run uses one bond law: the others' sets are empty, and their index is not read.
         const std::uint32_t b = set.size() == 0 ? BondSet<Law>::kNoBond : set.bond_of_pair[k];
         if (b != BondSet<Law>::kNoBond && set.intact[b]) {
-          if (!have_geometry) g = geometry(i, j);
-          have_geometry = true;
+          need(law_needs_motion<Law>());
           if constexpr (judged_on_interface<Law>) {
             held = Law::loads(set.state[b], g, dt);
             held_law = law_index;
@@ -80,8 +89,7 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
         // Most samples have no joints: no load of the pair's index then.
         const std::uint32_t b = set.size() == 0 ? BondSet<JL>::kNoBond : set.bond_of_pair[k];
         if (b != BondSet<JL>::kNoBond) {
-          if (!have_geometry) g = geometry(i, j);
-          have_geometry = true;
+          need(law_needs_motion<JL>());
           contact_off = true;
           BondFailure f;
           const PairForce pf = JL::compute(set.params, set.state[b], g, dt, joint_dis, f);
@@ -96,10 +104,7 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
         const PosRad& a = p_.pos_rad[i];
         const PosRad& b = p_.pos_rad[j];
         const double reach = a.r + b.r;
-        if (norm2(b.x - a.x) < reach * reach || has_history(c.state[k].n_old)) {
-          g = geometry(i, j);
-          have_geometry = true;
-        }
+        if (norm2(b.x - a.x) < reach * reach || has_history(c.state[k].n_old)) need(true);
       }
       PairSlot& s = c.slot[k];
       if (!have_geometry) {
@@ -114,6 +119,7 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
       }
       Vec3 contact_force;
       if (!contact_off && (g.delta > 0.0 || has_history(c.state[k].n_old))) {
+        need(true);
         const PairForce pf = CL::compute(c.params, c.state[k], g, dt, dis);
         force += pf.force;
         couple += pf.couple;

@@ -34,13 +34,12 @@ struct PairGeometry {
   double m_star() const noexcept { return wall ? m2 : m1 * m2 / (m1 + m2); }
 };
 
-// Geometry of a particle pair from centres, radii and velocities (§0.2): contact point in the
-// middle of the overlap (or gap).
-[[gnu::always_inline]] inline PairGeometry pair_geometry(const Vec3& x1, double R1, const Vec3& x2,
-                                                         double R2, const Vec3& v1, const Vec3& w1,
-                                                         const Vec3& v2, const Vec3& w2, double m1,
-                                                         double m2, bool planar,
-                                                         double thickness) noexcept {
+// The shape of a particle pair from centres and radii (§0.2): normal, distance, overlap and the
+// lever arms to the contact point in the middle of the overlap (or gap). Total-formulation bonds
+// need nothing more.
+[[gnu::always_inline]] inline PairGeometry pair_shape(const Vec3& x1, double R1, const Vec3& x2,
+                                                      double R2, bool planar,
+                                                      double thickness) noexcept {
   PairGeometry g;
   const Vec3 dvec = x2 - x1;
   g.d = norm(dvec);
@@ -49,16 +48,45 @@ struct PairGeometry {
   const Vec3 xc_rel = g.n * (R1 - 0.5 * g.delta);  // x_c - x_1
   g.r1 = xc_rel;
   g.r2 = xc_rel - dvec;
-  g.vc = (v2 + cross(w2, g.r2)) - (v1 + cross(w1, g.r1));
-  g.w1 = w1;
-  g.w2 = w2;
   g.R1 = R1;
   g.R2 = R2;
-  g.m1 = m1;
-  g.m2 = m2;
   g.planar = planar;
   g.thickness = thickness;
   return g;
+}
+
+// Adds the motion of the pair to its shape: the relative velocity of the contact point, the
+// angular velocities and the masses (contacts and incremental bonds).
+[[gnu::always_inline]] inline void add_pair_motion(PairGeometry& g, const Vec3& v1, const Vec3& w1,
+                                                   const Vec3& v2, const Vec3& w2, double m1,
+                                                   double m2) noexcept {
+  g.vc = (v2 + cross(w2, g.r2)) - (v1 + cross(w1, g.r1));
+  g.w1 = w1;
+  g.w2 = w2;
+  g.m1 = m1;
+  g.m2 = m2;
+}
+
+// Geometry of a particle pair from centres, radii and velocities (§0.2): its shape and motion.
+[[gnu::always_inline]] inline PairGeometry pair_geometry(const Vec3& x1, double R1, const Vec3& x2,
+                                                         double R2, const Vec3& v1, const Vec3& w1,
+                                                         const Vec3& v2, const Vec3& w2, double m1,
+                                                         double m2, bool planar,
+                                                         double thickness) noexcept {
+  PairGeometry g = pair_shape(x1, R1, x2, R2, planar, thickness);
+  add_pair_motion(g, v1, w1, v2, w2, m1, m2);
+  return g;
+}
+
+// Whether a law reads the pair's motion (PairGeometry::vc, w1, w2, m1, m2). A law that reads only
+// the shape and the orientations says `needs_motion = false`, and the engine then skips loading
+// the velocities of its pairs; without the declaration a law gets the motion.
+template <class Law>
+constexpr bool law_needs_motion() {
+  if constexpr (requires { Law::needs_motion; })
+    return Law::needs_motion;
+  else
+    return true;
 }
 
 // Orientations (body to world) of the two bodies, for the total bond formulations that need them

@@ -13,6 +13,7 @@
 #include "breccia/core/format.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
+#include "breccia/sample/spatial_order.hpp"
 #include "breccia/sample/geometry_checks.hpp"
 #include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/lattice.hpp"
@@ -356,6 +357,7 @@ Built assemble(const ExperimentSpec& s, const std::function<void(const std::stri
   GeometryData g = load_sample(s, report, info, log);
   // Density scaling (docs/physics.md §1.5): masses and inertias grow, so does the stable time step.
   for (ParticleSpec& q : g.particles) q.density *= s.density_scaling;
+  sort_spatially(g);
   ParticleStore ps = g.make_store(s.grain_body());
   EngineConfig cfg = s.engine;
   cfg.gravity = s.dimension == 2 ? Vec3{0, -s.gravity, 0} : Vec3{0, 0, -s.gravity};
