@@ -10,8 +10,8 @@
 #include <cmath>
 #include <numbers>
 #include <tuple>
-#include <utility>
 #include <type_traits>
+#include <utility>
 
 #include "breccia/engine/simulation.hpp"
 #include "breccia/law/brittle_beam.hpp"

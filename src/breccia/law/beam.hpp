@@ -16,7 +16,9 @@ namespace beam {
 // The length of (a, b) for components of a unit vector or quaternion: no overflow to guard
 // against, so the plain root (std::hypot's scaling took a sixth of a quaternion bond's time).
 // Below 1e-154 the square underflows and the length reads 0, an angle far below round-off.
-inline double unit_part_length(double a, double b) noexcept { return std::sqrt(a * a + b * b); }
+inline double unit_part_length(double a, double b) noexcept {
+  return std::sqrt(a * a + b * b);
+}
 
 // atan2(y, x) for the angles of a bond, which stay small until it breaks: for x > 0 and
 // |y| <= x / 16 the series of atan(t), t = y / x, to t^13 (the next term is below 1e-18 t), and

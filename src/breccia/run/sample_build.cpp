@@ -13,11 +13,11 @@
 #include "breccia/core/format.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
-#include "breccia/sample/spatial_order.hpp"
 #include "breccia/sample/geometry_checks.hpp"
 #include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/lattice.hpp"
 #include "breccia/sample/sample_import.hpp"
+#include "breccia/sample/spatial_order.hpp"
 #include "breccia/version.hpp"
 
 namespace breccia {
