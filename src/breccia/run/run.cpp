@@ -698,7 +698,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
                      "the run (status '" + status +
                          "') has no checkpoint: it stopped before writing one "
                          "(see output.checkpoint_interval_s)");
-  std::istringstream in(read_checkpoint_bytes(cpath), std::ios::binary);
+  std::ifstream in = open_checkpoint(cpath);
   ArchiveReader a(in, cpath.string());
   a.string();  // magic, format and version: checked with the hash
   a.get<std::uint32_t>();

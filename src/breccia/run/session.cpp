@@ -4,10 +4,9 @@
 
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
+#include "breccia/core/atomic_file.hpp"
 #include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/text_file.hpp"
@@ -30,10 +29,10 @@ constexpr std::uint32_t kCheckpointFormat = 14;
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
 // it is trusted.
 void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Session& s) {
-  const fs::path path = folder / kCheckpointFile;
-  std::ostringstream body(std::ios::binary);
+  // Streamed to a temporary renamed over the last complete checkpoint once whole.
+  AtomicFileWriter file(folder / kCheckpointFile);
   {
-    ArchiveWriter a(body);
+    ArchiveWriter a(file.stream());
     a.string(kCheckpointMagic);
     a.value(kCheckpointFormat);
     a.string(kVersion);
@@ -45,22 +44,17 @@ void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Sessio
     save_recorders(s.recorders, a);
     a.label("end of checkpoint");
   }
-  const std::string bytes = std::move(body).str();
-  const std::uint64_t hash = fnv1a64(bytes);
-  std::string file = bytes;
-  file.append(reinterpret_cast<const char*>(&hash), sizeof hash);
-  // The last complete checkpoint stays until this one is written whole.
-  write_file_atomically(path, file);
+  const std::uint64_t hash = file.hash();
+  file.stream().write(reinterpret_cast<const char*>(&hash), sizeof hash);
+  file.commit();
 }
 
-std::string read_checkpoint_bytes(const fs::path& cpath) {
+std::ifstream open_checkpoint(const fs::path& cpath) {
   require_regular_file(cpath.string(), "a checkpoint");
   std::ifstream in(cpath, std::ios::binary);
   if (!in) throw InputError(cpath.string(), "", "", "cannot read the checkpoint");
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   {
-    std::istringstream head(bytes, std::ios::binary);
-    ArchiveReader a(head, cpath.string());
+    ArchiveReader a(in, cpath.string());
     if (a.string() != kCheckpointMagic)
       throw InputError(cpath.string(), "header", "", "not a Breccia checkpoint");
     const auto format = a.get<std::uint32_t>();
@@ -72,18 +66,32 @@ std::string read_checkpoint_bytes(const fs::path& cpath) {
                            std::to_string(kCheckpointFormat) +
                            "): resume with the version that wrote the checkpoint");
   }
+  // The hash of every byte before the last eight, streamed (a checkpoint can be gigabytes).
+  in.clear();
+  in.seekg(0, std::ios::end);
+  const auto size = static_cast<std::uint64_t>(in.tellg());
   std::uint64_t stored = 0;
-  if (bytes.size() < sizeof stored)
-    throw InputError(cpath.string(), "length", std::to_string(bytes.size()) + " bytes",
+  if (size < sizeof stored)
+    throw InputError(cpath.string(), "length", std::to_string(size) + " bytes",
                      "the checkpoint is truncated");
-  std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
-  bytes.resize(bytes.size() - sizeof stored);
-  if (fnv1a64(bytes) != stored)
+  in.seekg(0);
+  std::vector<char> chunk(1 << 20);
+  std::uint64_t hash = fnv1a64({}), left = size - sizeof stored;
+  while (left > 0 && in) {
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(left, chunk.size()));
+    in.read(chunk.data(), static_cast<std::streamsize>(n));
+    hash = fnv1a64({chunk.data(), static_cast<std::size_t>(in.gcount())}, hash);
+    left -= static_cast<std::uint64_t>(in.gcount());
+  }
+  in.read(reinterpret_cast<char*>(&stored), sizeof stored);
+  if (!in) throw InputError(cpath.string(), "", "", "cannot read the checkpoint");
+  if (hash != stored)
     throw InputError(cpath.string(), "checksum", fmt::format("{:016x}", stored),
                      fmt::format("the file's bytes hash to {:016x}: the checkpoint is damaged "
                                  "or truncated and cannot be resumed",
-                                 fnv1a64(bytes)));
-  return bytes;
+                                 hash));
+  in.seekg(0);
+  return in;
 }
 
 }  // namespace breccia

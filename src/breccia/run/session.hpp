@@ -3,6 +3,7 @@
 // (observe/registry.hpp) and the loading loop's own state; and checkpoint.bin, which saves and
 // restores it exactly.
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -82,7 +83,8 @@ struct Session {
 // Writes checkpoint.bin atomically (temporary file, then rename): a crash while writing leaves the
 // previous checkpoint intact.
 void write_checkpoint(const std::filesystem::path& folder, const ExperimentSpec& spec, Session& s);
-// Reads checkpoint.bin whole and checks its header and hash; returns the bytes before the hash.
-std::string read_checkpoint_bytes(const std::filesystem::path& checkpoint);
+// Checks checkpoint.bin's header and its hash (streamed through, never held whole) and returns the
+// file opened at its first byte; throws InputError naming the file when either is wrong.
+std::ifstream open_checkpoint(const std::filesystem::path& checkpoint);
 
 }  // namespace breccia
