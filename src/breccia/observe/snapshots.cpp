@@ -5,8 +5,11 @@
 
 #include <cmath>
 #include <filesystem>
+#include <iterator>
+#include <utility>
 
 #include "breccia/core/archive.hpp"
+#include "breccia/core/atomic_file.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/text_file.hpp"
 #include "breccia/spec/experiment.hpp"
@@ -17,9 +20,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Writes `text` to path atomically (temporary file, then rename).
-void put(const fs::path& path, const std::string& text) {
-  write_file_atomically(path, text);
+// Formats straight into the file's stream: a snapshot of a million grains is hundreds of
+// megabytes of text, never held in memory whole.
+template <class... Args>
+void print(std::ostream& s, fmt::format_string<Args...> f, Args&&... args) {
+  fmt::format_to(std::ostreambuf_iterator<char>(s), f, std::forward<Args>(args)...);
 }
 
 std::string header(std::size_t points, std::size_t cells) {
@@ -31,41 +36,45 @@ std::string header(std::size_t points, std::size_t cells) {
 }
 const char* kFooter = "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
 
-void points_block(std::string& s, const std::vector<Vec3>& x) {
-  s += "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (const Vec3& p : x) s += fmt::format("{:.9g} {:.9g} {:.9g}\n", p.x, p.y, p.z);
-  s += "</DataArray>\n</Points>\n";
+// Points from `point(k)`, k < n.
+template <class F>
+void points_block(std::ostream& s, std::size_t n, F&& point) {
+  s << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3 p = point(k);
+    print(s, "{:.9g} {:.9g} {:.9g}\n", p.x, p.y, p.z);
+  }
+  s << "</DataArray>\n</Points>\n";
 }
 
 // Vertex cells (one per point) or line cells (pairs of points).
-void cells_block(std::string& s, std::size_t cells, int per_cell) {
-  s += "<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
-  for (std::size_t c = 0; c < cells * static_cast<std::size_t>(per_cell); ++c)
-    s += fmt::format("{}\n", c);
-  s += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-  for (std::size_t c = 1; c <= cells; ++c) s += fmt::format("{}\n", c * per_cell);
-  s += "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  for (std::size_t c = 0; c < cells; ++c) s += per_cell == 1 ? "1\n" : "3\n";
-  s += "</DataArray>\n</Cells>\n";
+void cells_block(std::ostream& s, std::size_t cells, int per_cell) {
+  s << "<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (std::size_t c = 0; c < cells * static_cast<std::size_t>(per_cell); ++c) print(s, "{}\n", c);
+  s << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  for (std::size_t c = 1; c <= cells; ++c) print(s, "{}\n", c * per_cell);
+  s << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+  for (std::size_t c = 0; c < cells; ++c) s << (per_cell == 1 ? "1\n" : "3\n");
+  s << "</DataArray>\n</Cells>\n";
 }
 
 template <class F>
-void scalar(std::string& s, const char* name, const char* type, std::size_t n, F&& f) {
-  s += fmt::format("<DataArray type=\"{}\" Name=\"{}\" format=\"ascii\">\n", type, name);
-  for (std::size_t i = 0; i < n; ++i) s += fmt::format("{}\n", f(i));
-  s += "</DataArray>\n";
+void scalar(std::ostream& s, const char* name, const char* type, std::size_t n, F&& f) {
+  print(s, "<DataArray type=\"{}\" Name=\"{}\" format=\"ascii\">\n", type, name);
+  for (std::size_t i = 0; i < n; ++i) print(s, "{}\n", f(i));
+  s << "</DataArray>\n";
 }
 // A symmetric 3x3 tensor per point, row-major (ParaView reads 9 components as a tensor).
 template <class F>
-void tensor(std::string& s, const char* name, std::size_t n, F&& f) {
-  s += fmt::format(
-      "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"9\" format=\"ascii\">\n", name);
+void tensor(std::ostream& s, const char* name, std::size_t n, F&& f) {
+  print(s, "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"9\" format=\"ascii\">\n",
+        name);
   for (std::size_t i = 0; i < n; ++i) {
     const std::array<double, 9> t = f(i);
-    s += fmt::format("{:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g}\n", t[0], t[1],
-                     t[2], t[3], t[4], t[5], t[6], t[7], t[8]);
+    print(s, "{:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g}\n", t[0], t[1], t[2],
+          t[3], t[4], t[5], t[6], t[7], t[8]);
   }
-  s += "</DataArray>\n";
+  s << "</DataArray>\n";
 }
 
 // The rotation of a unit quaternion as its axis times its angle in [0, pi] (docs/physics.md §0.4:
@@ -79,14 +88,14 @@ Vec3 rotation_vector(const Quat& q) {
 }
 
 template <class F>
-void vector(std::string& s, const char* name, std::size_t n, F&& f) {
-  s += fmt::format(
-      "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">\n", name);
+void vector(std::ostream& s, const char* name, std::size_t n, F&& f) {
+  print(s, "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">\n",
+        name);
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3 v = f(i);
-    s += fmt::format("{:.9g} {:.9g} {:.9g}\n", v.x, v.y, v.z);
+    print(s, "{:.9g} {:.9g} {:.9g}\n", v.x, v.y, v.z);
   }
-  s += "</DataArray>\n";
+  s << "</DataArray>\n";
 }
 
 }  // namespace
@@ -166,12 +175,12 @@ void SnapshotWriter::write(const Simulation& sim) {
 void SnapshotWriter::write_particles(const Simulation& sim, const fs::path& path) const {
   const ParticleStore& p = sim.particles();
   const std::size_t n = p.size();
-  std::string s = header(n, n);
-  std::vector<Vec3> x(n);
-  for (std::size_t i = 0; i < n; ++i) x[i] = p.pos_rad[i].x;
-  points_block(s, x);
+  AtomicFileWriter file(path);
+  std::ostream& s = file.stream();
+  s << header(n, n);
+  points_block(s, n, [&](std::size_t i) { return p.pos_rad[i].x; });
   cells_block(s, n, 1);
-  s += "<PointData Scalars=\"radius\" Vectors=\"velocity\" Tensors=\"stress_pa\">\n";
+  s << "<PointData Scalars=\"radius\" Vectors=\"velocity\" Tensors=\"stress_pa\">\n";
   scalar(s, "radius", "Float64", n, [&](std::size_t i) { return p.pos_rad[i].r; });
   scalar(s, "tag", "Int64", n, [&](std::size_t i) { return p.tag[i]; });
   scalar(s, "broken_bonds", "Int32", n, [&](std::size_t i) {
@@ -186,46 +195,68 @@ void SnapshotWriter::write_particles(const Simulation& sim, const fs::path& path
   });
   const std::vector<std::array<double, 9>> stress = sim.particle_stress();
   tensor(s, "stress_pa", n, [&](std::size_t i) { return stress[i]; });
-  s += "</PointData>\n";
-  s += kFooter;
-  put(path, s);
+  s << "</PointData>\n" << kFooter;
+  file.commit();
 }
 
 // Intact bonds as lines between the grain centres, each with its loads and how close they are
 // to its strength as its law judges them (the law's assess(): docs/physics.md §4.5).
 void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) const {
   const ParticleStore& p = sim.particles();
-  std::vector<Vec3> x;
-  std::vector<int> law;
-  std::vector<BondFailure> loads;
-  int law_index = 0;
-  auto add_set = [&]<class Law>(const BondSet<Law>& b) {
-    for (std::size_t k = 0; k < b.size(); ++k) {
-      if (!b.intact[k]) continue;
-      x.push_back(p.pos_rad[b.pairs.first[k]].x);
-      x.push_back(p.pos_rad[b.pairs.second[k]].x);
-      law.push_back(law_index);
-      loads.push_back(Law::assess(b.params, b.state[k]));
-    }
-    ++law_index;
+  // The intact bonds of every law in order, by their set and index: each column walks them
+  // afresh (assess() is cheap next to formatting) instead of holding a copy of every bond.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> intact;  // (law, bond)
+  std::uint32_t law_index = 0;
+  std::apply(
+      [&](const auto&... set) {
+        (
+            [&] {
+              for (std::size_t k = 0; k < set.size(); ++k)
+                if (set.intact[k]) intact.emplace_back(law_index, static_cast<std::uint32_t>(k));
+              ++law_index;
+            }(),
+            ...);
+      },
+      sim.bonds());
+  // f(set, k) for the m-th intact bond.
+  auto at = [&](std::size_t m, auto&& f) {
+    std::uint32_t li = 0;
+    std::apply(
+        [&](const auto&... set) {
+          ((li++ == intact[m].first ? f(set, intact[m].second) : void()), ...);
+        },
+        sim.bonds());
   };
-  std::apply([&](const auto&... set) { (add_set(set), ...); }, sim.bonds());
-  const std::size_t m = loads.size();
-  std::string s = header(x.size(), m);
-  points_block(s, x);
+  auto loads = [&](std::size_t m) {
+    BondFailure out;
+    at(m, [&]<class Law>(const BondSet<Law>& set, std::uint32_t k) {
+      out = Law::assess(set.params, set.state[k]);
+    });
+    return out;
+  };
+  const std::size_t m = intact.size();
+  AtomicFileWriter file(path);
+  std::ostream& s = file.stream();
+  s << header(2 * m, m);
+  points_block(s, 2 * m, [&](std::size_t e) {
+    Vec3 x;
+    at(e / 2, [&](const auto& set, std::uint32_t k) {
+      x = p.pos_rad[e % 2 == 0 ? set.pairs.first[k] : set.pairs.second[k]].x;
+    });
+    return x;
+  });
   cells_block(s, m, 2);
-  s += "<CellData Scalars=\"breakage_index\">\n";
-  scalar(s, "law", "Int32", m, [&](std::size_t k) { return law[k]; });
-  scalar(s, "normal_force_n", "Float64", m, [&](std::size_t k) { return loads[k].Fn; });
-  scalar(s, "shear_force_n", "Float64", m, [&](std::size_t k) { return loads[k].Fs; });
-  scalar(s, "twisting_moment_nm", "Float64", m, [&](std::size_t k) { return loads[k].Mt; });
-  scalar(s, "bending_moment_nm", "Float64", m, [&](std::size_t k) { return loads[k].Mb; });
-  scalar(s, "sigma_pa", "Float64", m, [&](std::size_t k) { return loads[k].sigma; });
-  scalar(s, "tau_pa", "Float64", m, [&](std::size_t k) { return loads[k].tau; });
-  scalar(s, "breakage_index", "Float64", m, [&](std::size_t k) { return loads[k].index; });
-  s += "</CellData>\n";
-  s += kFooter;
-  put(path, s);
+  s << "<CellData Scalars=\"breakage_index\">\n";
+  scalar(s, "law", "Int32", m, [&](std::size_t k) { return intact[k].first; });
+  scalar(s, "normal_force_n", "Float64", m, [&](std::size_t k) { return loads(k).Fn; });
+  scalar(s, "shear_force_n", "Float64", m, [&](std::size_t k) { return loads(k).Fs; });
+  scalar(s, "twisting_moment_nm", "Float64", m, [&](std::size_t k) { return loads(k).Mt; });
+  scalar(s, "bending_moment_nm", "Float64", m, [&](std::size_t k) { return loads(k).Mb; });
+  scalar(s, "sigma_pa", "Float64", m, [&](std::size_t k) { return loads(k).sigma; });
+  scalar(s, "tau_pa", "Float64", m, [&](std::size_t k) { return loads(k).tau; });
+  scalar(s, "breakage_index", "Float64", m, [&](std::size_t k) { return loads(k).index; });
+  s << "</CellData>\n" << kFooter;
+  file.commit();
 }
 
 // The cracks so far as points at their positions, with the crack plane's normal and radius (a
@@ -233,12 +264,12 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) co
 void SnapshotWriter::write_cracks(const Simulation& sim, const fs::path& path) const {
   const auto& cracks = sim.cracks();
   const std::size_t m = cracks.size();
-  std::vector<Vec3> x(m);
-  for (std::size_t k = 0; k < m; ++k) x[k] = cracks[k].position;
-  std::string s = header(m, m);
-  points_block(s, x);
+  AtomicFileWriter file(path);
+  std::ostream& s = file.stream();
+  s << header(m, m);
+  points_block(s, m, [&](std::size_t k) { return cracks[k].position; });
   cells_block(s, m, 1);
-  s += "<PointData Scalars=\"mode\" Vectors=\"normal\">\n";
+  s << "<PointData Scalars=\"mode\" Vectors=\"normal\">\n";
   scalar(s, "mode", "Int32", m,
          [&](std::size_t k) { return cracks[k].mode == CrackMode::Tensile ? 0 : 1; });
   scalar(s, "time_s", "Float64", m, [&](std::size_t k) { return cracks[k].time; });
@@ -246,9 +277,8 @@ void SnapshotWriter::write_cracks(const Simulation& sim, const fs::path& path) c
   scalar(s, "energy_j", "Float64", m, [&](std::size_t k) { return cracks[k].energy.total(); });
   scalar(s, "radius_m", "Float64", m, [&](std::size_t k) { return cracks[k].bond_radius; });
   vector(s, "normal", m, [&](std::size_t k) { return cracks[k].normal; });
-  s += "</PointData>\n";
-  s += kFooter;
-  put(path, s);
+  s << "</PointData>\n" << kFooter;
+  file.commit();
 }
 
 void SnapshotWriter::write_collections() const {
@@ -259,7 +289,7 @@ void SnapshotWriter::write_collections() const {
       s += fmt::format("<DataSet timestep=\"{:.9g}\" file=\"{}_{}.vtu\"/>\n", times_[k], set,
                        names_[k]);
     s += "</Collection>\n</VTKFile>\n";
-    put(fs::path(folder_) / (std::string(set) + ".pvd"), s);
+    write_file_atomically(fs::path(folder_) / (std::string(set) + ".pvd"), s);
   }
 }
 
