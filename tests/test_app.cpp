@@ -14,7 +14,9 @@
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/calibrate/calibration_file.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/run/memory_budget.hpp"
 #include "breccia/spec/experiment.hpp"
+#include "breccia/state/particle_store.hpp"
 #include "cli_harness.hpp"
 
 namespace fs = std::filesystem;
@@ -610,4 +612,28 @@ TEST(App, BuildsFromUncommittedTreesNameTheirCommitDirty) {
   EXPECT_EQ(label(), clean + "-dirty");
   fs::remove_all(repo);
   fs::remove(out);
+}
+
+// The memory estimate made before a run: it counts at least the particle and bond arrays, a
+// sample larger than the memory available is refused with the estimate and what to change, and
+// with the memory unknown the run goes ahead.
+TEST(MemoryBudget, ASampleLargerThanTheMemoryIsRefusedWithTheEstimate) {
+  const ExperimentSpec spec = parse_experiment("name = \"m\"\n", "exp.toml", {});
+  const MemoryEstimate e = estimate_memory(spec, 1000000, 3000000);
+  EXPECT_GE(e.particle_bytes, 1e6 * static_cast<double>(ParticleStore::kBytesPerParticle));
+  EXPECT_GE(e.bond_bytes, 3e6 * 100.0);  // every bond law's state is over 100 bytes
+  EXPECT_GT(e.pair_bytes, 0.0);
+  // Bonding touching grains itself: 3 bonds per grain assumed in 3D.
+  EXPECT_DOUBLE_EQ(estimate_memory(spec, 1000000, 0).bond_bytes, e.bond_bytes);
+  try {
+    check_memory(spec, 1000000, 3000000, 0.5 * e.total());
+    ADD_FAILURE() << "no error for a run twice the memory available";
+  } catch (const InputError& err) {
+    const std::string m = err.what();
+    for (const char* f : {"exp.toml", "sample", "1000000 grains", "GiB", "sample.radii"})
+      EXPECT_NE(m.find(f), std::string::npos) << m << " lacks " << f;
+  }
+  EXPECT_NE(check_memory(spec, 1000000, 3000000, 2.0 * e.total()).find("GiB available"),
+            std::string::npos);
+  EXPECT_NE(check_memory(spec, 1000000, 3000000, 0.0).find("unknown"), std::string::npos);
 }

@@ -3,10 +3,12 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "breccia/core/quat.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/core/vec3.hpp"
+#include "breccia/state/tag_index.hpp"
 
 using namespace breccia;
 
@@ -96,4 +98,28 @@ TEST(Vec3, PlaneCarryMatchesTheReferenceTiltThenSpin) {
   const Vec3 ref = spin_about(rotate_between(v, n_old, n), n, psi);
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], ref[k], 1e-15);
   EXPECT_NEAR(dot(got, n), 0.0, 1e-15);
+}
+
+// Tags 0..N go to the table, far ones to the map; a table grown past map entries takes them
+// over; every tag finds its index and an unknown one finds nothing.
+TEST(TagIndex, DenseAndSparseTagsFindTheirIndexes) {
+  TagIndex t;
+  t.insert(5000, 0);  // beyond 2 x 0 + 1024: the map
+  for (std::uint64_t k = 1; k <= 3000; ++k) t.insert(k, static_cast<std::size_t>(k));
+  t.insert(std::uint64_t{1} << 40, 3001);  // always the map
+  EXPECT_EQ(t.size(), 3002u);
+  EXPECT_EQ(t.find(5000), std::optional<std::size_t>(0));
+  for (std::uint64_t k = 1; k <= 3000; ++k) ASSERT_EQ(t.find(k), std::optional<std::size_t>(k));
+  EXPECT_EQ(t.find(std::uint64_t{1} << 40), std::optional<std::size_t>(3001));
+  EXPECT_FALSE(t.contains(0));
+  EXPECT_FALSE(t.contains(3001));
+  EXPECT_FALSE(t.contains(4999));
+  EXPECT_FALSE(t.contains((std::uint64_t{1} << 40) + 1));
+  // Growing the table over 5000 moved it from the map: still found after a further insert.
+  t.insert(5001, 3002);
+  EXPECT_EQ(t.find(5000), std::optional<std::size_t>(0));
+  EXPECT_EQ(t.find(5001), std::optional<std::size_t>(3002));
+  t.clear();
+  EXPECT_FALSE(t.contains(1));
+  EXPECT_EQ(t.size(), 0u);
 }

@@ -188,6 +188,11 @@ class Simulation {
   // InputError outside 0 <= alpha < 1.
   void set_local_damping(double alpha);
 
+  // The engine's own arrays per particle besides the store (run/memory_budget.cpp): positions at
+  // the last rebuild, wall loads, driver loads and the pair list's two offsets.
+  static constexpr std::size_t kScratchBytesPerParticle =
+      5 * sizeof(Vec3) + 2 * sizeof(std::uint32_t);
+
   // --- views ---
   const ParticleStore& particles() const noexcept { return p_; }
   ParticleStore& particles_mut() noexcept { return p_; }  // protocols: drives and fixities only

@@ -13,6 +13,7 @@
 #include "breccia/core/format.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
+#include "breccia/run/memory_budget.hpp"
 #include "breccia/sample/geometry_checks.hpp"
 #include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/lattice.hpp"
@@ -355,6 +356,9 @@ Built assemble(const ExperimentSpec& s, const std::function<void(const std::stri
   json report;
   SampleInfo info;
   GeometryData g = load_sample(s, report, info, log);
+  const std::string memory =
+      check_memory(s, g.particles.size(), g.bonds.size(), available_memory_bytes());
+  if (log) log(memory);
   // Density scaling (docs/physics.md §1.5): masses and inertias grow, so does the stable time step.
   for (ParticleSpec& q : g.particles) q.density *= s.density_scaling;
   sort_spatially(g);

@@ -21,6 +21,9 @@ struct BondSet {
   std::size_t broken_since_compaction = 0;
 
   static constexpr std::uint32_t kNoBond = 0xffffffffu;
+  // What each bond holds (run/memory_budget.cpp): its pair, tag, state and flag.
+  static constexpr std::size_t kBytesPerBond = 2 * sizeof(std::uint32_t) + sizeof(std::uint64_t) +
+                                               sizeof(typename Law::State) + sizeof(std::uint8_t);
 
   std::size_t size() const noexcept { return tag.size(); }
   std::size_t intact_count() const noexcept { return size() - broken_since_compaction; }

@@ -28,7 +28,7 @@ double ParticleStore::inertia_of(double m, double radius) const noexcept {
 
 std::size_t ParticleStore::add(const ParticleSpec& p) {
   const std::string where = "particle " + std::to_string(p.tag);
-  if (index_.count(p.tag))
+  if (index_.contains(p.tag))
     throw InputError(where, "tag", std::to_string(p.tag), "tags must be unique");
   if (!(p.radius > 0.0) || !std::isfinite(p.radius))
     throw InputError(where, "radius", num(p.radius), "must be a finite value > 0 m");
@@ -47,7 +47,10 @@ std::size_t ParticleStore::add(const ParticleSpec& p) {
                        "2D particles lie in the x-y plane: z, vz, wx and wy must be 0");
   }
   const std::size_t i = size();
-  index_.emplace(p.tag, i);
+  if (i >= TagIndex::kAbsent)
+    throw InputError(where, "particles", std::to_string(i + 1),
+                     "at most 4294967294 particles (indexes are 32-bit)");
+  index_.insert(p.tag, i);
   pos_rad.push_back({x, p.radius});
   vel.push_back(v);
   angvel.push_back(w);
@@ -68,10 +71,9 @@ std::size_t ParticleStore::add(const ParticleSpec& p) {
 }
 
 std::size_t ParticleStore::index_of(std::uint64_t t, const std::string& where) const {
-  const auto it = index_.find(t);
-  if (it == index_.end())
-    throw InputError(where, "particle tag", std::to_string(t), "no particle has this tag");
-  return it->second;
+  const auto i = index_.find(t);
+  if (!i) throw InputError(where, "particle tag", std::to_string(t), "no particle has this tag");
+  return *i;
 }
 
 // One field list for writing and reading: a checkpoint cannot write what it does not read.
@@ -113,7 +115,12 @@ void ParticleStore::load(ArchiveReader& a) {
       throw InputError(a.where(), "particles", std::to_string(m),
                        "array lengths differ: the checkpoint is corrupt");
   index_.clear();
-  for (std::size_t i = 0; i < n; ++i) index_[tag[i]] = i;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (index_.contains(tag[i]))
+      throw InputError(a.where(), "particles", std::to_string(tag[i]),
+                       "a tag appears twice: the checkpoint is corrupt");
+    index_.insert(tag[i], i);
+  }
 }
 
 }  // namespace breccia

@@ -3,11 +3,11 @@
 // "Layers"). Identity is the stable tag; indices are positions in these arrays.
 #include <cstdint>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "breccia/core/quat.hpp"
 #include "breccia/core/vec3.hpp"
+#include "breccia/state/tag_index.hpp"
 
 namespace breccia {
 
@@ -60,7 +60,7 @@ class ParticleStore {
   std::size_t add(const ParticleSpec& p);
   // Index of a tag, or throws InputError naming `where`.
   std::size_t index_of(std::uint64_t tag, const std::string& where = "particle store") const;
-  bool contains(std::uint64_t t) const { return index_.count(t) != 0; }
+  bool contains(std::uint64_t t) const { return index_.contains(t); }
 
   double mass_of(double radius, double density) const noexcept;
 
@@ -68,6 +68,11 @@ class ParticleStore {
   void save(ArchiveWriter& a) const;
   void load(ArchiveReader& a);
   double inertia_of(double mass, double radius) const noexcept;
+
+  // What each particle holds in the arrays below and the tag table (run/memory_budget.cpp).
+  static constexpr std::size_t kBytesPerParticle =
+      sizeof(PosRad) + 7 * sizeof(Vec3) + 4 * sizeof(double) + sizeof(Quat) +
+      sizeof(std::uint64_t) + sizeof(Motion) + 2 * sizeof(std::uint32_t);
 
   // Grouped arrays (public: the engine's loops read them directly).
   std::vector<PosRad> pos_rad;
@@ -87,7 +92,7 @@ class ParticleStore {
   Dimension dim_ = Dimension::Three;
   double thickness_ = 1.0;
   PlanarBody body_ = PlanarBody::Disk;
-  std::unordered_map<std::uint64_t, std::size_t> index_;
+  TagIndex index_;
 };
 
 }  // namespace breccia

@@ -1,0 +1,66 @@
+#include "breccia/run/memory_budget.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+#include "breccia/core/error.hpp"
+#include "breccia/engine/simulation.hpp"
+
+namespace breccia {
+
+MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, std::size_t bonds) {
+  const bool planar = s.dimension == 2;
+  const double n = static_cast<double>(particles);
+  MemoryEstimate e;
+  e.neighbour_pairs = n * (planar ? kPairsPerGrain2d : kPairsPerGrain3d);
+  const double bond_count = bonds > 0 ? static_cast<double>(bonds) : n * (planar ? 2.0 : 3.0);
+  e.particle_bytes = n * static_cast<double>(ParticleStore::kBytesPerParticle +
+                                             Simulation::kScratchBytesPerParticle);
+  visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params&) {
+    e.bond_bytes = bond_count * static_cast<double>(BondSet<Law>::kBytesPerBond);
+  });
+  visit_params<ContactLaws>(s.contact, [&]<class Law>(const typename Law::Params&) {
+    // At a rebuild the old list and history live beside the new ones.
+    const double kept = 2.0 * (3.0 * sizeof(std::uint32_t) + sizeof(typename Law::State));
+    e.pair_bytes = e.neighbour_pairs * (kept + sizeof(PairSlot) + sizeof(std::uint32_t));
+  });
+  return e;
+}
+
+double available_memory_bytes() {
+  std::ifstream in("/proc/meminfo");
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::string key;
+    double kib = 0.0;
+    if (words >> key >> kib && key == "MemAvailable:") return kib * 1024.0;
+  }
+  return 0.0;
+}
+
+std::string check_memory(const ExperimentSpec& s, std::size_t particles, std::size_t bonds,
+                         double available) {
+  const MemoryEstimate e = estimate_memory(s, particles, bonds);
+  const double gib = 1024.0 * 1024.0 * 1024.0;
+  const double per = e.total() / static_cast<double>(std::max<std::size_t>(particles, 1));
+  const std::string parts = fmt::format(
+      "{:.0f} bytes per grain: particles {:.2f} GiB, bonds {:.2f} GiB, about {:.3g} neighbour "
+      "pairs {:.2f} GiB",
+      per, e.particle_bytes / gib, e.bond_bytes / gib, e.neighbour_pairs, e.pair_bytes / gib);
+  if (available > 0.0 && e.total() > available)
+    throw InputError(
+        s.source, "sample", fmt::format("{} grains", particles),
+        fmt::format("the run needs about {:.1f} GiB ({}) and this machine has {:.1f} GiB "
+                    "available: use fewer grains (larger sample.radii or a smaller sample) or a "
+                    "machine with more memory",
+                    e.total() / gib, parts, available / gib));
+  return fmt::format("memory: about {:.2f} GiB estimated ({}); {} available", e.total() / gib,
+                     parts,
+                     available > 0.0 ? fmt::format("{:.1f} GiB", available / gib) : "unknown");
+}
+
+}  // namespace breccia
