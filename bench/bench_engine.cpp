@@ -178,10 +178,10 @@ int main(int argc, char** argv) {
   if (bond == "brittle_beam") name += "-beam";
   if (bond == "quaternion_bond") name += "-quat";
   std::fprintf(stderr,
-               "%-16s threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts; "
+               "%-16s threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts, %zu pairs; "
                "%.3g particle-steps/s (%.3g per thread), %.3g bond-steps/s, %.0f B/particle peak\n",
                name.c_str(), threads, sim.particles().size(), sim.intact_bonds(), bonds0,
-               sim.active_contacts(), rate, rate / threads, bond_rate,
+               sim.active_contacts(), sim.neighbour_pairs(), rate, rate / threads, bond_rate,
                static_cast<double>(peak_rss_bytes()) / static_cast<double>(sim.particles().size()));
   nlohmann::json j{{"case", name},
                    {"dim", dim},
@@ -193,6 +193,7 @@ int main(int argc, char** argv) {
                    {"bonds", bonds0},
                    {"bonds_intact_end", sim.intact_bonds()},
                    {"contacts_end", sim.active_contacts()},
+                   {"neighbour_pairs_end", sim.neighbour_pairs()},
                    {"threads", threads},
                    {"steps", steps},
                    {"repeats", repeats},
