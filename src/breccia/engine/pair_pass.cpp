@@ -62,7 +62,7 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
         // A run uses one bond law: the others' sets are empty, and their index is not read.
         const std::uint32_t b = set.size() == 0 ? BondSet<Law>::kNoBond : set.bond_of_pair[k];
         if (b != BondSet<Law>::kNoBond && set.intact[b]) {
-          need(law_needs_motion<Law>());
+          need(law_needs_motion<Law>);
           if constexpr (judged_on_interface<Law>) {
             held = Law::loads(set.state[b], g, dt);
             held_law = law_index;
@@ -89,7 +89,7 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
         // Most samples have no joints: no load of the pair's index then.
         const std::uint32_t b = set.size() == 0 ? BondSet<JL>::kNoBond : set.bond_of_pair[k];
         if (b != BondSet<JL>::kNoBond) {
-          need(law_needs_motion<JL>());
+          need(law_needs_motion<JL>);
           contact_off = true;
           BondFailure f;
           const PairForce pf = JL::compute(set.params, set.state[b], g, dt, joint_dis, f);

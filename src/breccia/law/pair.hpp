@@ -78,17 +78,6 @@ struct PairGeometry {
   return g;
 }
 
-// Whether a law reads the pair's motion (PairGeometry::vc, w1, w2, m1, m2). A law that reads only
-// the shape and the orientations says `needs_motion = false`, and the engine then skips loading
-// the velocities of its pairs; without the declaration a law gets the motion.
-template <class Law>
-constexpr bool law_needs_motion() {
-  if constexpr (requires { Law::needs_motion; })
-    return Law::needs_motion;
-  else
-    return true;
-}
-
 // Orientations (body to world) of the two bodies, for the total bond formulations that need them
 // (§4.2, §4.3; a law says so with `needs_frames`). In 2D, rotations about z by the disks' angles.
 struct BodyFrames {

@@ -38,6 +38,18 @@ consteval bool is_planar_only() {
 }
 template <class Law>
 constexpr bool planar_only_law = is_planar_only<Law>();
+// Whether a law reads the pair's motion (PairGeometry::vc, w1, w2, m1, m2). A law that reads only
+// the shape and the orientations says `needs_motion = false`, and the pair pass then skips
+// loading the velocities of its pairs; without the declaration a law gets the motion.
+template <class Law>
+consteval bool reads_motion() {
+  if constexpr (requires { Law::needs_motion; })
+    return Law::needs_motion;
+  else
+    return true;
+}
+template <class Law>
+constexpr bool law_needs_motion = reads_motion<Law>();
 
 // The chosen laws' parameters (the experiment's [contact] and [bond] tables).
 using ContactParams = ParamsVariant<ContactLaws>;
