@@ -9,7 +9,6 @@
 #include <utility>
 
 #include "breccia/core/archive.hpp"
-#include "breccia/core/atomic_file.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/text_file.hpp"
 #include "breccia/spec/experiment.hpp"

@@ -18,7 +18,7 @@ struct MemoryEstimate {
 };
 
 // Neighbour pairs per grain assumed by the estimate (half list, skin 0.4 mean radius): above
-// the 4.4-7 measured on bonded random packings and FCC blocks (bench/RESULTS.md), so that the
+// the 4.4 measured on a bonded GenGeo cylinder and 5.8 on an FCC block (bench_engine), so that the
 // estimate errs high.
 inline constexpr double kPairsPerGrain3d = 8.0, kPairsPerGrain2d = 4.0;
 

@@ -6,7 +6,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "breccia/core/atomic_file.hpp"
 #include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/text_file.hpp"
