@@ -139,25 +139,11 @@ void emplace_index(Variant& v, std::size_t index, std::index_sequence<I...>) {
 
 }  // namespace
 
+// The contact law by name, its pairs and histories, and the walls' contacts.
 template <class Archive>
-void Simulation::transfer(Archive& a) {
-  // Fails to compile when a member of the engine is added: add it below if it carries state from
-  // one step to the next, then update the size. The law-dependent members (the contact model and
-  // the bond and joint sets, whose sizes grow with the registry) are left out of the count: they
-  // are saved by law, so a new law needs nothing here.
-  static_assert(sizeof(Simulation) - sizeof(ContactModel) - sizeof(wall_contacts_) -
-                        sizeof(BondSets) - sizeof(JointSets) ==
-                    1552,
-                "Simulation changed: update engine/checkpoint.cpp");
-  a.label("simulation");
-  if constexpr (Archive::reading)
-    p_.load(a);
-  else
-    p_.save(a);
-  a.value(cfg_);
-
+void Simulation::transfer_contacts(Archive& a) {
   a.label("contacts");
-  // The contact law by name, like the bond sets: the registry's order does not matter.
+  // By name, like the bond sets: the registry's order does not matter.
   std::string contact_law;
   if constexpr (!Archive::reading)
     std::visit([&]<class CL>(const ContactSet<CL>&) { contact_law = CL::name; }, contact_);
@@ -198,6 +184,46 @@ void Simulation::transfer(Archive& a) {
         }
       },
       wall_contacts_);
+}
+
+// The crack catalogue (each record's law by name) and the run's warnings.
+template <class Archive>
+void Simulation::transfer_cracks(Archive& a) {
+  a.label("cracks");
+  a.sized(cracks_, sizeof(CrackRecord));
+  for (CrackRecord& c : cracks_) {
+    std::string name(c.law);
+    a.string(name);
+    CrackRecord plain = c;
+    plain.law = {};  // a pointer into this process: restored from the name
+    a.value(plain);
+    if constexpr (Archive::reading) {
+      c = plain;
+      c.law = bond_law_name(name, a.where());
+    }
+  }
+  a.sized(warnings_, 8);
+  for (std::string& w : warnings_) a.string(w);
+}
+
+template <class Archive>
+void Simulation::transfer(Archive& a) {
+  // Fails to compile when a member of the engine is added: add it below if it carries state from
+  // one step to the next, then update the size. The law-dependent members (the contact model and
+  // the bond and joint sets, whose sizes grow with the registry) are left out of the count: they
+  // are saved by law, so a new law needs nothing here.
+  static_assert(sizeof(Simulation) - sizeof(ContactModel) - sizeof(wall_contacts_) -
+                        sizeof(BondSets) - sizeof(JointSets) ==
+                    1552,
+                "Simulation changed: update engine/checkpoint.cpp");
+  a.label("simulation");
+  if constexpr (Archive::reading)
+    p_.load(a);
+  else
+    p_.save(a);
+  a.value(cfg_);
+
+  transfer_contacts(a);
 
   a.label("bonds");
   transfer_sets(a, bonds_);
@@ -228,21 +254,7 @@ void Simulation::transfer(Archive& a) {
   a.value(max_disp2_);
   a.value(radius_growth_);
 
-  a.label("cracks");
-  a.sized(cracks_, sizeof(CrackRecord));
-  for (CrackRecord& c : cracks_) {
-    std::string name(c.law);
-    a.string(name);
-    CrackRecord plain = c;
-    plain.law = {};  // a pointer into this process: restored from the name
-    a.value(plain);
-    if constexpr (Archive::reading) {
-      c = plain;
-      c.law = bond_law_name(name, a.where());
-    }
-  }
-  a.sized(warnings_, 8);
-  for (std::string& w : warnings_) a.string(w);
+  transfer_cracks(a);
 
   a.label("ledger");
   a.value(ledger_);

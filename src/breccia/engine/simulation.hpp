@@ -249,6 +249,10 @@ class Simulation {
   explicit Simulation(RestoreTag) {}
   template <class Archive>
   void transfer(Archive& a);  // the checkpoint's field list (engine/checkpoint.cpp)
+  template <class Archive>
+  void transfer_contacts(Archive& a);
+  template <class Archive>
+  void transfer_cracks(Archive& a);
   // The stages of a step, each in its own file of engine/: the neighbour list (neighbours.cpp),
   // the pass over pairs (pair_pass.cpp), the walls (wall_pass.cpp), the integrator
   // (integrator.cpp) and the ledger's stored energies (energy_ledger.cpp). Each dispatches once on
@@ -263,6 +267,9 @@ class Simulation {
   void rebuild_for(ContactSet<CL>& contacts);
   template <class CL>
   void compute_pairs_for(ContactSet<CL>& contacts);
+  template <class CL>
+  class PairWalk;  // one block's walk of the pair pass (pair_pass.cpp)
+  void process_failures(std::size_t blocks);
   template <class Law>
   void process_failure(BondSet<Law>& set, std::uint32_t bond, const BondFailure& info);
   template <class Law>
