@@ -484,3 +484,35 @@ TEST(ParticleStress, GrainStressesAddUpToThePairStressSum) {
       EXPECT_NEAR(sum[3 * a + b], 0.5 * (pairs.lf[3 * a + b] + pairs.lf[3 * b + a]), 1e-10 * scale)
           << a << b;
 }
+
+TEST(PairStress, AffineStiffnessPredictsTheStressOfASmallStrain) {
+  // Two fixed grains touching along (0.6, 0.8, 0): an affine strain eps along x (the 2D
+  // compaction's move, displace_particle) raises sum l_x F_x by axial_stiffness[0] eps, to within
+  // the geometric terms the normal springs leave out (of order overlap / |l| = 1e-3).
+  const double R = 0.5e-3, overlap = 1e-6, eps = 1e-7;
+  const Vec3 n{0.6, 0.8, 0.0};
+  ParticleStore ps(Dimension::Three, 1.0);
+  ps.add({.tag = 1, .position = {0, 0, 0}, .radius = R, .density = 2650, .motion = Motion::Fixed});
+  ps.add({.tag = 2,
+          .position = n * (2 * R - overlap),
+          .radius = R,
+          .density = 2650,
+          .motion = Motion::Fixed});
+  EngineConfig cfg;
+  cfg.time_step = 1e-8;
+  LinearContact::Params lp;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  sim.initialise();
+  sim.step();
+  const PairStress before = sim.pair_stress();
+  ASSERT_EQ(before.touching, 1u);
+  ASSERT_GT(before.lf[0], 0.0);
+  // k_n l_x^4 / |l|^2 per axis: their ratio is the direction's alone.
+  EXPECT_NEAR(before.axial_stiffness[1] / before.axial_stiffness[0], std::pow(0.8 / 0.6, 4), 1e-12);
+  EXPECT_EQ(before.axial_stiffness[2], 0.0);
+  for (std::size_t i = 0; i < 2; ++i)
+    sim.displace_particle(i, {-eps * sim.particles().pos_rad[i].x.x, 0, 0});
+  sim.step();
+  const double predicted = before.axial_stiffness[0] * eps;
+  EXPECT_NEAR(sim.pair_stress().lf[0] - before.lf[0], predicted, 1e-2 * predicted);
+}

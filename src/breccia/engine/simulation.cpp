@@ -295,6 +295,21 @@ void Simulation::place_particle(std::size_t i, const Vec3& position, double radi
   radius_growth_ = std::max(radius_growth_, skin_);  // the lists no longer cover it: rebuild
 }
 
+void Simulation::displace_particle(std::size_t i, const Vec3& dx) {
+  if (i >= p_.size() || !std::isfinite(norm2(dx)))
+    throw InputError("particle displacement", "displacement", num(norm(dx)),
+                     "must be finite, for a particle of the sample");
+  if (intact_bonds() > 0)
+    throw InputError("particle displacement", "bonds", std::to_string(intact_bonds()),
+                     "particles can only be displaced before bonds are installed");
+  p_.pos_rad[i].x += dx;
+  p_.displacement[i] += dx;
+  if (!x_at_build_.empty())
+    max_disp2_ = std::max(max_disp2_, norm2(p_.pos_rad[i].x - x_at_build_[i]));
+  baseline_.reset();
+  sample_requested_ = true;
+}
+
 PairStress Simulation::pair_stress() const {
   PairStress out;
   out.coordination.assign(p_.size(), 0);
@@ -313,6 +328,9 @@ PairStress Simulation::pair_stress() const {
           double kn = 0.0, ks = 0.0;
           CL::timestep_stiffness(c.params, g, kn, ks);
           out.radius_stiffness += kn * (g.R1 + g.R2) * g.d;
+          for (int a = 0; a < 3; ++a)
+            out.axial_stiffness[static_cast<std::size_t>(a)] +=
+                kn * l[a] * l[a] * l[a] * l[a] / norm2(l);
           ++out.touching;
           ++out.coordination[i];
           ++out.coordination[j];

@@ -123,8 +123,11 @@ struct IntegrateBlock {
 struct PairStress {
   std::array<double, 9> lf{};  // row-major sum of l_i F_j, N m
   double radius_stiffness =
-      0.0;                   // sum over touching pairs of k_n (R1 + R2) d (docs/physics.md §7.2)
-  std::size_t touching = 0;  // pairs in contact (overlapping), bonded or not
+      0.0;  // sum over touching pairs of k_n (R1 + R2) d (docs/physics.md §7.2)
+  // Per axis a, the sum over touching pairs of k_n l_a^4 / |l|^2, N m: V times the stiffness
+  // d sigma_aa / d eps_aa of the normal springs under an affine strain along a.
+  std::array<double, 3> axial_stiffness{};
+  std::size_t touching = 0;                 // pairs in contact (overlapping), bonded or not
   std::vector<std::uint32_t> coordination;  // touching pairs per particle
 
   double mean(int dimension, double volume) const noexcept {
@@ -177,6 +180,10 @@ class Simulation {
   // Moves one particle to `position` with `radius` (at rest), before bonds exist (packing: a
   // floater placed snug in its cage). The neighbour lists are rebuilt before the next step.
   void place_particle(std::size_t index, const Vec3& position, double radius);
+  // Moves one particle by `dx` between two steps, keeping its velocity (packing: an affine
+  // compaction imposed on every grain at once). Same rules as scale_radii; the neighbour lists
+  // see the move through their skin test.
+  void displace_particle(std::size_t index, const Vec3& dx);
   // Estimates the time step again for the current geometry (packing stages, whose radii and
   // contacts change a lot between the start and the end); refused once bonds exist.
   void refresh_time_step();
