@@ -399,6 +399,27 @@ TEST(Packing, PreconsolidationReachesItsStressIn2D) {
   }
 }
 
+TEST(Packing, HomogeneousCompactionReachesItsStressIn2D) {
+  // The sample strained with its side rows (docs/physics.md §7.3): the rows carry 10 MPa and the
+  // sample's own contacts balance them, its grains as evenly packed along the height as the
+  // rows' (homogeneity), and the width shrinks by the compaction.
+  PackingSettings s = preconsolidated_rectangle();
+  s.thickness = 0.1e-3;
+  s.radii.r_min = 20e-6;
+  s.radii.r_max = 80e-6;
+  s.contact = make_contact_model<LinearContact>({.modulus = 20e9}, {.modulus = 20e9});
+  s.homogeneous_compaction = true;
+  s.bond_gap_tolerance = 0.2e-6;  // bonded, for the homogeneity's bonds per grain
+  const PackedSample p = pack_sample(s);
+  EXPECT_TRUE(p.report.converged) << p.report.stages.back().note;
+  EXPECT_NEAR(p.report.preconsolidation_stress_reached, 10e6, 0.02 * 10e6);
+  EXPECT_GT(p.report.locked_in_mean_stress, 5e6);
+  EXPECT_LT(p.report.structure.porosity, 0.22);
+  EXPECT_GT(p.report.structure.porosity, 0.10);
+  EXPECT_LT(p.report.width, s.width * (1 - s.porosity) / 0.45);
+  EXPECT_TRUE(p.report.structure.homogeneity.passes());
+}
+
 TEST(Packing, BadSettingsAreRefused) {
   PackingSettings s = bar_prism();
   s.width = 0.5e-3;  // narrower than 4 grains

@@ -153,6 +153,7 @@ PackingSettings packing_settings(const ExperimentSpec& s) {
   p.servo_to_stress = s.packing_target == "stress";
   p.isotropic_stress = s.isotropic_stress;
   p.preconsolidation_stress = s.preconsolidation_stress;
+  p.homogeneous_compaction = s.compaction == "homogeneous";
   p.contact = contact_model(s);
   p.bond_gap_tolerance = s.bond_gap_tolerance;
   p.floater_contacts = static_cast<int>(s.floater_contacts);

@@ -44,6 +44,9 @@ struct PackingSettings {
   bool servo_to_stress = true;      // expansion: true: servo to isotropic_stress; false: porosity
   double isotropic_stress = 0.1e6;  // Pa, p0 of §7.2 (low: about 1 % of the UCS or less)
   double preconsolidation_stress = 10e6;  // Pa, 2D preconsolidation (seed 002: 10 MPa)
+  // 2D preconsolidation: the sample strained homogeneously with its side rows (steps about
+  // independent of the width), instead of the side rows pushed in alone (docs/physics.md §7.3).
+  bool homogeneous_compaction = false;
   // Contact law of the packing: the test's law and parameters (friction is switched off while
   // packing). Defaults to linear contacts with E_c = 10 GPa.
   ContactModel contact = make_contact_model<LinearContact>({}, {});

@@ -52,6 +52,7 @@ struct ExperimentSpec {
   std::string packing_target = "stress";  // "stress" (servo to isotropic_stress) or "porosity"
   double isotropic_stress = 0.1e6;
   double preconsolidation_stress = 10e6;
+  std::string compaction = "rows";  // preconsolidation: "rows" | "homogeneous"
   std::int64_t floater_contacts = 3;
   double floater_max_growth = 0.2;
   std::int64_t insertion_failures = 5000;

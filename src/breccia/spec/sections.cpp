@@ -354,6 +354,19 @@ std::vector<SpecField> sample_packing_fields() {
        "packing = \"preconsolidation\": stress the particle-row walls compact the disks to "
        "before bonding (seed 002: 10 MPa)",
        0, kInf, false},
+      {"sample",
+       "compaction",
+       "",
+       at<&S::compaction>,
+       "packing = \"preconsolidation\": rows: the side rows pushed in by a servo, the sample "
+       "following as a stress wave crosses it (its steps grow with the width; the 2D presets "
+       "were calibrated on such samples); homogeneous: the sample and its side rows strained "
+       "together, steps about independent of the width (docs/physics.md §7.3)",
+       0,
+       kText,
+       true,
+       true,
+       {"rows", "homogeneous"}},
       {"sample", "floater_contacts", "", at<&S::floater_contacts>,
        "N_f: generated grains with fewer bonded neighbours are floaters and are placed snug in "
        "their cages, touching N_f or more (P&C 2004: 3 contacts; vessel walls do not count here)",
