@@ -25,8 +25,6 @@ namespace {
 constexpr std::uint64_t kCheck = 20;       // steps between measurements
 constexpr double kGrowthRate = 4e-3;       // radius growth per check in stage 1
 constexpr double kServoCap = 2e-4;         // largest radius change per check in stage 3
-constexpr double kServoGain = 0.5;         // eta of §7.2 step 4
-constexpr double kMaxServoGain = 1000.0;   // the adaptive gain's ceiling
 constexpr double kStressTolerance = 0.02;  // |p - p0| / p0 for "at p0"
 constexpr int kChecksHeld = 5;             // consecutive checks at p0 for "there"
 // Settling at constant radii before the servo. Longer settling shortens the servo by fewer steps
@@ -78,15 +76,15 @@ class Expansion {
     sim_.run(std::min(steps, s_.max_steps - std::min(s_.max_steps, sim_.step_count())));
   }
 
-  // Stage 3: the increment is g (p_goal - p) / S with S the affine stiffness of the contacts,
-  // capped at kServoCap per check; g starts at eta = 0.5 (§7.2 step 4). The affine stiffness
-  // overstates the response of a packing near jamming, many times over with linear contacts, so
-  // p would creep toward p_goal for tens of thousands of steps: while the error keeps its sign
-  // without shrinking, g grows by half each check; when the sign flips, g halves (not below
-  // eta). True once p held within the tolerance for kChecksHeld checks.
+  // Stage 3: the radius increment is g (p_goal - p) / S with S the affine stiffness of the
+  // contacts, capped at kServoCap per check, g adaptive (AdaptiveServo: the affine stiffness
+  // overstates the response near jamming many times over with linear contacts, and a fixed g
+  // would creep toward p_goal for tens of thousands of steps). True once p held within the
+  // tolerance for kChecksHeld checks.
   bool servo(double p_goal) {
     int held = 0;
-    double p = 0.0, gain = kServoGain, last_error = 0.0;
+    double p = 0.0;
+    AdaptiveServo radius_servo(kServoCap);
     while (!out_of_steps()) {
       sim_.run(kCheck);
       const PairStress ps = sim_.pair_stress();
@@ -94,15 +92,7 @@ class Expansion {
       const double stiffness = ps.radius_stiffness / (dim_ * volume_);
       held = std::abs(p - p_goal) <= kStressTolerance * p_goal ? held + 1 : 0;
       if (held >= kChecksHeld) break;
-      const double error = p_goal - p;
-      if (error * last_error < 0.0)
-        gain = std::max(kServoGain, 0.5 * gain);
-      else if (last_error != 0.0 && std::abs(error) > 0.9 * std::abs(last_error))
-        gain = std::min(kMaxServoGain, 1.5 * gain);
-      last_error = error;
-      const double eps =
-          stiffness > 0.0 ? std::clamp(gain * error / stiffness, -kServoCap, kServoCap) : kServoCap;
-      sim_.scale_radii(1.0 + eps);
+      sim_.scale_radii(1.0 + radius_servo.increment(p_goal - p, stiffness));
     }
     return held >= kChecksHeld;
   }

@@ -1,7 +1,9 @@
 #pragma once
 // Internal to sample/: the three packing methods and the pieces they share. Each method returns
 // the packed particles in its vessel; pack_sample() then orders, bonds and reports them.
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -61,6 +63,28 @@ struct FloaterFix {
 FloaterFix fit_floaters(Simulation& sim, const Region& region, double tol, int n_f,
                         double max_growth, const std::vector<double>& nominal_radius,
                         std::size_t candidates = static_cast<std::size_t>(-1));
+
+// The packing servos' step (docs/physics.md §7.2 step 4): the increment g error / stiffness, capped
+// at `cap` either way (the cap when nothing is touching yet). The affine stiffness overstates the
+// response of a packing near jamming, so while the error keeps its sign without shrinking g grows
+// by half each check (up to kMaxGain); when the sign flips, g halves (not below kMinGain).
+class AdaptiveServo {
+ public:
+  static constexpr double kMinGain = 0.5;     // eta of §7.2 step 4
+  static constexpr double kMaxGain = 1000.0;  // the adaptive gain's ceiling
+  explicit AdaptiveServo(double cap) : cap_(cap) {}
+  double increment(double error, double stiffness) {
+    if (error * last_error_ < 0.0)
+      gain_ = std::max(kMinGain, 0.5 * gain_);
+    else if (last_error_ != 0.0 && std::abs(error) > 0.9 * std::abs(last_error_))
+      gain_ = std::min(kMaxGain, 1.5 * gain_);
+    last_error_ = error;
+    return stiffness > 0.0 ? std::clamp(gain_ * error / stiffness, -cap_, cap_) : cap_;
+  }
+
+ private:
+  double cap_, gain_ = kMinGain, last_error_ = 0.0;
+};
 
 class StageClock {
  public:

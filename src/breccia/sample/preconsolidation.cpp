@@ -30,10 +30,8 @@ constexpr std::uint64_t kSettleSteps = 1500;
 constexpr double kServoRelaxation = 0.2;   // alpha_s of §6.2 for the pushed side rows
 constexpr double kStressTolerance = 0.02;  // as the expansion servo: within 2 % for 10 checks
 constexpr int kChecksHeld = 10;
-constexpr double kIntegralShare = 0.1;    // of the rows' proportional speed, added per check
-constexpr double kServoCap = 5e-5;        // largest strain per check of the compaction
-constexpr double kServoGain = 0.5;        // the compaction servo's smallest gain
-constexpr double kMaxServoGain = 1000.0;  // and its ceiling
+constexpr double kIntegralShare = 0.1;  // of the rows' proportional speed, added per check
+constexpr double kServoCap = 5e-5;      // largest strain per check of the compaction
 
 // The four rows of disks around the sample: indices into the simulation's particles.
 struct Rows {
@@ -213,8 +211,7 @@ RowServo servo_side_rows(Simulation& sim, const Rows& rows, std::size_t n, doubl
 // disks, growing with the width; docs/physics.md §7.3). The strain increment of a check is
 // g (target - sigma_xx) / S, sigma_xx the sample's own mean stress and S the affine stiffness of
 // the contacts (PairStress::axial_stiffness), capped at kServoCap; the gain g adapts as the
-// expansion servo's does (§7.2 step 4): it grows by half while the error keeps its sign without
-// shrinking, and halves (not below kServoGain) when the sign flips.
+// expansion servo's does (AdaptiveServo).
 RowServo compact_affinely(Simulation& sim, const Rows& rows, std::size_t n, double target,
                           double thickness, std::uint64_t max_steps) {
   const ParticleStore& P = sim.particles();
@@ -231,7 +228,7 @@ RowServo compact_affinely(Simulation& sim, const Rows& rows, std::size_t n, doub
   moving.insert(moving.end(), rows.right.begin(), rows.right.end());
   RowServo out;
   int held = 0;
-  double gain = kServoGain, last_error = 0.0;
+  AdaptiveServo servo(kServoCap);
   while (sim.step_count() < max_steps) {
     sim.run(kCheck);
     const double f_left = row_load(sim, rows.left, n, {1, 0, 0});
@@ -246,15 +243,8 @@ RowServo compact_affinely(Simulation& sim, const Rows& rows, std::size_t n, doub
                ? held + 1
                : 0;
     if (held >= kChecksHeld) break;
-    const double error = target - inner;
-    if (error * last_error < 0.0)
-      gain = std::max(kServoGain, 0.5 * gain);
-    else if (last_error != 0.0 && std::abs(error) > 0.9 * std::abs(last_error))
-      gain = std::min(kMaxServoGain, 1.5 * gain);
-    last_error = error;
     const double stiffness = sim.pair_stress().axial_stiffness[0] / volume;
-    const double strain =
-        stiffness > 0.0 ? std::clamp(gain * error / stiffness, -kServoCap, kServoCap) : kServoCap;
+    const double strain = servo.increment(target - inner, stiffness);
     const double centre =
         0.5 * (P.pos_rad[rows.left.front()].x.x + P.pos_rad[rows.right.front()].x.x);
     for (std::size_t i : moving)
