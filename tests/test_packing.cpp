@@ -418,6 +418,14 @@ TEST(Packing, HomogeneousCompactionReachesItsStressIn2D) {
   EXPECT_GT(p.report.structure.porosity, 0.10);
   EXPECT_LT(p.report.width, s.width * (1 - s.porosity) / 0.45);
   EXPECT_TRUE(p.report.structure.homogeneity.passes());
+  // The same sample with its side rows pushed alone waits at every check for the stress wave to
+  // cross it: its compaction stage takes more steps (1.9x on 3,444 disks, 4.3x on 13,706).
+  s.homogeneous_compaction = false;
+  const PackedSample rows = pack_sample(s);
+  ASSERT_EQ(rows.report.stages.at(1).name, "preconsolidation");
+  ASSERT_EQ(p.report.stages.at(1).name, "preconsolidation");
+  EXPECT_LT(p.report.stages[1].steps, rows.report.stages[1].steps)
+      << p.report.stages[1].steps << " steps against the rows' " << rows.report.stages[1].steps;
 }
 
 TEST(Packing, BadSettingsAreRefused) {
