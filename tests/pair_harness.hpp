@@ -73,6 +73,10 @@ struct PairStepper {
   Vec3 joint_normal{1, 0, 0};  // joint laws: the plane's normal (tilted from most branches)
 
   void install(std::uint64_t seed = 1, std::uint64_t tag = 1) {
+    // As the engine does: the run's geometry, then the derived parameters.
+    if constexpr (requires { params.run; })
+      params.run = {planar, planar && planar_sphere, thickness};
+    if constexpr (requires { Law::prepare(params); }) Law::prepare(params);
     if constexpr (is_joint_law<Law>)
       state = Law::install(params, make_geometry(a, b, planar, thickness, planar_sphere),
                            joint_normal, Law::starts_bonded(params));
@@ -99,7 +103,7 @@ struct PairStepper {
   }
   double energy() const {
     if constexpr (is_bond_law<Law> || is_joint_law<Law>)
-      return Law::energy(state).total();
+      return Law::energy(params, state).total();
     else
       return Law::stored_energy(params, state);
   }

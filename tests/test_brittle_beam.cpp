@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "breccia/engine/simulation.hpp"
@@ -48,17 +49,17 @@ constexpr double kTol = 1e-5;
 
 TEST(BrittleBeam, StiffnessesAreThoseOfTheBeam) {
   auto s = touching_beam();
-  EXPECT_NEAR(s.state.kr, kKr, 1e-12 * kKr);
-  EXPECT_NEAR(s.state.ks, kKs, 1e-12 * kKs);
-  EXPECT_NEAR(s.state.kb, kKb, 1e-12 * kKb);
-  EXPECT_NEAR(s.state.kt, kKt, 1e-12 * kKt);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kr, kKr, 1e-12 * kKr);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).ks, kKs, 1e-12 * kKs);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kb, kKb, 1e-12 * kKb);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kt, kKt, 1e-12 * kKt);
   EXPECT_NEAR(BrittleBeam::moduli(s.params).shear, kG, 1.0);
   // ESyS's bending factor 0.5 halves the bending stiffness, nothing else.
   auto h = touching_beam();
   h.params.bending_factor = 0.5;
   h.install();
-  EXPECT_NEAR(h.state.kb, 0.5 * kKb, 1e-12 * kKb);
-  EXPECT_EQ(h.state.kr, s.state.kr);
+  EXPECT_NEAR(BrittleBeam::section(h.params, h.state).kb, 0.5 * kKb, 1e-12 * kKb);
+  EXPECT_EQ(BrittleBeam::section(h.params, h.state).kr, BrittleBeam::section(s.params, s.state).kr);
 }
 
 TEST(BrittleBeam, StretchPullsWithTheAxialStiffness) {
@@ -224,9 +225,10 @@ TEST(BrittleBeam, PlanarBeamIsASlab) {
   s.b.x = {kL, 0, 0};
   s.install();
   const double area = 2 * kR * 1e-3, inertia = 2.0 / 3.0 * kR * kR * kR * 1e-3;
-  EXPECT_NEAR(s.state.kr, kE * area / kL, 1e-12 * kE * area / kL);
-  EXPECT_NEAR(s.state.kb, kE * inertia / kL, 1e-12 * kE * inertia / kL);
-  EXPECT_EQ(s.state.kt, 0.0);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kr, kE * area / kL, 1e-12 * kE * area / kL);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kb, kE * inertia / kL,
+              1e-12 * kE * inertia / kL);
+  EXPECT_EQ(BrittleBeam::section(s.params, s.state).kt, 0.0);
   const double theta = 1e-6;
   s.b.q = from_axis_angle({0, 0, 1}, theta);
   const PairResult r = s.evaluate();
@@ -324,5 +326,46 @@ TEST(BrittleBeamEngine, FreeBondedPairKeepsItsEnergyIn3DAnd2D) {
     EXPECT_GT(most_bond, 0.05 * e0) << "the beam must carry load";
     EXPECT_EQ(sim.ledger().friction + sim.ledger().deleted, 0.0);
     EXPECT_LT(worst, 1e-5 * e0) << (planar ? "2D" : "3D");
+  }
+}
+
+// The section is derived at every step from the beam's radius and length through one division
+// (beam::section). Its reciprocals and stiffnesses must be those of the section itself: each is
+// a chain of at most six roundings (0.5 ulp each) after that division, so within 8 epsilon of
+// the quotient taken directly. In 2D the slab has no polar moment: 1 / J and K_t read 0.
+TEST(BeamSection, ReciprocalsAndStiffnessesAreThoseOfTheSection) {
+  const double tol = 8 * std::numeric_limits<double>::epsilon();
+  const double E = 12e9, G = 4.8e9, chi = 0.5;
+  beam::BeamState s;
+  s.radius = 0.37e-3;
+  s.d0 = 0.81e-3;
+  struct Case {
+    RunGeometry run;
+    bool disc_for_planar_spheres;
+    bool slab;
+  };
+  for (const Case& k :
+       {Case{{false, false, 1.0}, false, false}, Case{{true, false, 1e-3}, false, true},
+        Case{{true, true, 2e-3}, true, false}, Case{{true, true, 2e-3}, false, true}}) {
+    const beam::BeamSection c = beam::section(s, {E, G, chi, k.disc_for_planar_spheres}, k.run);
+    const double r = s.radius, t = k.run.thickness;
+    const double area = k.slab ? 2 * r * t : std::numbers::pi * r * r;
+    const double inertia =
+        k.slab ? 2.0 / 3.0 * r * r * r * t : 0.25 * std::numbers::pi * r * r * r * r;
+    EXPECT_NEAR(c.area, area, tol * area);
+    EXPECT_NEAR(c.inertia, inertia, tol * inertia);
+    EXPECT_NEAR(c.inv_area, 1 / area, tol / area);
+    EXPECT_NEAR(c.inv_inertia, 1 / inertia, tol / inertia);
+    EXPECT_NEAR(c.kr, E * area / s.d0, tol * E * area / s.d0);
+    EXPECT_NEAR(c.ks, G * area / s.d0, tol * G * area / s.d0);
+    EXPECT_NEAR(c.kb, chi * E * inertia / s.d0, tol * chi * E * inertia / s.d0);
+    if (k.slab) {
+      EXPECT_EQ(c.polar, 0.0);
+      EXPECT_EQ(c.inv_polar, 0.0);
+      EXPECT_EQ(c.kt, 0.0);
+    } else {
+      EXPECT_NEAR(c.inv_polar, 1 / (2 * inertia), tol / (2 * inertia));
+      EXPECT_NEAR(c.kt, G * 2 * inertia / s.d0, tol * G * 2 * inertia / s.d0);
+    }
   }
 }

@@ -146,8 +146,8 @@ void check_rigid_motion_invariance() {
   if constexpr (is_bond_law<Law>) {
     if constexpr (Law::needs_frames || requires { &Law::State::d0; }) {
       const double eps = std::numeric_limits<double>::epsilon();
-      f_ulp = eps * 1e-2 * Law::max_stiffness(s.state);
-      m_ulp = eps * Law::max_moment_stiffness(s.state) + f_ulp * s.a.R;
+      f_ulp = eps * 1e-2 * Law::max_stiffness(s.params, s.state);
+      m_ulp = eps * Law::max_moment_stiffness(s.params, s.state) + f_ulp * s.a.R;
     }
   }
   for (int k = 0; k < 300; ++k) {

@@ -57,9 +57,11 @@ TEST(QuaternionBond, ShearArmsAreThePresentLength) {
   // brittle beam's K_s d0 gamma (ESyS); their ratio is d / d0 exactly. Stiffnesses agree.
   auto q = touching_pair(1e12);  // elastic
   auto b = touching_pair<BrittleBeam>();
-  EXPECT_EQ(q.state.kr, b.state.kr);
-  EXPECT_EQ(q.state.kb, b.state.kb);
-  EXPECT_NEAR(q.state.ks, kKs, 1e-12 * kKs);
+  const beam::BeamSection qs = QuaternionBond::section(q.params, q.state);
+  const beam::BeamSection bs = BrittleBeam::section(b.params, b.state);
+  EXPECT_EQ(qs.kr, bs.kr);
+  EXPECT_EQ(qs.kb, bs.kb);
+  EXPECT_NEAR(qs.ks, kKs, 1e-12 * kKs);
   const double d = 1.01 * kL, gamma = 1e-6;
   place(q.b, d, gamma);
   place(b.b, d, gamma);
@@ -118,7 +120,7 @@ TEST(QuaternionBond, EachLoadAloneBreaksAtIndexOne) {
     ASSERT_TRUE(s.failure.broken) << c.what;
     EXPECT_EQ(s.failure.mode, c.mode) << c.what;
     EXPECT_NEAR(s.failure.ratio_t + s.failure.ratio_s, 1.01, 2e-4) << c.what;
-    EXPECT_NEAR(s.failure.energy.total(), QuaternionBond::energy(s.state).total(), 1e-30);
+    EXPECT_NEAR(s.failure.energy.total(), QuaternionBond::energy(s.params, s.state).total(), 1e-30);
   }
   // The stored energy at the tensile break is K_r u^2 / 2.
   auto t = touching_pair();

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "breccia/engine/simulation.hpp"
@@ -45,15 +46,22 @@ Vec3 force_on_2(const Simulation& s) {
   return s.particles().force[1];
 }
 
+// The bond's section and stiffnesses as the engine's parameters give them (its dimension and
+// thickness included).
+ParallelBond::Section section_of(const Simulation& s) {
+  const auto& set = std::get<BondSet<ParallelBond>>(s.bonds());
+  return ParallelBond::section(set.params, set.state[0]);
+}
+
 }  // namespace
 
 TEST(TwoParticle, HandStiffnessesOfPhysicsSection8) {
   Pair p = make_pair(false);
-  const auto& st = std::get<BondSet<ParallelBond>>(p.sim.bonds()).state[0];
+  const ParallelBond::Section st = section_of(p.sim);
   EXPECT_NEAR(st.kn, kKn, 1e-9 * kKn);
   EXPECT_NEAR(st.ks, kKs, 1e-9 * kKs);
-  EXPECT_NEAR(ParallelBond::kb(st), kKb, 1e-9 * kKb);
-  EXPECT_NEAR(ParallelBond::kt(st), kKt, 1e-9 * kKt);
+  EXPECT_NEAR(st.kb, kKb, 1e-9 * kKb);
+  EXPECT_NEAR(st.kt, kKt, 1e-9 * kKt);
 }
 
 TEST(TwoParticle, PullBreaksInTensionAtTwoMicrometres) {
@@ -96,7 +104,7 @@ namespace {
 // the bond breaks; checks |F_s| = K_s * arc on the way and returns the crack.
 CrackRecord shear_along_arc(bool planar, double thickness) {
   Pair p = make_pair(planar, thickness);
-  const auto& st = std::get<BondSet<ParallelBond>>(p.sim.bonds()).state[0];
+  const ParallelBond::Section st = section_of(p.sim);
   const double ks = st.ks, kn = st.kn;
   const double V = 1e-2, d0 = 2 * kR;
   const double dt = p.sim.time_step();
@@ -194,10 +202,10 @@ TEST(TwoParticle, TwistBreaksInShear) {
 TEST(TwoDisk, SlabStiffnessAndPullBreakIndependentOfThickness) {
   for (const double t : {1.0, 1e-3}) {
     Pair p = make_pair(true, t);
-    const auto& st = std::get<BondSet<ParallelBond>>(p.sim.bonds()).state[0];
+    const ParallelBond::Section st = section_of(p.sim);
     // K_n = E_bar (2 R t) / (2 R) = E_bar t: 1e10 N/m at t = 1 m, 1e7 N/m at t = 1 mm (§8.4).
     EXPECT_NEAR(st.kn, 10e9 * t, 1e-6 * 10e9 * t);
-    EXPECT_NEAR(ParallelBond::kb(st), 10e9 / (2 * kR) * (2.0 / 3.0) * kR * kR * kR * t, 1e-12 * t);
+    EXPECT_NEAR(st.kb, 10e9 / (2 * kR) * (2.0 / 3.0) * kR * kR * kR * t, 1e-12 * t);
     const double V = 1e-3;
     p.sim.particles_mut().drive_vel[1] = {V, 0, 0};
     while (p.sim.cracks().empty() && p.sim.step_count() < 2000000) p.sim.step();
@@ -215,8 +223,7 @@ TEST(TwoDisk, BendingAboutZBreaksInTension) {
   const double W = 2.0;
   p.sim.particles_mut().drive_angvel[0] = {0, 0, -0.5 * W};
   p.sim.particles_mut().drive_angvel[1] = {0, 0, 0.5 * W};
-  const auto& st = std::get<BondSet<ParallelBond>>(p.sim.bonds()).state[0];
-  const double kb = ParallelBond::kb(st);
+  const double kb = section_of(p.sim).kb;
   while (p.sim.cracks().empty() && p.sim.step_count() < 2000000) p.sim.step();
   ASSERT_EQ(p.sim.cracks().size(), 1u);
   const CrackRecord& c = p.sim.cracks()[0];
@@ -247,4 +254,37 @@ TEST(TwoDisk, MotionStaysInThePlane) {
   EXPECT_EQ(sim.particles().angvel[1].x, 0.0);
   EXPECT_EQ(sim.particles().angvel[1].y, 0.0);
   EXPECT_NE(sim.particles().angle[1], 0.0);
+}
+
+// The parallel bond derives its section at every step from R_bar and k_n with one division
+// (ParallelBond::section): 1 / A, R_bar / I and R_bar / J must be those of the disc (3D) or the
+// slab (2D, no twist), within 8 epsilon (at most six roundings of 0.5 ulp after the division).
+TEST(ParallelBondSection, StressCoefficientsAreThoseOfTheSection) {
+  const double tol = 8 * std::numeric_limits<double>::epsilon();
+  ParallelBond::Params p = ParallelBond::example_params();
+  p.stiffness_ratio = 1.7;
+  ParallelBond::prepare(p);
+  ParallelBond::State s;
+  s.bond_radius = 0.43e-3;
+  s.stiffness_per_area = 10e9 / 1.1e-3;
+  for (const bool planar : {false, true}) {
+    p.run = {planar, false, 2.5e-3};
+    const ParallelBond::Section c = ParallelBond::section(p, s);
+    const double r = s.bond_radius, t = p.run.thickness;
+    const double area = planar ? 2 * r * t : std::numbers::pi * r * r;
+    const double inertia =
+        planar ? 2.0 / 3.0 * r * r * r * t : std::numbers::pi / 4 * r * r * r * r;
+    const double polar = planar ? 0.0 : 2 * inertia;
+    const double kn = s.stiffness_per_area * area;
+    EXPECT_NEAR(c.kn, kn, tol * kn);
+    EXPECT_NEAR(c.ks, kn / 1.7, tol * kn / 1.7);
+    EXPECT_NEAR(c.kb, s.stiffness_per_area * inertia, tol * s.stiffness_per_area * inertia);
+    EXPECT_NEAR(c.kt, s.stiffness_per_area / 1.7 * polar, tol * s.stiffness_per_area * polar);
+    EXPECT_NEAR(c.inv_area, 1 / area, tol / area);
+    EXPECT_NEAR(c.bend_coeff, r / inertia, tol * r / inertia);
+    if (planar)
+      EXPECT_EQ(c.twist_coeff, 0.0);
+    else
+      EXPECT_NEAR(c.twist_coeff, r / polar, tol * r / polar);
+  }
 }

@@ -31,6 +31,7 @@ void Simulation::set_bond_params(const typename Law::Params& params) {
   validate_params<Law>(params, std::string("bond law '") + std::string(Law::name) + "'");
   auto& set = std::get<BondSet<Law>>(bonds_);
   set.params = params;
+  set_run_geometry(set.params);
   if constexpr (requires { Law::prepare(set.params); }) Law::prepare(set.params);
 }
 
@@ -39,6 +40,7 @@ void Simulation::set_joint_params(const typename Law::Params& params) {
   validate_params<Law>(params, std::string("joint law '") + std::string(Law::name) + "'");
   auto& set = std::get<BondSet<Law>>(joints_);
   set.params = params;
+  set_run_geometry(set.params);
   std::uint32_t index = 0;
   for_each_type<JointLaws>([&]<class J>() {
     if (std::is_same_v<J, Law>) joint_law_ = index;

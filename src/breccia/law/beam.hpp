@@ -86,51 +86,78 @@ inline Deformation deform(const Vec3& n_body1, double d, const Vec3& r0, double 
   return f;
 }
 
-// The state of a beam bond (§4.2, §4.3): the reference of installation, the section and
-// stiffnesses, and the last step's magnitudes for the stored energy.
+// The state of a beam bond (§4.2, §4.3): the reference of installation, the beam's radius, and
+// the last step's magnitudes for the stored energy and the failure test. The section and the
+// stiffnesses follow from the radius, the length and the law's moduli (section()), which keeps a
+// bond at 104 bytes.
 struct BeamState {
-  Vec3 r0;                                        // reference branch direction, body-1 frame
-  Quat q0;                                        // reference relative orientation q1* q2
-  double d0 = 0.0;                                // reference centre distance (the beam length L)
-  double kr = 0.0, ks = 0.0, kb = 0.0, kt = 0.0;  // K_r, K_s, chi_b K_b (effective), K_t
-  double area = 0.0, inertia = 0.0, polar = 0.0;  // A, I, J (J = 0 in 2D: no twist)
-  double radius = 0.0;                            // R_b
-  double arm1 = 0.0;  // R1 / (R1 + R2): where the beam meets the crack plane
+  Vec3 r0;              // reference branch direction, body-1 frame
+  Quat q0;              // reference relative orientation q1* q2
+  double d0 = 0.0;      // reference centre distance (the beam length L)
+  double radius = 0.0;  // R_b
   double normal_force = 0.0, shear_force = 0.0, bend_moment = 0.0, twist_moment = 0.0;
 };
 
-// A stress-free beam at the present geometry: radius R_b (d0 / 2, or min(R1, R2)), a disc
-// section in 3D and a slab of the disks' thickness in 2D (a disc for planar spheres when
-// `disc_for_planar_spheres`), K = modulus x section / d0.
-inline BeamState install(const PairGeometry& g, const BodyFrames& fr, double young, double shear,
-                         double bending_factor, bool min_radius,
-                         bool disc_for_planar_spheres = false) noexcept {
+// What a beam law's section and stiffnesses are made of: its moduli, the bending factor chi_b,
+// and whether planar spheres keep the disc section (§4.3).
+struct BeamModuli {
+  double young = 0.0, shear = 0.0, bending_factor = 1.0;
+  bool disc_for_planar_spheres = false;
+};
+
+// The beam's section (a disc in 3D, a slab of the disks' thickness in 2D), its stiffnesses, and
+// the reciprocals the failure rules use. Every bond derives it at every step, from one division.
+struct BeamSection {
+  double kr, ks, kb, kt;                    // K_r, K_s, chi_b K_b (effective), K_t
+  double area, inertia, polar;              // A, I, J (J = 0 in 2D: no twist)
+  double inv_area, inv_inertia, inv_polar;  // 1 / A, 1 / I, 1 / J (0 in 2D)
+};
+inline BeamSection section(const BeamState& s, const BeamModuli& m,
+                           const RunGeometry& run) noexcept {
+  const double r = s.radius;
+  const bool slab = run.planar && !(m.disc_for_planar_spheres && run.planar_sphere);
+  const double t = slab ? run.thickness : 1.0;
+  const double x = 1.0 / (r * t * s.d0);  // 1 / R_b, 1 / t and 1 / L follow from it
+  const double inv_r = t * s.d0 * x, inv_length = r * t * x;
+  BeamSection c;
+  if (slab) {
+    c.area = 2.0 * r * t;
+    c.inertia = 2.0 / 3.0 * r * r * r * t;
+    c.polar = 0.0;
+    const double inv_t = r * s.d0 * x;
+    c.inv_area = 0.5 * inv_r * inv_t;
+    c.inv_inertia = 1.5 * inv_r * inv_r * inv_r * inv_t;
+    c.inv_polar = 0.0;
+  } else {
+    c.area = std::numbers::pi * r * r;
+    c.inertia = 0.25 * std::numbers::pi * r * r * r * r;
+    c.polar = 2.0 * c.inertia;
+    c.inv_area = std::numbers::inv_pi * inv_r * inv_r;
+    c.inv_inertia = 4.0 * std::numbers::inv_pi * inv_r * inv_r * inv_r * inv_r;
+    c.inv_polar = 0.5 * c.inv_inertia;
+  }
+  c.kr = m.young * c.area * inv_length;
+  c.ks = m.shear * c.area * inv_length;
+  c.kb = m.bending_factor * m.young * c.inertia * inv_length;
+  c.kt = m.shear * c.polar * inv_length;
+  return c;
+}
+
+// A stress-free beam at the present geometry: radius R_b (d0 / 2, or min(R1, R2)).
+inline BeamState install(const PairGeometry& g, const BodyFrames& fr, bool min_radius) noexcept {
   BeamState s;
   s.d0 = g.d;
   s.r0 = rotate(conj(fr.q1), g.n);
   s.q0 = conj(fr.q1) * fr.q2;
-  const double rb = min_radius ? std::min(g.R1, g.R2) : 0.5 * g.d;
-  s.radius = rb;
-  if (g.planar && !(disc_for_planar_spheres && g.planar_sphere)) {
-    s.area = 2.0 * rb * g.thickness;
-    s.inertia = 2.0 / 3.0 * rb * rb * rb * g.thickness;
-  } else {
-    s.area = std::numbers::pi * rb * rb;
-    s.inertia = 0.25 * std::numbers::pi * rb * rb * rb * rb;
-    s.polar = 2.0 * s.inertia;
-  }
-  s.kr = young * s.area / s.d0;
-  s.ks = shear * s.area / s.d0;
-  s.kb = bending_factor * young * s.inertia / s.d0;
-  s.kt = shear * s.polar / s.d0;
-  s.arm1 = g.R1 / (g.R1 + g.R2);
+  s.radius = min_radius ? std::min(g.R1, g.R2) : 0.5 * g.d;
   return s;
 }
 
 // The beam meets the crack plane at x1 + arm1 d; the geometry's contact point lies at
 // x1 + (R1 - delta / 2) n. Zero for touching grains.
-inline double point_shift(const BeamState& s, const PairGeometry& g) noexcept {
-  return g.d * s.arm1 - g.R1 + 0.5 * g.delta;
+inline double point_shift(const PairGeometry& g) noexcept {
+  const double arm1 = g.R1 / (g.R1 + g.R2);  // radii do not change once bonded
+  return g.d * arm1 - g.R1 + 0.5 * g.delta;
 }
 
 // Force and couple on particle 2 (§0.3) from the present configuration (§4.2 steps 1-8), with
@@ -138,61 +165,82 @@ inline double point_shift(const BeamState& s, const PairGeometry& g) noexcept {
 // for ESyS's beam, d for LAMMPS's bpm/rotational). Stores the magnitudes of step 9 in `s`. The
 // couple includes moving the force to the beam point, so that the engine's lever-arm torques are
 // the beam's.
-inline PairForce loads(BeamState& s, const PairGeometry& g, const BodyFrames& fr, double arm,
-                       double arm_theta) noexcept {
+inline PairForce loads(BeamState& s, const BeamSection& c, const PairGeometry& g,
+                       const BodyFrames& fr, double arm, double arm_theta) noexcept {
   const Quat to_body1 = conj(fr.q1);
   const Deformation f =
       deform(rotate(to_body1, g.n), g.d, s.r0, s.d0, to_body1 * fr.q2 * conj(s.q0));
   // Forces on particle 1 in the body-1 frame (f_r, f_gamma) and the bond frame (the rest).
-  const Vec3 f_r = f.r_hat * (s.kr * f.stretch);
-  const Vec3 f_gamma = f.shear_gamma * (-s.ks * arm);
+  const Vec3 f_r = f.r_hat * (c.kr * f.stretch);
+  const Vec3 f_gamma = f.shear_gamma * (-c.ks * arm);
   const Vec3 z{0.0, 0.0, 1.0};
-  const Vec3 f_theta = cross(z, f.bend_axis) * (0.5 * s.ks * arm_theta * f.bend);
-  const Vec3 m_bend = f.bend_axis * (s.kb * f.bend);
-  const Vec3 m_twist = z * (s.kt * f.twist);
+  const Vec3 f_theta = cross(z, f.bend_axis) * (0.5 * c.ks * arm_theta * f.bend);
+  const Vec3 m_bend = f.bend_axis * (c.kb * f.bend);
+  const Vec3 m_twist = z * (c.kt * f.twist);
   const Vec3 shear_body1 = f_gamma + rotate(f.bond_frame, f_theta);
   const Vec3 force = -rotate(fr.q1, f_r + shear_body1);
   const Vec3 couple = -rotate(fr.q1, rotate(f.bond_frame, m_bend + m_twist));
-  s.normal_force = -s.kr * f.stretch;
+  s.normal_force = -c.kr * f.stretch;
   s.shear_force = norm(shear_body1);
   s.bend_moment = norm(m_bend);
-  s.twist_moment = s.kt * f.twist;
-  return {force, couple + cross(g.n * point_shift(s, g), force)};
+  s.twist_moment = c.kt * f.twist;
+  return {force, couple + cross(g.n * point_shift(g), force)};
 }
 
 // Stored energy by component; K_b is the effective chi_b K_b (§4.0).
-inline BondEnergy energy(const BeamState& s) noexcept {
+inline BondEnergy energy(const BeamState& s, const BeamSection& c) noexcept {
   BondEnergy e;
-  const double en = 0.5 * s.normal_force * s.normal_force / s.kr;
+  const double en = 0.5 * s.normal_force * s.normal_force / c.kr;
   (s.normal_force < 0.0 ? e.tension : e.compression) = en;
-  e.shear = 0.5 * s.shear_force * s.shear_force / s.ks;
-  e.bending = s.kb > 0.0 ? 0.5 * s.bend_moment * s.bend_moment / s.kb : 0.0;
-  e.twisting = s.kt > 0.0 ? 0.5 * s.twist_moment * s.twist_moment / s.kt : 0.0;
+  e.shear = 0.5 * s.shear_force * s.shear_force / c.ks;
+  e.bending = c.kb > 0.0 ? 0.5 * s.bend_moment * s.bend_moment / c.kb : 0.0;
+  e.twisting = c.kt > 0.0 ? 0.5 * s.twist_moment * s.twist_moment / c.kt : 0.0;
   return e;
 }
 
 // Fills the crack record's forces from the breaking step's state.
-inline void record(const BeamState& s, const PairGeometry& g, BondFailure& fail) noexcept {
+inline void record(const BeamState& s, const BeamSection& c, const PairGeometry& g,
+                   BondFailure& fail) noexcept {
   fail.broken = true;
   fail.Fn = s.normal_force;
   fail.Fs = s.shear_force;
   fail.Mt = s.twist_moment;
   fail.Mb = s.bend_moment;
   fail.bond_radius = s.radius;
-  fail.point_shift = point_shift(s, g);
-  fail.energy = energy(s);
+  fail.point_shift = point_shift(g);
+  fail.energy = energy(s, c);
 }
 
 // What the engine asks of every beam law's state, and the isotropic moduli of its beam
-// (G = E / (2 (1 + nu))): the two beam laws derive from it.
+// (G = E / (2 (1 + nu))): the two beam laws derive from it and name their moduli in
+// `beam_moduli(params)`.
+template <class Law>
 struct BeamLaw {
   using State = BeamState;
   static constexpr bool needs_frames = true;   // total formulation: reads the orientations
   static constexpr bool needs_motion = false;  // and the pair's shape, never its velocities
-  static double max_stiffness(const State& s) noexcept { return std::max(s.kr, s.ks); }
-  static double max_moment_stiffness(const State& s) noexcept { return std::max(s.kb, s.kt); }
-  static double shear_stiffness(const State& s) noexcept { return s.ks; }
-  static BondEnergy energy(const State& s) noexcept { return beam::energy(s); }
+  template <class Params>
+  static BeamSection section(const Params& p, const State& s) noexcept {
+    return beam::section(s, Law::beam_moduli(p), p.run);
+  }
+  template <class Params>
+  static double max_stiffness(const Params& p, const State& s) noexcept {
+    const BeamSection c = section(p, s);
+    return std::max(c.kr, c.ks);
+  }
+  template <class Params>
+  static double max_moment_stiffness(const Params& p, const State& s) noexcept {
+    const BeamSection c = section(p, s);
+    return std::max(c.kb, c.kt);
+  }
+  template <class Params>
+  static double shear_stiffness(const Params& p, const State& s) noexcept {
+    return section(p, s).ks;
+  }
+  template <class Params>
+  static BondEnergy energy(const Params& p, const State& s) noexcept {
+    return beam::energy(s, section(p, s));
+  }
   static BondModuli isotropic_moduli(double young, double poisson_ratio) noexcept {
     return {young, young / (2.0 * (1.0 + poisson_ratio))};
   }

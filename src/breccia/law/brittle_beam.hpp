@@ -17,7 +17,7 @@
 
 namespace breccia {
 
-struct BrittleBeam : beam::BeamLaw {
+struct BrittleBeam : beam::BeamLaw<BrittleBeam> {
   static constexpr std::string_view name = "brittle_beam";
   static constexpr std::string_view summary =
       "ESyS-Particle rotational brittle beam (total formulation), Mohr-Coulomb failure with a "
@@ -34,6 +34,7 @@ struct BrittleBeam : beam::BeamLaw {
     double twist_factor = 1.0;    // beta_2: moments in the shear stress
     bool min_radius = false;      // R_b = min(R1, R2) (ESyS meanR_scaling = false), else d0 / 2
     bool contact_while_bonded = true;  // false: no contact force between bonded grains (ESyS)
+    RunGeometry run;                   // set by the engine: the section's shape
   };
   static void prepare(Params&) noexcept {}
   static constexpr std::array<ParamField<Params>, 10> fields() {
@@ -68,19 +69,25 @@ struct BrittleBeam : beam::BeamLaw {
   }
   static bool contact_while_bonded(const Params& p) noexcept { return p.contact_while_bonded; }
 
+  static beam::BeamModuli beam_moduli(const Params& p) noexcept {
+    return {p.modulus, moduli(p).shear, p.bending_factor, false};
+  }
   static State install(const Params& p, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
                        std::uint64_t) noexcept {
-    return beam::install(g, fr, p.modulus, moduli(p).shear, p.bending_factor, p.min_radius);
+    return beam::install(g, fr, p.min_radius);
   }
 
   // Mohr-Coulomb on the beam's peak stresses (tension-positive sigma) with the tensile cut-off.
   static BondFailure assess(const Params& p, const State& s) noexcept {
+    return assess(p, s, section(p, s));
+  }
+  static BondFailure assess(const Params& p, const State& s, const beam::BeamSection& c) noexcept {
     BondFailure f;
+    // Peak stresses (J = 0 in 2D: 1 / J reads 0, no twist).
     const double sigma =
-        -s.normal_force / s.area + p.moment_factor * s.bend_moment * s.radius / s.inertia;
-    const double tau =
-        s.shear_force / s.area +
-        (s.polar > 0.0 ? p.twist_factor * std::abs(s.twist_moment) * s.radius / s.polar : 0.0);
+        -s.normal_force * c.inv_area + p.moment_factor * s.bend_moment * s.radius * c.inv_inertia;
+    const double tau = s.shear_force * c.inv_area +
+                       p.twist_factor * std::abs(s.twist_moment) * s.radius * c.inv_polar;
     const double tensile_index = sigma * p.tan_friction / p.cohesion;
     const double shear_limit = p.cohesion - sigma * p.tan_friction;
     const bool tensile = tensile_index > p.tensile_cutoff;
@@ -103,11 +110,12 @@ struct BrittleBeam : beam::BeamLaw {
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
                            double, BondFailure& fail) noexcept {
     // ESyS's arms: d0 for the shear of the branch rotation and for the rotation-induced shear.
-    const PairForce pf = beam::loads(s, g, fr, s.d0, s.d0);
-    const BondFailure judged = assess(p, s);
+    const beam::BeamSection c = section(p, s);
+    const PairForce pf = beam::loads(s, c, g, fr, s.d0, s.d0);
+    const BondFailure judged = assess(p, s, c);
     if (judged.broken) {
       fail = judged;
-      beam::record(s, g, fail);
+      beam::record(s, c, g, fail);
       return {};
     }
     return pf;

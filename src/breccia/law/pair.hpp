@@ -34,6 +34,15 @@ struct PairGeometry {
   double m_star() const noexcept { return wall ? m2 : m1 * m2 / (m1 + m2); }
 };
 
+// The run's geometry, as a bond's section needs it where no pair is at hand (stored energy, time
+// step, snapshots): 2D or 3D, the disks' thickness, planar spheres. The engine sets it on a
+// law's parameters (`Params::run`) before any bond is installed; it is not input.
+struct RunGeometry {
+  bool planar = false;
+  bool planar_sphere = false;
+  double thickness = 1.0;
+};
+
 // The shape of a particle pair from centres and radii (§0.2): normal, distance, overlap and the
 // lever arms to the contact point in the middle of the overlap (or gap). Total-formulation bonds
 // need nothing more.

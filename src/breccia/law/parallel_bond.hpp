@@ -32,11 +32,15 @@ struct ParallelBond {
     double cohesion_sd = 0;
     double friction_angle_deg = 0;  // phi_bar; 0 = 2004 model
     double moment_factor = 1.0;     // beta_bar
-    // Derived by prepare(), not input: tan(phi), kept out of the per-step kernel.
+    // Derived by prepare(), not input: tan(phi) and 1 / kappa_bar, kept out of the per-step
+    // kernel.
     double tan_friction = 0.0;
+    double shear_fraction = 1.0 / 2.5;
+    RunGeometry run;  // set by the engine: the section's shape (disc in 3D, slab in 2D)
   };
   static void prepare(Params& p) noexcept {
     p.tan_friction = std::tan(p.friction_angle_deg * kDegree);
+    p.shear_fraction = 1.0 / p.stiffness_ratio;
   }
   static constexpr std::array<ParamField<Params>, 9> fields() {
     return {{
@@ -73,47 +77,62 @@ struct ParallelBond {
   // The linear contact acts in parallel with the bond (docs/physics.md §4.0).
   static bool contact_while_bonded(const Params&) noexcept { return true; }
 
+  // What a bond carries from step to step, and what was drawn or measured at installation; its
+  // section and stiffnesses follow from the radius and the parameters (section()), which keeps a
+  // bond at 120 bytes.
   struct State {
     Vec3 shear_force;  // F_s
     Vec3 bend_moment;  // M_b
     Vec3 n_old;        // normal of the previous step; zero until the first step after install
-    double normal_force = 0.0;  // F_n, compression-positive
-    double twist_moment = 0.0;  // M_t
-    // Fixed at installation (the kernel needs them every step, so they are kept, not recomputed):
-    double kn = 0.0, ks = 0.0;  // force stiffnesses K_n = k_n A, K_s = k_s A
-    double kb = 0.0, kt = 0.0;  // moment stiffnesses K_b = k_n I, K_t = k_s J (0 in 2D)
-    double inv_area = 0.0;      // 1 / A
-    double bend_coeff = 0.0;    // R_bar / I: peak bending stress per unit moment
-    double twist_coeff = 0.0;   // R_bar / J (0 in 2D: no twist)
-    double bond_radius = 0.0;   // R_bar
+    double normal_force = 0.0;        // F_n, compression-positive
+    double twist_moment = 0.0;        // M_t
+    double stiffness_per_area = 0.0;  // k_n = E_bar / (R1 + R2) at installation
+    double bond_radius = 0.0;         // R_bar
     double tensile_strength = 0.0;
     double cohesion = 0.0;
   };
+
+  // The bond's section and what follows from it: a disc of radius R_bar in 3D, a slab of the
+  // disks' thickness t in 2D (no twist).
+  struct Section {
+    double kn, ks;       // force stiffnesses K_n = k_n A, K_s = K_n / kappa_bar
+    double kb, kt;       // moment stiffnesses K_b = k_n I, K_t = k_n / kappa_bar J (0 in 2D)
+    double inv_area;     // 1 / A
+    double bend_coeff;   // R_bar / I: peak bending stress per unit moment
+    double twist_coeff;  // R_bar / J (0 in 2D)
+  };
+  static Section section(const Params& p, const State& s) noexcept {
+    const double rb = s.bond_radius, kn_area = s.stiffness_per_area;
+    double area = 0.0, inertia = 0.0, polar = 0.0;
+    if (p.run.planar) {
+      area = 2.0 * rb * p.run.thickness;                     // slab of thickness t
+      inertia = 2.0 / 3.0 * rb * rb * rb * p.run.thickness;  // I = 2/3 R^3 t; no twist in 2D
+    } else {
+      area = std::numbers::pi * rb * rb;  // disc
+      inertia = 0.25 * std::numbers::pi * rb * rb * rb * rb;
+      polar = 2.0 * inertia;
+    }
+    // One division, whose result only the failure test waits for: every bond derives its
+    // section at every step.
+    const double inv_area_inertia = 1.0 / (area * inertia);
+    Section c;
+    c.kn = kn_area * area;
+    c.ks = c.kn * p.shear_fraction;
+    c.kb = kn_area * inertia;
+    c.kt = kn_area * p.shear_fraction * polar;
+    c.inv_area = inertia * inv_area_inertia;
+    c.bend_coeff = rb * (area * inv_area_inertia);
+    c.twist_coeff = 0.5 * c.bend_coeff * (polar > 0.0 ? 1.0 : 0.0);  // R_bar / J, J = 2 I
+    return c;
+  }
 
   // Installs a stress-free bond at the current geometry. Strengths are drawn from the counter-based
   // generator keyed by the bond tag, so they do not depend on creation order.
   static State install(const Params& p, const PairGeometry& g, const BodyFrames&,
                        std::uint64_t seed, std::uint64_t bond_tag) noexcept {
     State s;
-    const double rb = p.radius_multiplier * std::min(g.R1, g.R2);
-    s.bond_radius = rb;
-    double area = 0.0, inertia = 0.0, polar = 0.0;
-    if (g.planar) {
-      area = 2.0 * rb * g.thickness;                     // slab of thickness t
-      inertia = 2.0 / 3.0 * rb * rb * rb * g.thickness;  // I = 2/3 R^3 t; no twist in 2D
-    } else {
-      area = std::numbers::pi * rb * rb;  // disc
-      inertia = 0.25 * std::numbers::pi * rb * rb * rb * rb;
-      polar = 2.0 * inertia;
-    }
-    const double kn_area = p.modulus / (g.R1 + g.R2);  // k_n = E_bar / L
-    s.kn = kn_area * area;
-    s.ks = s.kn / p.stiffness_ratio;
-    s.kb = kn_area * inertia;
-    s.kt = kn_area / p.stiffness_ratio * polar;
-    s.inv_area = 1.0 / area;
-    s.bend_coeff = rb / inertia;
-    s.twist_coeff = polar > 0.0 ? rb / polar : 0.0;
+    s.bond_radius = p.radius_multiplier * std::min(g.R1, g.R2);
+    s.stiffness_per_area = p.modulus / (g.R1 + g.R2);  // k_n = E_bar / L
     constexpr std::uint64_t kTensileStream = 0x7e51, kCohesionStream = 0xc0e5;
     s.tensile_strength =
         positive_normal(p.tensile_strength, p.tensile_strength_sd, seed, kTensileStream, bond_tag);
@@ -121,13 +140,18 @@ struct ParallelBond {
     return s;
   }
 
-  static double kb(const State& s) noexcept { return s.kb; }
-  static double kt(const State& s) noexcept { return s.kt; }
-
   // Largest translational and rotational stiffness for the time-step estimate (§1.5).
-  static double max_stiffness(const State& s) noexcept { return std::max(s.kn, s.ks); }
-  static double max_moment_stiffness(const State& s) noexcept { return std::max(kb(s), kt(s)); }
-  static double shear_stiffness(const State& s) noexcept { return s.ks; }
+  static double max_stiffness(const Params& p, const State& s) noexcept {
+    const Section c = section(p, s);
+    return std::max(c.kn, c.ks);
+  }
+  static double max_moment_stiffness(const Params& p, const State& s) noexcept {
+    const Section c = section(p, s);
+    return std::max(c.kb, c.kt);
+  }
+  static double shear_stiffness(const Params& p, const State& s) noexcept {
+    return section(p, s).ks;
+  }
 
   // One step. On failure the bond's force is not applied (§4.0 decision) and `fail` carries the
   // record; the caller removes the bond.
@@ -150,10 +174,11 @@ struct ParallelBond {
     const Vec3 wr = g.w2 - g.w1;
     const double wtw = dot(wr, g.n);
     const Vec3 wb = wr - g.n * wtw;
-    const double fn = s.normal_force - s.kn * vn * dt;
-    fs -= vt * (s.ks * dt);
-    const double mt = s.twist_moment - s.kt * wtw * dt;
-    mb -= wb * (s.kb * dt);
+    const Section c = section(p, s);
+    const double fn = s.normal_force - c.kn * vn * dt;
+    fs -= vt * (c.ks * dt);
+    const double mt = s.twist_moment - c.kt * wtw * dt;
+    mb -= wb * (c.kb * dt);
     s.normal_force = fn;
     s.shear_force = fs;
     s.twist_moment = mt;
@@ -161,10 +186,10 @@ struct ParallelBond {
     s.n_old = g.n;
 
     // The decision needs only the peak stresses; the record's ratios are made when it breaks.
-    const PeakStresses k = peak_stresses(p, s);
+    const PeakStresses k = peak_stresses(p, s, c);
     if (k.tensile(s) || k.shear()) {
       fail = record(p, s, k);
-      fail.energy = energy(s);
+      fail.energy = energy(s, c);
       return {};
     }
     return {g.n * fn + fs, g.n * mt + mb};
@@ -178,20 +203,20 @@ struct ParallelBond {
     bool tensile(const State& s) const noexcept { return sigma_max >= s.tensile_strength; }
     bool shear() const noexcept { return tau_max >= tau_c; }
   };
-  static PeakStresses peak_stresses(const Params& p, const State& s) noexcept {
+  static PeakStresses peak_stresses(const Params& p, const State& s, const Section& c) noexcept {
     PeakStresses k;
     k.mb_abs = norm(s.bend_moment);
     k.fs_abs = norm(s.shear_force);
-    const double sigma_avg = -s.normal_force * s.inv_area;
-    k.sigma_max = sigma_avg + p.moment_factor * k.mb_abs * s.bend_coeff;
-    k.tau_max = k.fs_abs * s.inv_area + p.moment_factor * std::abs(s.twist_moment) * s.twist_coeff;
+    const double sigma_avg = -s.normal_force * c.inv_area;
+    k.sigma_max = sigma_avg + p.moment_factor * k.mb_abs * c.bend_coeff;
+    k.tau_max = k.fs_abs * c.inv_area + p.moment_factor * std::abs(s.twist_moment) * c.twist_coeff;
     k.tau_c = s.cohesion - sigma_avg * p.tan_friction;
     return k;
   }
 
   // The failure criterion on the bond's present loads, as the crack record and snapshots give it.
   static BondFailure assess(const Params& p, const State& s) noexcept {
-    return record(p, s, peak_stresses(p, s));
+    return record(p, s, peak_stresses(p, s, section(p, s)));
   }
 
   static BondFailure record(const Params&, const State& s, const PeakStresses& k) noexcept {
@@ -213,13 +238,16 @@ struct ParallelBond {
   }
 
   // Stored elastic energy by component (§4.0).
-  static BondEnergy energy(const State& s) noexcept {
+  static BondEnergy energy(const Params& p, const State& s) noexcept {
+    return energy(s, section(p, s));
+  }
+  static BondEnergy energy(const State& s, const Section& c) noexcept {
     BondEnergy e;
-    const double en = 0.5 * s.normal_force * s.normal_force / s.kn;
+    const double en = 0.5 * s.normal_force * s.normal_force / c.kn;
     (s.normal_force < 0.0 ? e.tension : e.compression) = en;
-    e.shear = 0.5 * norm2(s.shear_force) / s.ks;
-    e.bending = 0.5 * norm2(s.bend_moment) / s.kb;
-    e.twisting = s.kt > 0.0 ? 0.5 * s.twist_moment * s.twist_moment / s.kt : 0.0;
+    e.shear = 0.5 * norm2(s.shear_force) / c.ks;
+    e.bending = 0.5 * norm2(s.bend_moment) / c.kb;
+    e.twisting = c.kt > 0.0 ? 0.5 * s.twist_moment * s.twist_moment / c.kt : 0.0;
     return e;
   }
 

@@ -14,7 +14,7 @@
 
 namespace breccia {
 
-struct QuaternionBond : beam::BeamLaw {
+struct QuaternionBond : beam::BeamLaw<QuaternionBond> {
   static constexpr std::string_view name = "quaternion_bond";
   static constexpr std::string_view summary =
       "Quaternion (total) bond of LAMMPS bpm/rotational: normal, shear, bending and twisting "
@@ -27,8 +27,14 @@ struct QuaternionBond : beam::BeamLaw {
     double shear_strength = 20e6;      // c_b: F_s^max = c A, M_t^max = c J / R_b
     bool signed_normal = false;        // LAMMPS: -F_n (compression lowers B), else max(0, -F_n)
     bool contact_while_bonded = true;  // false: no contact between bonded grains
+    RunGeometry run;                   // set by the engine: the section's shape
+    // Derived by prepare(), not input: the strengths' reciprocals, for the per-step test.
+    double inv_tensile_strength = 1.0 / 20e6, inv_shear_strength = 1.0 / 20e6;
   };
-  static void prepare(Params&) noexcept {}
+  static void prepare(Params& p) noexcept {
+    p.inv_tensile_strength = 1.0 / p.tensile_strength;
+    p.inv_shear_strength = 1.0 / p.shear_strength;
+  }
   static constexpr std::array<ParamField<Params>, 6> fields() {
     return {{
         {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
@@ -47,28 +53,39 @@ struct QuaternionBond : beam::BeamLaw {
          "overlay/pair; their contact energy is booked as deleted)"},
     }};
   }
-  static Params example_params() { return {}; }
+  static Params example_params() {
+    Params p;
+    prepare(p);
+    return p;
+  }
   static BondModuli moduli(const Params& p) noexcept {
     return isotropic_moduli(p.modulus, p.poisson_ratio);
   }
   static bool contact_while_bonded(const Params& p) noexcept { return p.contact_while_bonded; }
 
-  static State install(const Params& p, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
+  // Planar spheres keep the disc section (§4.3): a 2D run of them is a 3D run in the plane.
+  static beam::BeamModuli beam_moduli(const Params& p) noexcept {
+    return {p.modulus, moduli(p).shear, 1.0, true};
+  }
+  static State install(const Params&, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
                        std::uint64_t) noexcept {
-    // Planar spheres keep the disc section (§4.3): a 2D run of them is a 3D run in the plane.
-    return beam::install(g, fr, p.modulus, moduli(p).shear, 1.0, false, true);
+    return beam::install(g, fr, false);
   }
 
   // The breakage index B of the present loads; its larger part, tensile or shear, names the mode
   // (the index itself defines none).
   static BondFailure assess(const Params& p, const State& s) noexcept {
+    return assess(p, s, section(p, s));
+  }
+  static BondFailure assess(const Params& p, const State& s, const beam::BeamSection& c) noexcept {
     BondFailure f;
     const double tension = p.signed_normal ? -s.normal_force : std::max(0.0, -s.normal_force);
-    const double tensile_index = tension / (p.tensile_strength * s.area) +
-                                 s.bend_moment * s.radius / (p.tensile_strength * s.inertia);
-    const double shear_index =
-        s.shear_force / (p.shear_strength * s.area) +
-        (s.polar > 0.0 ? std::abs(s.twist_moment) * s.radius / (p.shear_strength * s.polar) : 0.0);
+    // Peak stresses of the moments and the shear force (J = 0 in 2D: 1 / J reads 0).
+    const double bend_stress = s.bend_moment * s.radius * c.inv_inertia;
+    const double twist_stress = std::abs(s.twist_moment) * s.radius * c.inv_polar;
+    const double shear_stress = s.shear_force * c.inv_area;
+    const double tensile_index = (tension * c.inv_area + bend_stress) * p.inv_tensile_strength;
+    const double shear_index = (shear_stress + twist_stress) * p.inv_shear_strength;
     f.index = std::max(0.0, tensile_index + shear_index);
     f.broken = f.index >= 1.0;
     f.mode = tensile_index >= shear_index ? CrackMode::Tensile : CrackMode::Shear;
@@ -76,9 +93,8 @@ struct QuaternionBond : beam::BeamLaw {
     f.Fs = s.shear_force;
     f.Mt = s.twist_moment;
     f.Mb = s.bend_moment;
-    f.sigma = -s.normal_force / s.area + s.bend_moment * s.radius / s.inertia;
-    f.tau = s.shear_force / s.area +
-            (s.polar > 0.0 ? std::abs(s.twist_moment) * s.radius / s.polar : 0.0);
+    f.sigma = -s.normal_force * c.inv_area + bend_stress;
+    f.tau = shear_stress + twist_stress;
     f.ratio_t = tensile_index;
     f.ratio_s = shear_index;
     f.bond_radius = s.radius;
@@ -88,11 +104,12 @@ struct QuaternionBond : beam::BeamLaw {
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
                            double, BondFailure& fail) noexcept {
     // LAMMPS's arms: the present length for both shear terms.
-    const PairForce pf = beam::loads(s, g, fr, g.d, g.d);
-    const BondFailure judged = assess(p, s);
+    const beam::BeamSection c = section(p, s);
+    const PairForce pf = beam::loads(s, c, g, fr, g.d, g.d);
+    const BondFailure judged = assess(p, s, c);
     if (judged.broken) {
       fail = judged;
-      beam::record(s, g, fail);
+      beam::record(s, c, g, fail);
       return {};
     }
     return pf;

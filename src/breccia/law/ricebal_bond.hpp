@@ -102,9 +102,11 @@ struct RicebalBond {
     return s;
   }
 
-  static double max_stiffness(const State& s) noexcept { return std::max(s.kn, s.ks); }
-  static double max_moment_stiffness(const State& s) noexcept { return s.km; }
-  static double shear_stiffness(const State& s) noexcept { return s.ks; }
+  static double max_stiffness(const Params&, const State& s) noexcept {
+    return std::max(s.kn, s.ks);
+  }
+  static double max_moment_stiffness(const Params&, const State& s) noexcept { return s.km; }
+  static double shear_stiffness(const Params&, const State& s) noexcept { return s.ks; }
 
   // The bond's own loads of this step (forces on particle 2), before the failure check.
   static PairForce loads(State& s, const PairGeometry& g, double dt) noexcept {
@@ -126,7 +128,7 @@ struct RicebalBond {
                                         s.shear_force + dot(contact_force, t));
     if (!judged.broken) return;
     fail = judged;
-    fail.energy = energy(s);
+    fail.energy = energy(p, s);
   }
 
   // The envelope on the bond's own loads, as if the grains were apart (what snapshots show).
@@ -169,7 +171,7 @@ struct RicebalBond {
     return fail.broken ? PairForce{} : pf;
   }
 
-  static BondEnergy energy(const State& s) noexcept {
+  static BondEnergy energy(const Params&, const State& s) noexcept {
     BondEnergy e;
     const double en = 0.5 * s.normal_force * s.normal_force / s.kn;
     (s.normal_force < 0.0 ? e.tension : e.compression) = en;
