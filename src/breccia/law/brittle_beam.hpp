@@ -81,27 +81,40 @@ struct BrittleBeam : beam::BeamLaw<BrittleBeam> {
   static BondFailure assess(const Params& p, const State& s) noexcept {
     return assess(p, s, section(p, s));
   }
-  static BondFailure assess(const Params& p, const State& s, const beam::BeamSection& c) noexcept {
-    BondFailure f;
-    // Peak stresses (J = 0 in 2D: 1 / J reads 0, no twist).
-    const double sigma =
+  // The peak stresses (tension-positive sigma; J = 0 in 2D, where 1 / J reads 0) and which
+  // branch of the envelope they reach.
+  struct Envelope {
+    double sigma, tau, tensile_index, shear_limit;
+    bool tensile, shear;
+  };
+  static Envelope envelope(const Params& p, const State& s, const beam::BeamSection& c) noexcept {
+    Envelope e;
+    e.sigma =
         -s.normal_force * c.inv_area + p.moment_factor * s.bend_moment * s.radius * c.inv_inertia;
-    const double tau = s.shear_force * c.inv_area +
-                       p.twist_factor * std::abs(s.twist_moment) * s.radius * c.inv_polar;
-    const double tensile_index = sigma * p.tan_friction / p.cohesion;
-    const double shear_limit = p.cohesion - sigma * p.tan_friction;
-    const bool tensile = tensile_index > p.tensile_cutoff;
-    const bool shear = !tensile && tau > shear_limit;
-    f.broken = tensile || shear;
-    f.mode = tensile || !shear ? CrackMode::Tensile : CrackMode::Shear;
+    e.tau = s.shear_force * c.inv_area +
+            p.twist_factor * std::abs(s.twist_moment) * s.radius * c.inv_polar;
+    e.tensile_index = e.sigma * p.tan_friction / p.cohesion;
+    e.shear_limit = p.cohesion - e.sigma * p.tan_friction;
+    e.tensile = e.tensile_index > p.tensile_cutoff;
+    e.shear = !e.tensile && e.tau > e.shear_limit;
+    return e;
+  }
+  static BondFailure assess(const Params& p, const State& s, const beam::BeamSection& c) noexcept {
+    return record(p, s, envelope(p, s, c));
+  }
+  static BondFailure record(const Params& p, const State& s, const Envelope& e) noexcept {
+    BondFailure f;
+    f.broken = e.tensile || e.shear;
+    f.mode = e.tensile || !e.shear ? CrackMode::Tensile : CrackMode::Shear;
     f.Fn = s.normal_force;
     f.Fs = s.shear_force;
     f.Mt = s.twist_moment;
     f.Mb = s.bend_moment;
-    f.sigma = sigma;
-    f.tau = tau;
-    f.ratio_t = tensile_index / p.tensile_cutoff;
-    f.ratio_s = shear_limit > 0.0 ? tau / shear_limit : std::numeric_limits<double>::quiet_NaN();
+    f.sigma = e.sigma;
+    f.tau = e.tau;
+    f.ratio_t = e.tensile_index / p.tensile_cutoff;
+    f.ratio_s =
+        e.shear_limit > 0.0 ? e.tau / e.shear_limit : std::numeric_limits<double>::quiet_NaN();
     f.index = larger_ratio(f.ratio_t, f.ratio_s);
     f.bond_radius = s.radius;
     return f;
@@ -112,13 +125,11 @@ struct BrittleBeam : beam::BeamLaw<BrittleBeam> {
     // ESyS's arms: d0 for the shear of the branch rotation and for the rotation-induced shear.
     const beam::BeamSection c = section(p, s);
     const PairForce pf = beam::loads(s, c, g, fr, s.d0, s.d0);
-    const BondFailure judged = assess(p, s, c);
-    if (judged.broken) {
-      fail = judged;
-      beam::record(s, c, g, fail);
-      return {};
-    }
-    return pf;
+    const Envelope e = envelope(p, s, c);
+    if (!e.tensile && !e.shear) return pf;  // the record's ratios only for a break
+    fail = record(p, s, e);
+    beam::record(s, c, g, fail);
+    return {};
   }
 };
 
