@@ -119,19 +119,30 @@ def check_wall_table(folder):
 def virtual_display():
     """Starts Debian's Xvfb on a free display and waits until it accepts connections (pvbatch
     needs an X server to render). Returns the process and the DISPLAY value."""
+    import socket
     import time
     for number in range(90, 200):
         if not os.path.exists(f"/tmp/.X{number}-lock"):
             break
+    path = f"/tmp/.X11-unix/X{number}"
     server = subprocess.Popen(["Xvfb", f":{number}", "-screen", "0", "1024x768x24",
                                "-nolisten", "tcp"], stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL)
-    socket = f"/tmp/.X11-unix/X{number}"
+
+    def accepts():
+        # A socket file alone may be a dead server's, left behind: ready means it answers.
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
+            try:
+                probe.connect(path)
+                return True
+            except OSError:
+                return False
+
     for _ in range(600):
-        if os.path.exists(socket) or server.poll() is not None:
+        if server.poll() is not None or accepts():
             break
         time.sleep(0.1)
-    assert server.poll() is None and os.path.exists(socket), "Xvfb did not start"
+    assert server.poll() is None and accepts(), "Xvfb did not start"
     return server, f":{number}"
 
 

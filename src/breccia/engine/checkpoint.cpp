@@ -319,6 +319,7 @@ Simulation Simulation::restore(ArchiveReader& a) {
   std::apply([&](const auto&... set) { (check_set(set), ...); }, s.bonds_);
   std::apply([&](const auto&... set) { (check_set(set), ...); }, s.joints_);
   if (s.joint_law_ >= JointLaws::size) fail("joint law");
+  s.reserve_crack_catalogue();
   return s;
 }
 

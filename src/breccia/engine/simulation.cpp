@@ -163,8 +163,17 @@ void Simulation::initialise() {
     w.advanced_velocity = w.velocity;
     w.advanced_radial_speed = w.radial_speed;
   }
+  reserve_crack_catalogue();
   initialised_ = true;
   sample_requested_ = true;  // the first step's sample is the energy baseline
+}
+
+// Every intact bond and bonded joint can break once, and nothing else makes a crack: the
+// catalogue's room for all of them is taken at once, so that it never reallocates (a growing
+// array briefly holds two copies, the largest part of a broken sample's peak memory). Pages
+// are resident only once written.
+void Simulation::reserve_crack_catalogue() {
+  cracks_.reserve(cracks_.size() + intact_bonds() + bonded_joints());
 }
 
 void Simulation::step() {

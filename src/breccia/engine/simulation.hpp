@@ -304,6 +304,7 @@ class Simulation {
   template <class Law>
   void compact_bonds(BondSet<Law>& set);
   void estimate_time_step();
+  void reserve_crack_catalogue();
   // Its stages: the stiffness each particle sees from its bonds and joints, then from its
   // contacts and walls (returning the Rayleigh bound of Hertz contacts, or infinity), then the
   // step taken from the critical one.
