@@ -117,10 +117,9 @@ void Simulation::install_bonds(BondSet<Law>& set) {
   set.state.resize(n);
   set.intact.assign(n, 1);
   set.broken_since_compaction = 0;
-  // Parameters never given through set_bond_params are the law's defaults: their derived values
-  // are made here too.
-  set_run_geometry(set.params);
-  if constexpr (requires { Law::prepare(set.params); }) Law::prepare(set.params);
+  // Parameters never given through set_bond_params are the law's defaults: they are made ready
+  // here too.
+  prepare_params<Law>(set.params);
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint32_t i = set.pairs.first[k], j = set.pairs.second[k];
     set.state[k] =

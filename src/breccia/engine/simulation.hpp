@@ -312,12 +312,14 @@ class Simulation {
   double add_contact_stiffness(std::vector<double>& k_tr, std::vector<double>& k_rot);
   void adopt_time_step(double crit, double dt_rayleigh);
   bool needs_rebuild() const noexcept;
-  // The run's geometry on a law's parameters, for the laws that derive their section from it.
-  template <class Params>
-  void set_run_geometry(Params& params) const noexcept {
+  // A law's parameters made ready for the kernels: the run's geometry (for the laws that derive
+  // their section from it), then the law's derived values (prepare()).
+  template <class Law>
+  void prepare_params(typename Law::Params& params) const noexcept {
     if constexpr (requires { params.run; })
       params.run = {p_.planar(), p_.planar() && p_.planar_body() == PlanarBody::PlanarSphere,
                     p_.thickness()};
+    if constexpr (requires { Law::prepare(params); }) Law::prepare(params);
   }
   // Orientations for the bond laws that need them (2D: rotations about z by the angles).
   Quat body_orientation(std::uint32_t i) const noexcept {

@@ -31,8 +31,7 @@ void Simulation::set_bond_params(const typename Law::Params& params) {
   validate_params<Law>(params, std::string("bond law '") + std::string(Law::name) + "'");
   auto& set = std::get<BondSet<Law>>(bonds_);
   set.params = params;
-  set_run_geometry(set.params);
-  if constexpr (requires { Law::prepare(set.params); }) Law::prepare(set.params);
+  prepare_params<Law>(set.params);
 }
 
 template <class Law>
@@ -40,13 +39,12 @@ void Simulation::set_joint_params(const typename Law::Params& params) {
   validate_params<Law>(params, std::string("joint law '") + std::string(Law::name) + "'");
   auto& set = std::get<BondSet<Law>>(joints_);
   set.params = params;
-  set_run_geometry(set.params);
+  prepare_params<Law>(set.params);
   std::uint32_t index = 0;
   for_each_type<JointLaws>([&]<class J>() {
     if (std::is_same_v<J, Law>) joint_law_ = index;
     ++index;
   });
-  if constexpr (requires { Law::prepare(set.params); }) Law::prepare(set.params);
 }
 
 template <class Law>

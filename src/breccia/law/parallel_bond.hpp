@@ -122,7 +122,7 @@ struct ParallelBond {
     c.kt = kn_area * p.shear_fraction * polar;
     c.inv_area = inertia * inv_area_inertia;
     c.bend_coeff = rb * (area * inv_area_inertia);
-    c.twist_coeff = 0.5 * c.bend_coeff * (polar > 0.0 ? 1.0 : 0.0);  // R_bar / J, J = 2 I
+    c.twist_coeff = polar > 0.0 ? 0.5 * c.bend_coeff : 0.0;  // R_bar / J, J = 2 I
     return c;
   }
 
