@@ -42,7 +42,7 @@ Moduli measure(double rate, double contact_modulus) {
   sim.step();  // forces of this step belong to the configuration measured above
   const double eps = 1.0 - x0 / (2 * R);  // compression-positive strain
   // Stress of the centre particle: half of l (x) F over its pairs (bond and contact of a pair
-  // share one result slot) divided by the cell area 2 sqrt(3) R^2 t.
+  // share one summed force) divided by the cell area 2 sqrt(3) R^2 t.
   double sxx = 0, syy = 0;
   std::visit(
       [&](const auto& c) {
@@ -50,7 +50,7 @@ Moduli measure(double rate, double contact_modulus) {
           const auto i = c.pairs.first[k], j = c.pairs.second[k];
           if (i != centre && j != centre) continue;
           const Vec3 l = sim.particles().pos_rad[j].x - sim.particles().pos_rad[i].x;
-          const Vec3 f = c.slot[k].force;  // on particle j (particle 2)
+          const Vec3 f = c.force[k];  // on particle j (particle 2)
           sxx += 0.5 * l.x * f.x;
           syy += 0.5 * l.y * f.y;
         }

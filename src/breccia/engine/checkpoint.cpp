@@ -167,8 +167,15 @@ void Simulation::transfer_contacts(Archive& a) {
         a.value(c.params);
         a.value(c.wall_params);
         transfer_pairs(a, c.pairs);
-        a.vector(c.state);
-        a.vector(c.slot);
+        a.vector(c.history);
+        // Each block's histories with its free entries in order: the next contact takes the
+        // entry the uninterrupted run would have given it.
+        a.sized(c.stores, 16);
+        for (auto& store : c.stores) {
+          a.vector(store.entries);
+          a.vector(store.free);
+        }
+        a.vector(c.force);
       },
       contact_);
   std::visit(
@@ -214,7 +221,7 @@ void Simulation::transfer(Archive& a) {
   // are saved by law, so a new law needs nothing here.
   static_assert(sizeof(Simulation) - sizeof(ContactModel) - sizeof(wall_contacts_) -
                         sizeof(BondSets) - sizeof(JointSets) ==
-                    1552,
+                    1528,
                 "Simulation changed: update engine/checkpoint.cpp");
   a.label("simulation");
   if constexpr (Archive::reading)
@@ -247,8 +254,6 @@ void Simulation::transfer(Archive& a) {
   a.value(initialised_);
   a.value(sample_requested_);
   a.vector(x_at_build_);
-  a.vector(ext_force_);
-  a.vector(ext_torque_);
   a.vector(user_force_);
   a.vector(drive_force_prev_);
   a.value(max_disp2_);
@@ -292,15 +297,23 @@ Simulation Simulation::restore(ArchiveReader& a) {
   };
   if (s.walls_.size() != std::visit([](const auto& v) { return v.size(); }, s.wall_contacts_))
     fail("walls");
-  if (s.ext_force_.size() != n || s.ext_torque_.size() != n || s.x_at_build_.size() != n)
-    fail("per-particle arrays");
+  if (s.x_at_build_.size() != n) fail("per-particle arrays");
   std::visit(
       [&](const auto& c) {
-        if (c.state.size() != c.pairs.size() || c.slot.size() != c.pairs.size() ||
-            (c.pairs.offsets.size() != n + 1 && !c.pairs.offsets.empty()))
+        if (c.history.size() != c.pairs.size() || c.force.size() != c.pairs.size() ||
+            (c.pairs.offsets.size() != n + 1 && !c.pairs.offsets.empty()) ||
+            (c.stores.size() != (n + kParticleBlock - 1) / kParticleBlock &&
+             !c.pairs.offsets.empty()))
           fail("contacts");
-        for (std::size_t k = 0; k < c.pairs.size(); ++k)
+        for (std::size_t k = 0; k < c.pairs.size(); ++k) {
           if (c.pairs.first[k] >= n || c.pairs.second[k] >= n) fail("contact pairs");
+          if (c.has_history(k) &&
+              c.history[k] >= c.stores[c.pairs.first[k] / kParticleBlock].entries.size())
+            fail("contact history");
+        }
+        for (const auto& store : c.stores)
+          for (std::uint32_t e : store.free)
+            if (e >= store.entries.size()) fail("contact history");
       },
       s.contact_);
   const std::size_t pairs = s.neighbour_pairs();
@@ -319,6 +332,12 @@ Simulation Simulation::restore(ArchiveReader& a) {
   std::apply([&](const auto&... set) { (check_set(set), ...); }, s.bonds_);
   std::apply([&](const auto&... set) { (check_set(set), ...); }, s.joints_);
   if (s.joint_law_ >= JointLaws::size) fail("joint law");
+  // The pair pass's cross index follows from the list (not saved).
+  std::visit(
+      [&](auto& c) {
+        if (!c.pairs.offsets.empty()) c.pairs.build_cross_index(n);
+      },
+      s.contact_);
   s.reserve_crack_catalogue();
   return s;
 }

@@ -33,10 +33,11 @@ void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
         (one(sets), ...);
       },
       bonds_);
-  std::vector<double> part(block_count(c.pairs.size()));
-  for_blocks(c.pairs.size(), [&](std::size_t b, std::size_t e, std::size_t blk) {
+  // Per block of the pair pass, over its histories (a freed entry is zeroed and stores nothing).
+  std::vector<double> part(c.stores.size());
+  for_each_item(c.stores.size(), [&](std::size_t blk) {
     double acc = 0.0;
-    for (std::size_t k = b; k < e; ++k) acc += CL::stored_energy(c.params, c.state[k]);
+    for (const auto& st : c.stores[blk].entries) acc += CL::stored_energy(c.params, st);
     part[blk] = acc;
   });
   double contact = ordered_sum(part);

@@ -1,6 +1,6 @@
-// The integrator (docs/physics.md §1.3-§1.4, §2.1): gather each particle's pair forces in a fixed
-// order, add walls, loads and gravity, local damping, then the leapfrog kick and drift and the
-// rotation update.
+// The integrator (docs/physics.md §1.3-§1.4, §2.1): each particle's pair and wall loads (summed by
+// the pair and wall passes) with its cross slots added in a fixed order, external loads and
+// gravity, local damping, then the leapfrog kick and drift and the rotation update.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -101,10 +101,8 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
   for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
     IntegrateBlock acc;
     for (std::size_t i = begin; i < end; ++i) {
-      Vec3 f = ext_force_[i], t = ext_torque_[i];
-      ext_force_[i] = {};
-      ext_torque_[i] = {};
-      gather_pairs(c.pairs, c.slot, i, f, t);
+      Vec3 f = p_.force[i], t = p_.torque[i];
+      gather_cross(c.pairs, cross_slots_, i, f, t);
       Vec3 f_user;
       if (has_user_force) {
         f_user = user_force_[i];

@@ -95,10 +95,10 @@ void Simulation::assign_joints_for(ContactSet<CL>& c) {
     map_bonds_to_pairs(set, c.pairs);
     std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint64_t, typename JL::State>> add;
     for (std::size_t k = 0; k < c.pairs.size(); ++k) {
-      if (set.bond_of_pair[k] != BondSet<JL>::kNoBond || has_history(c.state[k].n_old)) continue;
+      if (set.bond_at_pair(k) != BondSet<JL>::kNoBond || c.has_history(k)) continue;
       bool bonded = false;
       std::apply(
-          [&](const auto&... b) { ((bonded = bonded || b.bond_of_pair[k] != b.kNoBond), ...); },
+          [&](const auto&... b) { ((bonded = bonded || b.bond_at_pair(k) != b.kNoBond), ...); },
           bonds_);
       if (bonded) continue;
       const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];

@@ -48,18 +48,21 @@ template <class CL>
 void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::apply([&](auto&... set) { (compact_bonds(set), ...); }, bonds_);
   PairList old_pairs = std::move(contacts.pairs);
-  std::vector<typename CL::State> old_state = std::move(contacts.state);
+  std::vector<std::uint32_t> old_history = std::move(contacts.history);
+  std::vector<HistoryStore<typename CL::State>> old_stores = std::move(contacts.stores);
   contacts.pairs = PairList{};
   build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs);
   // Every intact bond must be an interacting pair even if it stretched beyond the search range.
   std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, bonds_);
   std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, joints_);
   contacts.pairs.build_index(p_.size());
+  contacts.pairs.build_cross_index(p_.size());
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
-  merge_history(old_pairs, old_state, contacts.pairs, contacts.state);
+  merge_history(old_pairs, old_history, old_stores, contacts.pairs, contacts.history,
+                contacts.stores);
   assign_joints();
-  contacts.slot.assign(contacts.pairs.size(), PairSlot{});
+  contacts.force.assign(contacts.pairs.size(), Vec3{});
   // Wall candidates: particles within the skin of each wall, history carried by particle index.
   auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
   for (std::size_t wi = 0; wi < walls_.size(); ++wi) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "breccia/core/parallel.hpp"
 #include "breccia/core/vec3.hpp"
 #include "breccia/state/bond_set.hpp"
 #include "breccia/state/pair_list.hpp"
@@ -17,23 +18,38 @@ inline bool has_history(const Vec3& n_old) noexcept {
   return n_old.x != 0.0 || n_old.y != 0.0 || n_old.z != 0.0;
 }
 
-// Carries contact history from an old sorted pair list to a new one (same particle indexing).
+// Carries contact history from an old sorted pair list to a new one (same particle indexing):
+// each new particle block's store gets its pairs' histories in pair order, with room for a
+// quarter more contacts before it grows.
 template <class State>
-void merge_history(const PairList& old_pairs, const std::vector<State>& old_state,
-                   const PairList& new_pairs, std::vector<State>& new_state) {
-  new_state.assign(new_pairs.size(), State{});
-  if (old_pairs.offsets.empty()) return;
-  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(new_pairs.offsets.size()) - 1;
-#pragma omp parallel for schedule(static, 1024) if (n > 4096)
-  for (std::ptrdiff_t si = 0; si < n; ++si) {
-    const std::size_t i = static_cast<std::size_t>(si);
-    std::uint32_t a = old_pairs.offsets[i];
-    const std::uint32_t ae = old_pairs.offsets[i + 1];
-    for (std::uint32_t b = new_pairs.offsets[i]; b < new_pairs.offsets[i + 1]; ++b) {
-      while (a < ae && old_pairs.second[a] < new_pairs.second[b]) ++a;
-      if (a < ae && old_pairs.second[a] == new_pairs.second[b]) new_state[b] = old_state[a];
+void merge_history(const PairList& old_pairs, const std::vector<std::uint32_t>& old_history,
+                   const std::vector<HistoryStore<State>>& old_stores, const PairList& new_pairs,
+                   std::vector<std::uint32_t>& new_history,
+                   std::vector<HistoryStore<State>>& new_stores) {
+  const std::size_t n = new_pairs.offsets.size() - 1;
+  new_history.assign(new_pairs.size(), kNoHistory);
+  new_stores.assign((n + kParticleBlock - 1) / kParticleBlock, HistoryStore<State>{});
+  const bool carried = !old_pairs.offsets.empty();
+  for_each_item(new_stores.size(), [&](std::size_t blk) {
+    const std::size_t first = blk * kParticleBlock, last = std::min(n, first + kParticleBlock);
+    HistoryStore<State>& store = new_stores[blk];
+    std::size_t count = 0;
+    if (carried) count = old_stores[blk].in_use();
+    store.entries.reserve(count + count / 4 + 16);
+    if (!carried) return;
+    const HistoryStore<State>& old = old_stores[blk];
+    for (std::size_t i = first; i < last; ++i) {
+      std::uint32_t a = old_pairs.offsets[i];
+      const std::uint32_t ae = old_pairs.offsets[i + 1];
+      for (std::uint32_t b = new_pairs.offsets[i]; b < new_pairs.offsets[i + 1]; ++b) {
+        while (a < ae && old_pairs.second[a] < new_pairs.second[b]) ++a;
+        if (a < ae && old_pairs.second[a] == new_pairs.second[b] && old_history[a] != kNoHistory) {
+          new_history[b] = static_cast<std::uint32_t>(store.entries.size());
+          store.entries.push_back(old.entries[old_history[a]]);
+        }
+      }
     }
-  }
+  });
 }
 
 // Adds the pairs of `bonds` (sorted) that `pairs` (sorted) lacks. Rare: a bond stretched beyond
@@ -61,8 +77,15 @@ inline void add_missing_pairs(const PairList& bonds, PairList& pairs) {
 }
 
 // For each interacting pair, the index of its bond in `set` (or kNoBond). Both lists are sorted.
+// A law without bonds keeps no index (the pair pass does not read it): a run uses one bond law,
+// and an index per law would cost 4 bytes per pair for each of the others.
 template <class Law>
 void map_bonds_to_pairs(BondSet<Law>& set, const PairList& pairs) {
+  if (set.size() == 0) {
+    set.bond_of_pair.clear();
+    set.bond_of_pair.shrink_to_fit();
+    return;
+  }
   set.bond_of_pair.assign(pairs.size(), BondSet<Law>::kNoBond);
   std::size_t a = 0;
   for (std::size_t k = 0; k < set.size(); ++k) {

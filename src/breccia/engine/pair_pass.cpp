@@ -1,5 +1,6 @@
-// The pass over interacting pairs: each pair's geometry once, its bonds' and contact's loads
-// summed into the pair's slot, and the bonds that broke turned into crack records in pair order.
+// The pass over interacting pairs: each pair's geometry once, its bonds' and contact's loads summed
+// into its two particles' totals (through a cross slot where the second particle belongs to a later
+// block), and the bonds that broke turned into crack records in pair order.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -24,8 +25,9 @@ constexpr std::uint32_t kNoHeldBond = 0xffffffffu;
 
 }  // namespace
 
-// One block's walk over its pairs. The pair in hand is worked through in stages: its bonds, its
-// joint, whether it is touching, its contact, the bond judged on the interface totals, its slot.
+// One particle block's walk over the pairs it owns. The pair in hand is worked through in stages:
+// its bonds, its joint, whether it is touching, its contact, the bond judged on the interface
+// totals, its loads on the two particles.
 // The stages are inlined into the walk, and what a law writes through a reference (the geometry,
 // the dissipation) lives outside the object, so that the object itself stays in registers: a
 // split into out-of-line stages ran 7-17 % slower on bench_engine's 100k-grain elastic case, and
@@ -43,21 +45,35 @@ class Simulation::PairWalk {
         dissipation_(dissipation),
         joint_dissipation_(joint_dissipation) {}
 
-  [[gnu::always_inline]] void walk(std::size_t begin, std::size_t end) {
+  // Pairs [begin, end) of the block that owns particles up to owned_end; its cross pairs' loads
+  // go to the cross slots from `next_cross` on. Each particle's sum runs in pair order.
+  [[gnu::always_inline]] void walk(std::size_t begin, std::size_t end, std::uint32_t owned_end,
+                                   std::uint32_t next_cross,
+                                   HistoryStore<typename CL::State>& store) {
+    store_ = &store;
+    Vec3* const force = sim_.p_.force.data();
+    Vec3* const torque = sim_.p_.torque.data();
     for (std::size_t k = begin; k < end; ++k) {
       start(k);
       bond_parts(kBondLaws);
       joint_parts(kJointLaws);
-      PairSlot& s = c_.slot[k];
       if (!have_geometry_ && !touching_or_loaded()) {
-        s = PairSlot{};
+        c_.force[k] = {};
+        if (j_ >= owned_end) sim_.cross_slots_[next_cross++] = CrossSlot{};
         continue;
       }
       const Vec3 contact_force = contact_part();
       if (held_law_ != kNoHeldBond) judge_held_bond(contact_force, kBondLaws);
-      s.force = force_;
-      s.torque1 = cross(g_.r1, -force_) - couple_;
-      s.torque2 = cross(g_.r2, force_) + couple_;
+      c_.force[k] = force_;
+      force[i_] -= force_;
+      torque[i_] += cross(g_.r1, -force_) - couple_;
+      const Vec3 torque2 = cross(g_.r2, force_) + couple_;
+      if (j_ < owned_end) {
+        force[j_] += force_;
+        torque[j_] += torque2;
+      } else {
+        sim_.cross_slots_[next_cross++] = {force_, torque2};
+      }
     }
   }
 
@@ -105,8 +121,8 @@ class Simulation::PairWalk {
 
   template <std::uint32_t LawIndex, class Law>
   [[gnu::always_inline]] void bond_part(BondSet<Law>& set) {
-    // A run uses one bond law: the others' sets are empty, and their index is not read.
-    const std::uint32_t b = set.size() == 0 ? BondSet<Law>::kNoBond : set.bond_of_pair[k_];
+    // A run uses one bond law: the others' sets are empty, and keep no index.
+    const std::uint32_t b = set.bond_at_pair(k_);
     if (b != BondSet<Law>::kNoBond && set.intact[b]) {
       need(law_needs_motion<Law>);
       if constexpr (judged_on_interface<Law>) {
@@ -134,7 +150,7 @@ class Simulation::PairWalk {
   template <std::uint32_t LawIndex, class JL>
   [[gnu::always_inline]] void joint_part(BondSet<JL>& set) {
     // Most samples have no joints: no load of the pair's index then.
-    const std::uint32_t b = set.size() == 0 ? BondSet<JL>::kNoBond : set.bond_of_pair[k_];
+    const std::uint32_t b = set.bond_at_pair(k_);
     if (b != BondSet<JL>::kNoBond) {
       need(law_needs_motion<JL>);
       contact_off_ = true;
@@ -152,22 +168,31 @@ class Simulation::PairWalk {
     const PosRad& a = sim_.p_.pos_rad[i_];
     const PosRad& b = sim_.p_.pos_rad[j_];
     const double reach = a.r + b.r;
-    if (norm2(b.x - a.x) >= reach * reach && !has_history(c_.state[k_].n_old)) return false;
+    if (norm2(b.x - a.x) >= reach * reach && !c_.has_history(k_)) return false;
     need(true);
     return true;
   }
 
   // The contact's force, summed into the pair's (zero when the contact is off or open).
+  // A contact takes its history entry at the first touch and gives it back when it opens.
   [[gnu::always_inline]] Vec3 contact_part() {
-    if (contact_off_ && has_history(c_.state[k_].n_old)) {
+    std::uint32_t& h = c_.history[k_];
+    if (contact_off_ && h != kNoHistory) {
       // Bonded under load with a law that excludes the contact: its spring energy is lost
       // without work (§4.0, D_del) and the contact starts afresh when the bond breaks.
-      dissipation_.deleted += CL::stored_energy(c_.params, c_.state[k_]);
-      c_.state[k_] = {};
+      dissipation_.deleted += CL::stored_energy(c_.params, store_->entries[h]);
+      store_->release(h);
+      h = kNoHistory;
     }
-    if (contact_off_ || !(g_.delta > 0.0 || has_history(c_.state[k_].n_old))) return {};
+    if (contact_off_ || !(g_.delta > 0.0 || h != kNoHistory)) return {};
     need(true);
-    const PairForce pf = CL::compute(c_.params, c_.state[k_], g_, dt_, dissipation_);
+    if (h == kNoHistory) h = store_->take();
+    typename CL::State& state = store_->entries[h];
+    const PairForce pf = CL::compute(c_.params, state, g_, dt_, dissipation_);
+    if (!has_history(state.n_old)) {
+      store_->release(h);
+      h = kNoHistory;
+    }
     force_ += pf.force;
     couple_ += pf.couple;
     return pf.force;
@@ -192,7 +217,8 @@ class Simulation::PairWalk {
   ContactSet<CL>& c_;
   const double dt_;
   std::vector<Failure>& fails_;
-  PairGeometry& g_;  // the pair in hand's
+  HistoryStore<typename CL::State>* store_ = nullptr;  // the block's contact histories
+  PairGeometry& g_;                                    // the pair in hand's
   PairDissipation &dissipation_, &joint_dissipation_;
   // The pair in hand.
   std::size_t k_ = 0;
@@ -204,21 +230,31 @@ class Simulation::PairWalk {
   std::uint32_t held_law_ = kNoHeldBond, held_bond_ = 0;
 };
 
-// One pass over all interacting pairs: the bond(s) of the pair, then its contact, summed into one
-// slot. Each pair's geometry is computed once; bonded pairs that overlap get the contact force in
-// parallel (docs/physics.md §4.0). Breaks are collected per block and processed in pair order.
+// One pass over all interacting pairs: the bond(s) of the pair, then its contact, summed into the
+// two particles' totals. Each pair's geometry is computed once; bonded pairs that overlap get the
+// contact force in parallel (docs/physics.md §4.0). The blocks are blocks of particles (a block
+// owns the pairs of its particles as first), fixed by the particle count; breaks are collected
+// per block and processed in pair order.
 template <class CL>
 void Simulation::compute_pairs_for(ContactSet<CL>& c) {
-  const std::size_t n = c.pairs.size();
-  const std::size_t nb = block_count(n);
+  const std::size_t n = p_.size();
+  const std::size_t nb = (n + kParticleBlock - 1) / kParticleBlock;
   block_dis_.assign(nb, PairDissipation{});
   block_joint_dis_.assign(nb, PairDissipation{});
   if (block_failures_.size() < nb) block_failures_.resize(nb);
-  for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
+  cross_slots_.resize(c.pairs.cross_slots());
+  for_each_item(nb, [&](std::size_t blk) {
+    const std::size_t begin = blk * kParticleBlock, end = std::min(n, begin + kParticleBlock);
+    std::fill(p_.force.begin() + static_cast<std::ptrdiff_t>(begin),
+              p_.force.begin() + static_cast<std::ptrdiff_t>(end), Vec3{});
+    std::fill(p_.torque.begin() + static_cast<std::ptrdiff_t>(begin),
+              p_.torque.begin() + static_cast<std::ptrdiff_t>(end), Vec3{});
     block_failures_[blk].clear();
     PairGeometry g;
     PairDissipation dis, joint_dis;
-    PairWalk<CL>(*this, c, block_failures_[blk], g, dis, joint_dis).walk(begin, end);
+    PairWalk<CL>(*this, c, block_failures_[blk], g, dis, joint_dis)
+        .walk(c.pairs.offsets[begin], c.pairs.offsets[end], static_cast<std::uint32_t>(end),
+              c.pairs.cross_begin[blk], c.stores[blk]);
     block_dis_[blk] = dis;
     block_joint_dis_[blk] = joint_dis;
   });

@@ -147,8 +147,6 @@ void Simulation::initialise() {
   std::apply([&](auto&... set) { (install_bonds(set), ...); }, bonds_);
   install_pending_joints();
   const std::size_t n = p_.size();
-  ext_force_.assign(n, {});
-  ext_torque_.assign(n, {});
   drive_force_prev_.assign(2 * n, {});
   double rsum = 0.0;
   for (const PosRad& q : p_.pos_rad) rsum += q.r;
@@ -257,11 +255,7 @@ BondModuli Simulation::bond_moduli(std::string_view law) const noexcept {
 
 std::size_t Simulation::active_contacts() const noexcept {
   std::size_t n = 0;
-  std::visit(
-      [&](const auto& c) {
-        for (const auto& s : c.state) n += has_history(s.n_old) ? 1 : 0;
-      },
-      contact_);
+  std::visit([&](const auto& c) { n = c.active(); }, contact_);
   return n;
 }
 
@@ -328,12 +322,12 @@ PairStress Simulation::pair_stress() const {
   std::visit(
       [&]<class CL>(const ContactSet<CL>& c) {
         for (std::size_t k = 0; k < c.pairs.size(); ++k) {
-          const PairSlot& s = c.slot[k];
+          const Vec3& force = c.force[k];
           const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
           const Vec3 l = p_.pos_rad[j].x - p_.pos_rad[i].x;
           for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b)
-              out.lf[static_cast<std::size_t>(3 * a + b)] += l[a] * s.force[b];
+              out.lf[static_cast<std::size_t>(3 * a + b)] += l[a] * force[b];
           const double reach = p_.pos_rad[i].r + p_.pos_rad[j].r;
           if (norm2(l) >= reach * reach) continue;
           const PairGeometry g = geometry(i, j);
@@ -362,12 +356,12 @@ std::vector<std::array<double, 9>> Simulation::particle_stress() const {
   std::visit(
       [&]<class CL>(const ContactSet<CL>& c) {
         for (std::size_t k = 0; k < c.pairs.size(); ++k) {
-          const PairSlot& slot = c.slot[k];
-          if (slot.force.x == 0.0 && slot.force.y == 0.0 && slot.force.z == 0.0) continue;
+          const Vec3& force = c.force[k];
+          if (force.x == 0.0 && force.y == 0.0 && force.z == 0.0) continue;
           const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
           const PairGeometry g = geometry(i, j);
-          add(i, g.r1, -slot.force);
-          add(j, g.r2, slot.force);
+          add(i, g.r1, -force);
+          add(j, g.r2, force);
         }
         const auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
         for (std::size_t wi = 0; wi < walls_.size(); ++wi)
@@ -397,6 +391,10 @@ std::vector<std::array<double, 9>> Simulation::particle_stress() const {
 
 std::size_t Simulation::neighbour_pairs() const noexcept {
   return std::visit([](const auto& c) { return c.pairs.size(); }, contact_);
+}
+
+std::size_t Simulation::cross_block_pairs() const noexcept {
+  return std::visit([](const auto& c) { return c.pairs.cross_slots(); }, contact_);
 }
 
 }  // namespace breccia

@@ -196,9 +196,9 @@ class Simulation {
   void set_local_damping(double alpha);
 
   // The engine's own arrays per particle besides the store (run/memory_budget.cpp): positions at
-  // the last rebuild, wall loads, driver loads and the pair list's two offsets.
+  // the last rebuild, driver loads and the pair list's three offsets.
   static constexpr std::size_t kScratchBytesPerParticle =
-      5 * sizeof(Vec3) + 2 * sizeof(std::uint32_t);
+      3 * sizeof(Vec3) + 3 * sizeof(std::uint32_t);
 
   // --- views ---
   const ParticleStore& particles() const noexcept { return p_; }
@@ -228,6 +228,8 @@ class Simulation {
   BondModuli bond_moduli(std::string_view law) const noexcept;
   std::size_t active_contacts() const noexcept;
   std::size_t neighbour_pairs() const noexcept;
+  // Pairs whose second grain lies in a later particle block of the pair pass (pair_list.hpp).
+  std::size_t cross_block_pairs() const noexcept;
   // Pair forces of the last step as a stress sum and contact counts (docs/physics.md §6.5, §7.2).
   PairStress pair_stress() const;
   // Per-particle stress of the last step's forces (docs/physics.md §6.5), compression-positive,
@@ -380,9 +382,9 @@ class Simulation {
   std::uint64_t step_ = 0, rebuilds_ = 0, next_bond_tag_ = 1;
   bool initialised_ = false, sample_requested_ = false;
   std::vector<Vec3> x_at_build_;
-  std::vector<Vec3> ext_force_, ext_torque_;  // wall contributions of the step
-  std::vector<Vec3> user_force_;              // external loads (empty when unused)
-  std::vector<Vec3> drive_force_prev_;        // driver force of driven particles, previous step
+  std::vector<CrossSlot> cross_slots_;  // the pair pass's cross pairs (pair_list.hpp)
+  std::vector<Vec3> user_force_;        // external loads (empty when unused)
+  std::vector<Vec3> drive_force_prev_;  // driver force of driven particles, previous step
   double max_disp2_ = 0.0;
   double radius_growth_ = 0.0;  // largest radius increase since the last neighbour rebuild
 

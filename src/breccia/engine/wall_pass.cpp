@@ -70,8 +70,8 @@ void Simulation::compute_walls_for(ContactSet<CL>& c) {
     std::size_t touching = 0;
     for (std::size_t k = 0; k < n; ++k) {
       const std::uint32_t i = wc.particle[k];
-      ext_force_[i] += wc.force[k];
-      ext_torque_[i] += wc.torque[k];
+      p_.force[i] += wc.force[k];  // after the pair pass's sum, in wall and particle order
+      p_.torque[i] += wc.torque[k];
       total += wc.force[k];
       radial += wc.normal_force[k];
       touching += wc.normal_force[k] != 0.0 ? 1 : 0;

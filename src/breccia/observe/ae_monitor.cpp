@@ -46,7 +46,7 @@ std::uint64_t ref_key(std::uint32_t p, std::uint32_t q) {
   return (static_cast<std::uint64_t>(p) << 32) | q;
 }
 
-// Calls f(q, force exerted by p on q) for every neighbour pair of p (the pair slot holds the
+// Calls f(q, force exerted by p on q) for every neighbour pair of p (the pair's force is the
 // force on the pair's second particle).
 template <class F>
 void for_pairs(const Simulation& sim, std::uint32_t p, F&& f) {
@@ -54,11 +54,10 @@ void for_pairs(const Simulation& sim, std::uint32_t p, F&& f) {
       [&](const auto& c) {
         const PairList& l = c.pairs;
         if (l.offsets.size() <= p + 1) return;
-        for (std::uint32_t k = l.offsets[p]; k < l.offsets[p + 1]; ++k)
-          f(l.second[k], c.slot[k].force);
+        for (std::uint32_t k = l.offsets[p]; k < l.offsets[p + 1]; ++k) f(l.second[k], c.force[k]);
         for (std::uint32_t m = l.in_offsets[p]; m < l.in_offsets[p + 1]; ++m) {
           const std::uint32_t k = l.in_slot[m];
-          f(l.first[k], -c.slot[k].force);
+          f(l.first[k], -c.force[k]);
         }
       },
       sim.contact_model());

@@ -23,9 +23,13 @@ MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, s
     e.bond_bytes = bond_count * static_cast<double>(BondSet<Law>::kBytesPerBond);
   });
   visit_params<ContactLaws>(s.contact, [&]<class Law>(const typename Law::Params&) {
-    // At a rebuild the old list and history live beside the new ones.
-    const double kept = 2.0 * (3.0 * sizeof(std::uint32_t) + sizeof(typename Law::State));
-    e.pair_bytes = e.neighbour_pairs * (kept + sizeof(PairSlot) + sizeof(std::uint32_t));
+    // At a rebuild the old list and history live beside the new ones. Only touching pairs hold a
+    // history; the estimate gives one to every pair (an FCC block's pairs all touch).
+    const double kept = 2.0 * (4.0 * sizeof(std::uint32_t) + sizeof(typename Law::State));
+    // Every pair keeps its force and one bond index; a cross pair (pair_list.hpp) also a slot
+    // and its entry in the gather index.
+    const double cross = kCrossPairShare * (sizeof(CrossSlot) + sizeof(std::uint32_t));
+    e.pair_bytes = e.neighbour_pairs * (kept + sizeof(Vec3) + sizeof(std::uint32_t) + cross);
   });
   return e;
 }
