@@ -9,6 +9,7 @@
 #include "breccia/core/error.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
+#include "breccia/engine/pair_lists.hpp"
 #include "breccia/engine/simulation.hpp"
 
 using namespace breccia;
@@ -99,27 +100,32 @@ TEST(Neighbours, MatchBruteForce2D) {
   check_against_brute_force(true);
 }
 
-TEST(ContactHistory, FreedEntriesAreZeroedAndReusedLastInFirstOut) {
-  HistoryStore<LinearContact::State> store;
-  const std::uint32_t a = store.take(), b = store.take(), c = store.take();
-  EXPECT_EQ(std::vector<std::uint32_t>({a, b, c}), std::vector<std::uint32_t>({0, 1, 2}));
-  store.entries[a].kn = 1.0;
-  store.entries[c].kn = 3.0;
-  store.release(a);
-  store.release(c);
-  EXPECT_EQ(store.entries[a].kn, 0.0);
-  EXPECT_EQ(store.entries[c].kn, 0.0);
-  EXPECT_EQ(store.in_use(), 1u);
-  EXPECT_EQ(store.take(), c);
-  EXPECT_EQ(store.take(), a);
-  EXPECT_EQ(store.take(), 3u);
-  EXPECT_EQ(store.in_use(), 4u);
+// A block's states in the order of first touch, with the entries of opened contacts zeroed, are
+// rewritten in pair order with the histories in force only; each pair keeps its own state.
+TEST(ContactHistory, RepackPutsTheStatesInPairOrder) {
+  using State = LinearContact::State;
+  auto state = [](double kn) {
+    State s;
+    s.kn = kn;
+    s.n_old = {1, 0, 0};
+    return s;
+  };
+  // Pairs 0..5 (pair k's state marked kn = 10 + k): pair 4 touched first, pair 1 opened (its entry
+  // zeroed), pairs 2 and 5 never touched.
+  std::vector<State> store = {state(14), State{}, state(10), state(13)};
+  std::vector<std::uint32_t> history = {2, 1, kNoHistory, 3, 0, kNoHistory};
+  engine_detail::repack_history(0, history.size(), history, store);
+  ASSERT_EQ(store.size(), 3u);
+  EXPECT_EQ(history, std::vector<std::uint32_t>({0, kNoHistory, kNoHistory, 1, 2, kNoHistory}));
+  EXPECT_EQ(store[0].kn, 10.0);
+  EXPECT_EQ(store[1].kn, 13.0);
+  EXPECT_EQ(store[2].kn, 14.0);
 }
 
-// Only touching pairs hold a contact state: through breakage, grains flying apart and rebuilds,
-// the pairs with a history are exactly those whose grains overlapped at the last step's
-// positions (their normal is that step's), each store entry in use belongs to one pair, and the
-// free entries are zeroed.
+// Only pairs that touched since the last rebuild hold a contact state: through breakage, grains
+// moving apart and rebuilds, the pairs with history are exactly those whose grains overlapped at
+// the last step's positions, every store entry belongs to exactly one pair, and the entries of
+// contacts that opened are zeroed.
 TEST(ContactHistory, OnlyPairsInTouchHoldAState) {
   Simulation sim = test::compressed_block(5, 5, 12, 2.0, 1e4);  // weak bonds: they break
   for (std::size_t i = 0; i < sim.particles().size(); ++i)
@@ -137,31 +143,28 @@ TEST(ContactHistory, OnlyPairsInTouchHoldAState) {
       [&]<class CL>(const ContactSet<CL>& c) {
         std::size_t touching = 0, with_history = 0;
         std::vector<std::vector<int>> owner(c.stores.size());
-        for (std::size_t b = 0; b < c.stores.size(); ++b)
-          owner[b].assign(c.stores[b].entries.size(), 0);
+        for (std::size_t b = 0; b < c.stores.size(); ++b) owner[b].assign(c.stores[b].size(), 0);
         for (std::size_t k = 0; k < c.pairs.size(); ++k) {
           const PosRad& p = before[c.pairs.first[k]];
           const PosRad& q = before[c.pairs.second[k]];
           const bool touches = norm(q.x - p.x) < p.r + q.r;
           touching += touches ? 1 : 0;
           EXPECT_EQ(c.has_history(k), touches) << k;
-          if (!c.has_history(k)) continue;
+          if (c.history[k] == kNoHistory) continue;
+          ++owner[c.pairs.first[k] / kParticleBlock][c.history[k]];
+          if (!c.has_history(k)) {
+            EXPECT_EQ(c.state(k).normal_force, 0.0);
+            EXPECT_EQ(norm(c.state(k).shear_force), 0.0);
+            continue;
+          }
           ++with_history;
           EXPECT_GT(norm(c.state(k).n_old), 0.5);
-          ++owner[c.pairs.first[k] / kParticleBlock][c.history[k]];
         }
         ASSERT_GT(touching, 50u);
         EXPECT_EQ(with_history, c.active());
         EXPECT_EQ(with_history, sim.active_contacts());
-        for (std::size_t b = 0; b < c.stores.size(); ++b) {
-          for (std::uint32_t e : c.stores[b].free) {
-            EXPECT_EQ(owner[b][e], 0);
-            EXPECT_EQ(norm(c.stores[b].entries[e].n_old), 0.0);
-            owner[b][e] = -1;
-          }
-          for (int o : owner[b]) EXPECT_NE(o, 0) << "an entry neither used nor free";
-          for (int o : owner[b]) EXPECT_LE(o, 1) << "an entry of two pairs";
-        }
+        for (const auto& owners : owner)
+          for (int o : owners) EXPECT_EQ(o, 1) << "every entry belongs to exactly one pair";
       },
       sim.contact_model());
 }

@@ -168,13 +168,11 @@ void Simulation::transfer_contacts(Archive& a) {
         a.value(c.wall_params);
         transfer_pairs(a, c.pairs);
         a.vector(c.history);
-        // Each block's histories with its free entries in order: the next contact takes the
-        // entry the uninterrupted run would have given it.
-        a.sized(c.stores, 16);
-        for (auto& store : c.stores) {
-          a.vector(store.entries);
-          a.vector(store.free);
-        }
+        // Each block's histories as they lie: a new contact appends where the uninterrupted
+        // run would have appended it.
+        a.sized(c.stores, 8);
+        for (auto& store : c.stores) a.vector(store);
+        a.vector(c.packed);
         a.vector(c.force);
       },
       contact_);
@@ -302,18 +300,16 @@ Simulation Simulation::restore(ArchiveReader& a) {
       [&](const auto& c) {
         if (c.history.size() != c.pairs.size() || c.force.size() != c.pairs.size() ||
             (c.pairs.offsets.size() != n + 1 && !c.pairs.offsets.empty()) ||
-            (c.stores.size() != (n + kParticleBlock - 1) / kParticleBlock &&
+            ((c.stores.size() != (n + kParticleBlock - 1) / kParticleBlock ||
+              c.packed.size() != c.stores.size()) &&
              !c.pairs.offsets.empty()))
           fail("contacts");
         for (std::size_t k = 0; k < c.pairs.size(); ++k) {
           if (c.pairs.first[k] >= n || c.pairs.second[k] >= n) fail("contact pairs");
-          if (c.has_history(k) &&
-              c.history[k] >= c.stores[c.pairs.first[k] / kParticleBlock].entries.size())
+          if (c.history[k] != kNoHistory &&
+              c.history[k] >= c.stores[c.pairs.first[k] / kParticleBlock].size())
             fail("contact history");
         }
-        for (const auto& store : c.stores)
-          for (std::uint32_t e : store.free)
-            if (e >= store.entries.size()) fail("contact history");
       },
       s.contact_);
   const std::size_t pairs = s.neighbour_pairs();

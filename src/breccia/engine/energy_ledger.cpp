@@ -33,11 +33,12 @@ void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
         (one(sets), ...);
       },
       bonds_);
-  // Per block of the pair pass, over its histories (a freed entry is zeroed and stores nothing).
-  std::vector<double> part(c.stores.size());
-  for_each_item(c.stores.size(), [&](std::size_t blk) {
+  // In pair order (where a state lies in its block's array is no part of any result).
+  std::vector<double> part(block_count(c.pairs.size()));
+  for_blocks(c.pairs.size(), [&](std::size_t b, std::size_t e, std::size_t blk) {
     double acc = 0.0;
-    for (const auto& st : c.stores[blk].entries) acc += CL::stored_energy(c.params, st);
+    for (std::size_t k = b; k < e; ++k)
+      if (c.history[k] != kNoHistory) acc += CL::stored_energy(c.params, c.state(k));
     part[blk] = acc;
   });
   double contact = ordered_sum(part);

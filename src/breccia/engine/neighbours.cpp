@@ -49,7 +49,7 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::apply([&](auto&... set) { (compact_bonds(set), ...); }, bonds_);
   PairList old_pairs = std::move(contacts.pairs);
   std::vector<std::uint32_t> old_history = std::move(contacts.history);
-  std::vector<HistoryStore<typename CL::State>> old_stores = std::move(contacts.stores);
+  std::vector<std::vector<typename CL::State>> old_stores = std::move(contacts.stores);
   contacts.pairs = PairList{};
   build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs);
   // Every intact bond must be an interacting pair even if it stretched beyond the search range.
@@ -60,7 +60,7 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
   merge_history(old_pairs, old_history, old_stores, contacts.pairs, contacts.history,
-                contacts.stores);
+                contacts.stores, contacts.packed);
   assign_joints();
   contacts.force.assign(contacts.pairs.size(), Vec3{});
   // Wall candidates: particles within the skin of each wall, history carried by particle index.

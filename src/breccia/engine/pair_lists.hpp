@@ -13,43 +13,70 @@
 
 namespace breccia::engine_detail {
 
-// A contact that has been in touch carries its previous normal (zero before the first touch).
-inline bool has_history(const Vec3& n_old) noexcept {
-  return n_old.x != 0.0 || n_old.y != 0.0 || n_old.z != 0.0;
-}
-
 // Carries contact history from an old sorted pair list to a new one (same particle indexing):
-// each new particle block's store gets its pairs' histories in pair order, with room for a
-// quarter more contacts before it grows.
+// each new particle block's store gets the histories in force of its pairs, in pair order, with
+// room for a quarter more contacts before it grows.
 template <class State>
 void merge_history(const PairList& old_pairs, const std::vector<std::uint32_t>& old_history,
-                   const std::vector<HistoryStore<State>>& old_stores, const PairList& new_pairs,
+                   const std::vector<std::vector<State>>& old_stores, const PairList& new_pairs,
                    std::vector<std::uint32_t>& new_history,
-                   std::vector<HistoryStore<State>>& new_stores) {
+                   std::vector<std::vector<State>>& new_stores,
+                   std::vector<std::uint32_t>& packed) {
   const std::size_t n = new_pairs.offsets.size() - 1;
   new_history.assign(new_pairs.size(), kNoHistory);
-  new_stores.assign((n + kParticleBlock - 1) / kParticleBlock, HistoryStore<State>{});
+  new_stores.assign((n + kParticleBlock - 1) / kParticleBlock, {});
+  packed.assign(new_stores.size(), 0);
   const bool carried = !old_pairs.offsets.empty();
   for_each_item(new_stores.size(), [&](std::size_t blk) {
     const std::size_t first = blk * kParticleBlock, last = std::min(n, first + kParticleBlock);
-    HistoryStore<State>& store = new_stores[blk];
+    std::vector<State>& store = new_stores[blk];
+    if (!carried) {
+      store.reserve(16);
+      return;
+    }
+    const std::vector<State>& old = old_stores[blk];
     std::size_t count = 0;
-    if (carried) count = old_stores[blk].in_use();
-    store.entries.reserve(count + count / 4 + 16);
-    if (!carried) return;
-    const HistoryStore<State>& old = old_stores[blk];
+    for (const State& st : old) count += has_history(st.n_old) ? 1 : 0;
+    store.reserve(count + count / 4 + 16);
     for (std::size_t i = first; i < last; ++i) {
       std::uint32_t a = old_pairs.offsets[i];
       const std::uint32_t ae = old_pairs.offsets[i + 1];
       for (std::uint32_t b = new_pairs.offsets[i]; b < new_pairs.offsets[i + 1]; ++b) {
         while (a < ae && old_pairs.second[a] < new_pairs.second[b]) ++a;
-        if (a < ae && old_pairs.second[a] == new_pairs.second[b] && old_history[a] != kNoHistory) {
-          new_history[b] = static_cast<std::uint32_t>(store.entries.size());
-          store.entries.push_back(old.entries[old_history[a]]);
+        if (a < ae && old_pairs.second[a] == new_pairs.second[b] && old_history[a] != kNoHistory &&
+            has_history(old[old_history[a]].n_old)) {
+          new_history[b] = static_cast<std::uint32_t>(store.size());
+          store.push_back(old[old_history[a]]);
         }
       }
     }
+    packed[blk] = static_cast<std::uint32_t>(store.size());
   });
+}
+
+// Rewrites one block's contact histories in pair order, keeping only those in force: entries
+// appended in the order of first touch, and those of contacts that opened, scatter a block's
+// states in memory; packed, the pair pass reads them in order again. Where a state lies changes
+// no result. Pairs [begin, end) are the block's.
+template <class State>
+void repack_history(std::size_t begin, std::size_t end, std::vector<std::uint32_t>& history,
+                    std::vector<State>& store) {
+  std::size_t count = 0;
+  for (std::size_t k = begin; k < end; ++k)
+    count += history[k] != kNoHistory && has_history(store[history[k]].n_old) ? 1 : 0;
+  std::vector<State> packed;
+  packed.reserve(count + count / 4 + 16);
+  for (std::size_t k = begin; k < end; ++k) {
+    std::uint32_t& h = history[k];
+    if (h == kNoHistory) continue;
+    if (!has_history(store[h].n_old)) {
+      h = kNoHistory;
+      continue;
+    }
+    packed.push_back(store[h]);
+    h = static_cast<std::uint32_t>(packed.size() - 1);
+  }
+  store.swap(packed);
 }
 
 // Adds the pairs of `bonds` (sorted) that `pairs` (sorted) lacks. Rare: a bond stretched beyond

@@ -49,7 +49,7 @@ class Simulation::PairWalk {
   // go to the cross slots from `next_cross` on. Each particle's sum runs in pair order.
   [[gnu::always_inline]] void walk(std::size_t begin, std::size_t end, std::uint32_t owned_end,
                                    std::uint32_t next_cross,
-                                   HistoryStore<typename CL::State>& store) {
+                                   std::vector<typename CL::State>& store) {
     store_ = &store;
     Vec3* const force = sim_.p_.force.data();
     Vec3* const torque = sim_.p_.torque.data();
@@ -163,36 +163,40 @@ class Simulation::PairWalk {
   }
 
   // An unbonded pair takes part when its grains overlap or its contact still holds history; the
-  // test reads the two positions only.
+  // test reads the two positions, and the pair's history only when it has touched since the
+  // last rebuild.
   [[gnu::always_inline]] bool touching_or_loaded() {
     const PosRad& a = sim_.p_.pos_rad[i_];
     const PosRad& b = sim_.p_.pos_rad[j_];
     const double reach = a.r + b.r;
-    if (norm2(b.x - a.x) >= reach * reach && !c_.has_history(k_)) return false;
+    if (norm2(b.x - a.x) >= reach * reach && !loaded()) return false;
     need(true);
     return true;
   }
 
-  // The contact's force, summed into the pair's (zero when the contact is off or open).
-  // A contact takes its history entry at the first touch and gives it back when it opens.
+  [[gnu::always_inline]] bool loaded() const {
+    const std::uint32_t h = c_.history[k_];
+    return h != kNoHistory && has_history((*store_)[h].n_old);
+  }
+
+  // The contact's force, summed into the pair's (zero when the contact is off or open). A pair's
+  // first touch since the last rebuild appends its history entry to the block's store.
   [[gnu::always_inline]] Vec3 contact_part() {
     std::uint32_t& h = c_.history[k_];
-    if (contact_off_ && h != kNoHistory) {
+    const bool was_loaded = loaded();
+    if (contact_off_ && was_loaded) {
       // Bonded under load with a law that excludes the contact: its spring energy is lost
       // without work (§4.0, D_del) and the contact starts afresh when the bond breaks.
-      dissipation_.deleted += CL::stored_energy(c_.params, store_->entries[h]);
-      store_->release(h);
-      h = kNoHistory;
+      dissipation_.deleted += CL::stored_energy(c_.params, (*store_)[h]);
+      (*store_)[h] = {};
     }
-    if (contact_off_ || !(g_.delta > 0.0 || h != kNoHistory)) return {};
+    if (contact_off_ || !(g_.delta > 0.0 || was_loaded)) return {};
     need(true);
-    if (h == kNoHistory) h = store_->take();
-    typename CL::State& state = store_->entries[h];
-    const PairForce pf = CL::compute(c_.params, state, g_, dt_, dissipation_);
-    if (!has_history(state.n_old)) {
-      store_->release(h);
-      h = kNoHistory;
+    if (h == kNoHistory) {
+      h = static_cast<std::uint32_t>(store_->size());
+      store_->emplace_back();
     }
+    const PairForce pf = CL::compute(c_.params, (*store_)[h], g_, dt_, dissipation_);
     force_ += pf.force;
     couple_ += pf.couple;
     return pf.force;
@@ -217,8 +221,8 @@ class Simulation::PairWalk {
   ContactSet<CL>& c_;
   const double dt_;
   std::vector<Failure>& fails_;
-  HistoryStore<typename CL::State>* store_ = nullptr;  // the block's contact histories
-  PairGeometry& g_;                                    // the pair in hand's
+  std::vector<typename CL::State>* store_ = nullptr;  // the block's contact histories
+  PairGeometry& g_;                                   // the pair in hand's
   PairDissipation &dissipation_, &joint_dissipation_;
   // The pair in hand.
   std::size_t k_ = 0;
@@ -255,6 +259,13 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
     PairWalk<CL>(*this, c, block_failures_[blk], g, dis, joint_dis)
         .walk(c.pairs.offsets[begin], c.pairs.offsets[end], static_cast<std::uint32_t>(end),
               c.pairs.cross_begin[blk], c.stores[blk]);
+    // New contacts append: once an eighth of the block's states came since it was last in pair
+    // order, it is put back in order.
+    std::vector<typename CL::State>& store = c.stores[blk];
+    if (store.size() > c.packed[blk] + c.packed[blk] / 8 + 32) {
+      repack_history(c.pairs.offsets[begin], c.pairs.offsets[end], c.history, store);
+      c.packed[blk] = static_cast<std::uint32_t>(store.size());
+    }
     block_dis_[blk] = dis;
     block_joint_dis_[blk] = joint_dis;
   });

@@ -33,56 +33,45 @@ struct BondSet {
   std::size_t intact_count() const noexcept { return size() - broken_since_compaction; }
 };
 
-// The contact histories of one particle block of the pair pass (pair_list.hpp). A contact takes an
-// entry at its first touch and frees it when it opens; freed entries are zeroed and reused last
-// in, first out. The pass runs a block on one thread, so the block's entries are taken and freed
-// without locks, in an order fixed by the particle count.
-// A pair without contact history.
+// A contact that has been in touch carries its previous normal (zero before the first touch).
+inline bool has_history(const Vec3& n_old) noexcept {
+  return n_old.x != 0.0 || n_old.y != 0.0 || n_old.z != 0.0;
+}
+
+// A pair without a contact-history entry.
 inline constexpr std::uint32_t kNoHistory = 0xffffffffu;
 
-template <class State>
-struct HistoryStore {
-  std::vector<State> entries;
-  std::vector<std::uint32_t> free;
-
-  std::uint32_t take() {
-    if (!free.empty()) {
-      const std::uint32_t e = free.back();
-      free.pop_back();
-      return e;
-    }
-    entries.emplace_back();
-    return static_cast<std::uint32_t>(entries.size() - 1);
-  }
-  void release(std::uint32_t e) {
-    entries[e] = State{};
-    free.push_back(e);
-  }
-  std::size_t in_use() const noexcept { return entries.size() - free.size(); }
-};
-
-// The contacts of one contact law over the neighbour pairs. Only a pair in touch (or holding
-// history) has a state: a listed pair that does not touch costs a 4-byte index, not a state
-// (a neighbour list holds 1.5-2 times as many pairs as touch). The histories survive
-// neighbour-list rebuilds: the engine merges the old entries into the new sorted list.
+// The contacts of one contact law over the neighbour pairs. Only a pair that has touched since
+// the last neighbour-list rebuild has a state: a listed pair that never touches costs a 4-byte
+// index, not a state (a neighbour list holds 1.5-2 times as many pairs as touch). The states live
+// in one array per particle block of the pair pass (pair_list.hpp), which runs the block on one
+// thread: a pair's first touch appends its entry without a lock, in an order fixed by the
+// particle count. An entry whose contact opened is zeroed and stays the pair's until the next
+// rebuild, which carries over only the histories in force, in pair order (a contact that opens
+// and closes again keeps its place in memory).
 template <class Law>
 struct ContactSet {
   using State = typename Law::State;
   typename Law::Params params;       // particle-particle
   typename Law::Params wall_params;  // particle-wall (wall friction differs)
   PairList pairs;
-  std::vector<std::uint32_t> history;       // per pair: its entry in its block's store, or none
-  std::vector<HistoryStore<State>> stores;  // per particle block of the pair pass
+  std::vector<std::uint32_t> history;      // per pair: its entry in its block's store
+  std::vector<std::vector<State>> stores;  // per particle block of the pair pass
+  std::vector<std::uint32_t> packed;       // per block: its store's size when last in order
   std::vector<Vec3> force;  // each pair's force on its second particle in the last step
 
-  bool has_history(std::size_t k) const noexcept { return history[k] != kNoHistory; }
-  // The state of pair k (which must have history).
+  // The state of pair k (which must have an entry).
   const State& state(std::size_t k) const noexcept {
-    return stores[pairs.first[k] / kParticleBlock].entries[history[k]];
+    return stores[pairs.first[k] / kParticleBlock][history[k]];
+  }
+  // Whether pair k's contact holds history (it was in touch at the last step).
+  bool has_history(std::size_t k) const noexcept {
+    return history[k] != kNoHistory && breccia::has_history(state(k).n_old);
   }
   std::size_t active() const noexcept {
     std::size_t n = 0;
-    for (const auto& s : stores) n += s.in_use();
+    for (const auto& store : stores)
+      for (const State& st : store) n += breccia::has_history(st.n_old) ? 1 : 0;
     return n;
   }
 };
