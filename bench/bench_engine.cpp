@@ -82,17 +82,7 @@ ParticleStore random_cylinder(long target) {
 // so does the benchmark, for the lattice blocks too (their lattice order puts a grain's upper
 // neighbours a layer away in memory).
 ParticleStore sorted_as_a_run_does(const ParticleStore& ps) {
-  GeometryData g;
-  g.dimension = ps.dimension();
-  g.thickness = ps.thickness();
-  for (std::size_t i = 0; i < ps.size(); ++i)
-    g.particles.push_back({.tag = ps.tag[i],
-                           .position = ps.pos_rad[i].x,
-                           .radius = ps.pos_rad[i].r,
-                           .density = ps.density[i],
-                           .velocity = ps.vel[i],
-                           .angular_velocity = ps.angvel[i],
-                           .motion = ps.motion[i]});
+  GeometryData g = GeometryData::of_store(ps);
   sort_spatially(g);
   return g.make_store();
 }

@@ -230,13 +230,7 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info
                                      s.radius, s.density, s.thickness)
                          : fcc_block(static_cast<int>(s.cells[0]), static_cast<int>(s.cells[1]),
                                      static_cast<int>(s.cells[2]), s.radius, s.density);
-    g.dimension = ps.dimension();
-    g.thickness = ps.thickness();
-    for (std::size_t i = 0; i < ps.size(); ++i)
-      g.particles.push_back({.tag = ps.tag[i],
-                             .position = ps.pos_rad[i].x,
-                             .radius = ps.pos_rad[i].r,
-                             .density = ps.density[i]});
+    g = GeometryData::of_store(ps);  // at rest and free, as the lattice makes them
     report["lattice"] = s.dimension == 2 ? "hexagonal" : "fcc";
     check_geometry(g, s.source + " (sample.source = \"lattice\")", max_n);
   }

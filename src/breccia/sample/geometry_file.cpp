@@ -195,6 +195,22 @@ GeometryData read_geometry(const std::string& path, std::uint64_t max_particles)
   return parse_geometry(read_text_file(path, "the geometry file"), path, max_particles);
 }
 
+GeometryData GeometryData::of_store(const ParticleStore& ps) {
+  GeometryData g;
+  g.dimension = ps.dimension();
+  g.thickness = ps.thickness();
+  g.particles.reserve(ps.size());
+  for (std::size_t i = 0; i < ps.size(); ++i)
+    g.particles.push_back({.tag = ps.tag[i],
+                           .position = ps.pos_rad[i].x,
+                           .radius = ps.pos_rad[i].r,
+                           .density = ps.density[i],
+                           .velocity = ps.vel[i],
+                           .angular_velocity = ps.angvel[i],
+                           .motion = ps.motion[i]});
+  return g;
+}
+
 ParticleStore GeometryData::make_store(PlanarBody body) const {
   ParticleStore s(dimension, thickness, body);
   for (const ParticleSpec& p : particles) s.add(p);

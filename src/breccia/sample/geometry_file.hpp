@@ -40,6 +40,8 @@ struct GeometryData {
 
   // Builds the particle store; throws InputError on duplicate tags and bad values.
   ParticleStore make_store(PlanarBody body = PlanarBody::Disk) const;
+  // The particles of a store (tags, positions, radii, densities, velocities, motion), no bonds.
+  static GeometryData of_store(const ParticleStore& ps);
 };
 
 // Reads a geometry file. Throws InputError naming the file, line, key, value and what is allowed,
