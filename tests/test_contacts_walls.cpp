@@ -270,6 +270,12 @@ TEST(Wall, RampFollowsTheCosineProfile) {
   EXPECT_NEAR(r.factor(2.0), 0.5, 1e-15);
   EXPECT_NEAR(r.factor(1.5), 0.5 * (1 - std::cos(std::numbers::pi / 4)), 1e-15);
   EXPECT_EQ(r.factor(3.5), 1.0);
+  // Slowing down: from 4 times the target to the target, through the same cosine.
+  const VelocityRamp down{1.0, 2.0, 4.0};
+  EXPECT_EQ(down.factor(0.5), 4.0);
+  EXPECT_NEAR(down.factor(2.0), 2.5, 1e-15);
+  EXPECT_NEAR(down.factor(1.5), 4.0 - 3.0 * 0.5 * (1 - std::cos(std::numbers::pi / 4)), 1e-15);
+  EXPECT_EQ(down.factor(3.5), 1.0);
 }
 
 TEST(HertzMindlin, PlanarSpheresReproduceTheConfined3DRun) {

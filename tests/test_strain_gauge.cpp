@@ -10,6 +10,7 @@
 // A column has no lateral strain, so Poisson's ratio reads zero.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -174,4 +175,117 @@ TEST(PlatenCompression, ADipWhileThePlatensRampUpDoesNotStopTheTest) {
   EXPECT_FALSE(test.finished(s, 1)) << "the platens are still ramping up";
   s.strain = 1.1 * ramp_strain;
   EXPECT_TRUE(test.finished(s, 1)) << "at full speed a drop after a broken bond stops the test";
+}
+
+namespace {
+
+// A two-speed loading of a block of weak bonds at rest: the platens' compression breaks none, so
+// the cracks come only from two corner grains kicked sideways at steps 100 and 200, after the
+// ramp-up. Checks the platens' speed at every step until they have slowed down
+// and finished their second ramp.
+void expect_two_speed_loading(double slow_down_broken_fraction, std::size_t cracks_to_slow,
+                              int kick_that_slows) {
+  Simulation sim = bonded_block(false, 1e5);
+  PlatenCompressionSettings st;
+  st.platen_speed = 0.01;
+  st.elastic_speed = 0.04;
+  st.ramp_time = 1e-6;  // about 30 steps
+  st.slow_down_broken_fraction = slow_down_broken_fraction;
+  PlatenCompression test(sim, st, LateralBoundary::Prism, "ucs");
+  const std::size_t bottom = 0;  // the platens are the first walls
+  sim.initialise();
+  test.start(sim, 1000.0);
+  const std::size_t before = sim.cracks().size();
+  double slowed_at = -1.0;
+  int at_elastic_speed = 0;  // steps at full elastic speed before the slow-down
+  for (int k = 0; k < 2000; ++k) {
+    if (k == 100) sim.particles_mut().vel[0] = {-0.05, -0.05, 0};  // corner (0, 0, 0)
+    if (k == 200) sim.particles_mut().vel[53] = {0.05, 0.05, 0};   // corner (2, 2, 5)
+    const std::size_t broken = sim.cracks().size() - before;
+    test.control(sim);
+    const Wall& w = sim.walls()[bottom];
+    if (slowed_at < 0.0) {
+      ASSERT_EQ(test.slowed_down(), broken >= cracks_to_slow) << "step " << k << ", " << broken;
+      if (test.slowed_down()) {
+        slowed_at = sim.time();
+        EXPECT_GT(k, kick_that_slows);
+        EXPECT_LT(k, kick_that_slows + 50);
+        EXPECT_NEAR(test.slow_down_strain(), test.measure(sim).strain, 1e-15);
+        // The ramp starts at the elastic speed (from = 4 on the new target) and ends at v.
+        EXPECT_EQ(w.ramp.start, sim.time());
+        EXPECT_EQ(w.ramp.from, st.elastic_speed / st.platen_speed);
+        EXPECT_EQ(w.target_velocity.z, st.platen_speed);
+        EXPECT_NEAR(w.velocity.z, st.elastic_speed, 1e-15);
+      } else if (sim.time() > st.ramp_time) {
+        EXPECT_NEAR(w.velocity.z, st.elastic_speed, 1e-15) << "at full elastic speed";
+        ++at_elastic_speed;
+      }
+    } else if (sim.time() > slowed_at + st.ramp_time) {
+      EXPECT_NEAR(w.velocity.z, st.platen_speed, 1e-15);
+      EXPECT_GT(at_elastic_speed, 50);
+      return;
+    }
+    sim.step();
+  }
+  FAIL() << "the platens never slowed down: " << sim.cracks().size() - before << " cracks";
+}
+
+}  // namespace
+
+TEST(PlatenCompression, TwoSpeedLoadingSlowsThePlatensAtTheFirstCrack) {
+  // The platens run at elastic_speed until a bond breaks during axial loading, then slow to
+  // platen_speed through a cosine ramp as long as the first.
+  expect_two_speed_loading(0.0, 1, 100);
+}
+
+TEST(PlatenCompression, TwoSpeedLoadingWaitsForItsShareOfBrokenBonds) {
+  // 117 bonds (3 x 3 x 5 along z, 2 x 3 x 6 along x and along y): 10 % of them round up to 12
+  // cracks. The first kicked corner breaks 8 (its 3 bonds and, as it swings, 5 more), the second
+  // as many again, which completes the 12.
+  expect_two_speed_loading(0.1, 12, 200);
+}
+
+TEST(PlatenCompression, TwoSpeedLoadingIsRefusedSlowerInTheElasticPhase) {
+  UcsTest::Params p;
+  p.platen_speed = 0.02;
+  p.elastic_speed = 0.01;
+  EXPECT_THROW(UcsTest::check(p, {}, "e.toml"), InputError);
+  p.elastic_speed = 0.0;
+  EXPECT_NO_THROW(UcsTest::check(p, {}, "e.toml"));
+  p.elastic_speed = 0.02;
+  EXPECT_NO_THROW(UcsTest::check(p, {}, "e.toml"));
+}
+
+TEST(PlatenCompression, TheLoadingsOwnMotionIsNoFluctuation) {
+  // Grains that follow a homogeneous compression between the platens (axial velocity linear
+  // from the bottom platen's to the top's) carry kinetic energy that the loading prescribes;
+  // the quasi-static check counts only the rest: here a common sideways drift u, 1/2 M u^2, and
+  // the rotational energy of the ledger.
+  Simulation sim = bonded_block(false, 0.0);
+  PlatenCompressionSettings st;
+  st.platen_speed = 0.02;
+  st.ramp_time = 1e-7;
+  PlatenCompression test(sim, st, LateralBoundary::Prism, "ucs");
+  sim.initialise();
+  test.start(sim, 1000.0);
+  for (int k = 0; k < 50; ++k) {
+    test.control(sim);
+    sim.step();
+  }
+  const Wall& b = sim.walls()[0];
+  const Wall& t = sim.walls()[1];
+  ASSERT_EQ(b.velocity.z, st.platen_speed);
+  ASSERT_EQ(t.velocity.z, -st.platen_speed);
+  const double rate = (t.velocity.z - b.velocity.z) / (t.point.z - b.point.z);
+  const double u = 0.003;
+  ParticleStore& p = sim.particles_mut();
+  double mass = 0.0, kinetic = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.vel[i] = {u, 0.0, b.velocity.z + rate * (p.pos_rad[i].x.z - b.point.z)};
+    mass += p.mass[i];
+    kinetic += 0.5 * p.mass[i] * dot(p.vel[i], p.vel[i]);
+  }
+  const double expected = 0.5 * mass * u * u + sim.ledger().kinetic_rotational;
+  EXPECT_NEAR(test.fluctuating_kinetic_energy(sim), expected, 1e-12 * expected);
+  EXPECT_GT(kinetic, 10.0 * expected) << "the loading's own motion must dominate the set-up";
 }

@@ -288,8 +288,15 @@ def summary_rows(folder, summary):
         rows.append(("sample", sample_text(spec, summary)))
     if manifest and (manifest.get("material") or {}).get("record"):
         rows.append(("calibration", calibration_text(manifest["material"])))
+    elastic = ""
+    if summary.get("elastic_speed_m_per_s"):
+        where = summary.get("slow_down_axial_strain")
+        elastic = (f"; {fmt(summary['elastic_speed_m_per_s'], '{:g}')} m/s before the first cracks, "
+                   + (f"slowed down from {fmt(100 * where, '{:.3g}')} % axial strain"
+                      if where is not None else "never slowed down"))
     rows.append(("loading", f"platens at {fmt(summary.get('platen_speed_m_per_s'), '{:g}')} m/s "
-                            f"(strain rate {fmt(summary.get('strain_rate_per_s'), '{:.3g}')} /s), "
+                            f"(strain rate {fmt(summary.get('strain_rate_per_s'), '{:.3g}')} /s"
+                            f"{elastic}), "
                             f"density scaling {fmt(summary.get('density_scaling'), '{:g}')}, "
                             f"time step {fmt(summary.get('time_step_s'), '{:.3g}')} s, "
                             f"{summary.get('steps')} steps"))

@@ -16,14 +16,17 @@ namespace breccia {
 
 enum class WallShape : std::uint8_t { Plane, Cylinder, Sphere, Rod };
 
-// Cosine velocity ramp from 0 to 1 over `duration` seconds starting at `start` (§6.1).
+// Cosine velocity ramp of the factor on the target velocity, from `from` to 1 over `duration`
+// seconds starting at `start` (§6.1): from 0 as a test starts, or from above 1 when platens slow
+// down to their target speed.
 struct VelocityRamp {
   double start = 0.0;
   double duration = 0.0;
+  double from = 0.0;
   double factor(double t) const noexcept {
-    if (t <= start) return duration > 0.0 ? 0.0 : 1.0;
+    if (t <= start) return duration > 0.0 ? from : 1.0;
     if (duration <= 0.0 || t >= start + duration) return 1.0;
-    return 0.5 * (1.0 - std::cos(std::numbers::pi * (t - start) / duration));
+    return from + (1.0 - from) * 0.5 * (1.0 - std::cos(std::numbers::pi * (t - start) / duration));
   }
 };
 

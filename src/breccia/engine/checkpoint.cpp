@@ -51,7 +51,7 @@ void transfer_set(Archive& a, BondSet<Law>& b) {
 
 // Walls hold a name (not plain data): transferred field by field. The size check fails to
 // compile when a field is added, as a reminder to add it here.
-static_assert(sizeof(Wall) == 344, "Wall changed: update the checkpoint (engine/checkpoint.cpp)");
+static_assert(sizeof(Wall) == 352, "Wall changed: update the checkpoint (engine/checkpoint.cpp)");
 
 template <class Archive>
 void transfer_wall(Archive& a, Wall& w) {

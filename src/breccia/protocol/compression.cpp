@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <numeric>
 
@@ -207,6 +208,43 @@ void PlatenCompression::drive_lateral(Simulation& sim) {
 
 void PlatenCompression::control(Simulation& sim) {
   if (confined()) drive_lateral(sim);
+  if (!slowed_ && sim.cracks().size() - broken_at_start_ >= slow_down_cracks_) slow_down(sim);
+}
+
+void PlatenCompression::slow_down(Simulation& sim) {
+  slowed_ = true;
+  slow_down_strain_ = (h0_ - height(sim)) / h0_;
+  auto& W = sim.walls();
+  Vec3 up{};
+  up[axis_] = 1.0;
+  for (auto [w, sign] : {std::pair{bottom_, 1.0}, std::pair{top_, -1.0}}) {
+    W[w].target_velocity = up * (sign * st_.platen_speed);
+    W[w].ramp = {sim.time(), ramp_, st_.elastic_speed / st_.platen_speed};
+    W[w].update_motion(sim.time());
+  }
+}
+
+double PlatenCompression::fluctuating_kinetic_energy(const Simulation& sim) const {
+  const Wall& b = sim.walls()[bottom_];
+  const Wall& t = sim.walls()[top_];
+  const double z0 = b.point[axis_], vb = b.velocity[axis_];
+  const double rate = (t.velocity[axis_] - vb) / (t.point[axis_] - z0);
+  const ParticleStore& p = sim.particles();
+  double e = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    Vec3 d = p.vel[i];
+    d[axis_] -= vb + rate * (p.pos_rad[i].x[axis_] - z0);
+    e += 0.5 * p.mass[i] * dot(d, d);
+  }
+  return e + sim.ledger().kinetic_rotational;
+}
+
+void PlatenCompression::summarise_curve(const analysis::CompressionResult&,
+                                        nlohmann::json& out) const {
+  if (!(st_.elastic_speed > st_.platen_speed)) return;
+  out["elastic_speed_m_per_s"] = st_.elastic_speed;
+  out["slow_down_axial_strain"] =
+      slowed_ ? nlohmann::json(slow_down_strain_) : nlohmann::json(nullptr);
 }
 
 std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
@@ -259,9 +297,12 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
   up[axis_] = 1.0;
   double ramp = st_.ramp_time;
   if (ramp <= 0.0) ramp = std::max(10.0 * h0_ / bar_wave_speed, 1000.0 * sim.time_step());
+  ramp_ = ramp;
+  slowed_ = !(st_.elastic_speed > st_.platen_speed);
+  const double speed = slowed_ ? st_.platen_speed : st_.elastic_speed;
   for (auto [w, sign] : {std::pair{bottom_, 1.0}, std::pair{top_, -1.0}}) {
     W[w].controlled = false;
-    W[w].target_velocity = up * (sign * st_.platen_speed);
+    W[w].target_velocity = up * (sign * speed);
     W[w].ramp = {sim.time(), ramp};
     W[w].update_motion(sim.time());
   }
@@ -271,7 +312,10 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
   // from consolidation then, and a membrane-confined granite broke 3 bonds and stopped at a
   // "peak" of 0.01 MPa. The cosine ramp closes the platens by platen_speed x ramp in all.
   broken_at_start_ = sim.cracks().size();
-  arm_strain_ = st_.platen_speed * ramp / h0_;
+  arm_strain_ = speed * ramp / h0_;
+  slow_down_cracks_ = std::max<std::size_t>(
+      1, static_cast<std::size_t>(
+             std::ceil(st_.slow_down_broken_fraction * static_cast<double>(sim.intact_bonds()))));
   return sim.step_count() - step0;
 }
 
@@ -365,6 +409,10 @@ void PlatenCompression::transfer(Archive& a) {
   a.value(peak_);
   a.value(broken_at_start_);
   a.value(arm_strain_);
+  a.value(ramp_);
+  a.value(slow_down_cracks_);
+  a.value(slowed_);
+  a.value(slow_down_strain_);
   a.value(k_min_);
   a.value(consolidated_);
   a.value(servo_);
@@ -405,6 +453,8 @@ std::unique_ptr<Protocol> UcsTest::create(Simulation& sim, const Params& p, cons
   st.ramp_time = p.ramp_time;
   st.max_strain = p.max_strain;
   st.stop_fraction = p.stop_fraction;
+  st.elastic_speed = p.elastic_speed;
+  st.slow_down_broken_fraction = p.slow_down_broken_fraction;
   return std::make_unique<PlatenCompression>(
       sim, st, s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism, "ucs");
 }

@@ -9,6 +9,7 @@
 // Stresses and strains follow docs/analysis.md §1.1, referred to the start of axial loading.
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,6 +30,11 @@ enum class LateralBoundary { Prism, Cylinder, Membrane };
 struct PlatenCompressionSettings {
   double platen_speed = 0.05;  // m/s, each platen
   double ramp_time = 0.0;      // s; 0 = automatic (10 bar-wave transits, at least 1000 steps)
+  // > platen_speed: each platen's speed from the start of axial loading until the broken bonds
+  // reach slow_down_broken_fraction of those intact then (0: the first crack); the platens then
+  // slow to platen_speed through a cosine ramp of the same duration as the first.
+  double elastic_speed = 0.0;              // m/s; 0 = platen_speed throughout
+  double slow_down_broken_fraction = 0.0;  // of the intact bonds when axial loading starts
   double max_strain = 0.02;
   double stop_fraction = 0.5;  // stop after the peak once stress < stop_fraction x peak
   double platen_friction = 0.0;
@@ -71,6 +77,13 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   double max_strain() const noexcept override { return st_.max_strain; }
   double platen_speed() const noexcept override { return st_.platen_speed; }
   std::string lateral_boundary() const override;
+  // Translational kinetic energy relative to the velocity field of a homogeneous compression
+  // (the axial velocity interpolated linearly between the platens), plus all rotational energy.
+  double fluctuating_kinetic_energy(const Simulation& sim) const override;
+  // The elastic-phase speed and where the platens began to slow down, when the test used one.
+  void summarise_curve(const analysis::CompressionResult&, nlohmann::json& out) const override;
+  bool slowed_down() const noexcept { return slowed_; }
+  double slow_down_strain() const noexcept { return slow_down_strain_; }
   double height0() const noexcept { return h0_; }
   double area() const noexcept { return area0_; }
   double peak_stress() const noexcept { return peak_; }
@@ -103,6 +116,8 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   void place_gauges(const Simulation& sim);
   double gauge_length(const Simulation& sim) const;
   void drive_lateral(Simulation& sim);
+  // Two-speed loading: ramps the platens from elastic_speed down to platen_speed.
+  void slow_down(Simulation& sim);
   double lateral_stress(const Simulation& sim) const;
 
   PlatenCompressionSettings st_;
@@ -125,6 +140,12 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   double peak_ = 0.0, k_min_ = 0.0;
   std::size_t broken_at_start_ = 0;  // cracks when axial loading began
   double arm_strain_ = 0.0;          // axial strain when the platens reach full speed
+  // Two-speed loading: the ramp's duration, the cracks that slow the platens (counted from
+  // broken_at_start_), whether they have, and the axial strain where they began to (NaN: not).
+  double ramp_ = 0.0;
+  std::size_t slow_down_cracks_ = 0;
+  bool slowed_ = true;
+  double slow_down_strain_ = std::numeric_limits<double>::quiet_NaN();
   bool consolidated_ = true;
   StressServo servo_;
   // The integral terms of the 2D side walls' servo (StressServo::drive_pi), a velocity each.
@@ -139,9 +160,9 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
 
 // Fields every compression test shares (platen speed, ramp, stop rules), then `extra`.
 template <class P, std::size_t N = 0>
-constexpr std::array<ParamField<P>, 4 + N> compression_fields(
+constexpr std::array<ParamField<P>, 6 + N> compression_fields(
     const std::array<ParamField<P>, N>& extra = {}) {
-  std::array<ParamField<P>, 4 + N> f{{
+  std::array<ParamField<P>, 6 + N> f{{
       {"platen_speed", "m/s", &P::platen_speed, 0, kInf, false, true,
        "speed of each platen toward the other"},
       {"ramp_time", "s", &P::ramp_time, 0, kInf, true, true,
@@ -150,8 +171,15 @@ constexpr std::array<ParamField<P>, 4 + N> compression_fields(
       {"stop_fraction", "-", &P::stop_fraction, 0, 1, true, false,
        "after the peak, stop once the deviatoric stress is below this fraction of it (0: run "
        "to max_strain)"},
+      {"elastic_speed", "m/s", &P::elastic_speed, 0, kInf, true, true,
+       "speed of each platen until the sample cracks (at least platen_speed; then the platens "
+       "slow to platen_speed through a cosine ramp as long as the first); 0 = platen_speed "
+       "throughout"},
+      {"slow_down_broken_fraction", "-", &P::slow_down_broken_fraction, 0, 1, true, false,
+       "with elastic_speed: the platens slow down once this fraction of the bonds has broken "
+       "during axial loading (0: at the first broken bond)"},
   }};
-  for (std::size_t k = 0; k < N; ++k) f[4 + k] = extra[k];
+  for (std::size_t k = 0; k < N; ++k) f[6 + k] = extra[k];
   return f;
 }
 
@@ -171,12 +199,23 @@ constexpr std::array<ParamField<P>, 2> confining_fields(std::string_view walls) 
 // and dimension it is the test to run (`runs_at`); spec/experiment.cpp finds them in the registry.
 struct PlatenLoading {
   double platen_speed = 0.0, ramp_time = 0.0, max_strain = 0.0, stop_fraction = 0.0;
+  double elastic_speed = 0.0, slow_down_broken_fraction = 0.0;
   double confining_stress = 0.0, servo_relaxation = 0.5;
 };
 
+// A two-speed loading must not be slower in its elastic phase than toward the peak.
+template <class P>
+void check_platen_speeds(const P& p, const std::string& where) {
+  if (p.elastic_speed > 0.0 && p.elastic_speed < p.platen_speed)
+    throw InputError(
+        where, "test.elastic_speed", num(p.elastic_speed),
+        "allowed: 0 (off) or at least test.platen_speed (" + num(p.platen_speed) + " m/s)");
+}
+
 template <class P>
 PlatenLoading platen_loading(const P& p) {
-  PlatenLoading l{p.platen_speed, p.ramp_time, p.max_strain, p.stop_fraction};
+  PlatenLoading l{p.platen_speed,  p.ramp_time,     p.max_strain,
+                  p.stop_fraction, p.elastic_speed, p.slow_down_broken_fraction};
   if constexpr (requires { p.confining_stress; }) {
     l.confining_stress = p.confining_stress;
     l.servo_relaxation = p.servo_relaxation;
@@ -190,6 +229,8 @@ void set_platen_loading(P& p, const PlatenLoading& l) {
   p.ramp_time = l.ramp_time;
   p.max_strain = l.max_strain;
   p.stop_fraction = l.stop_fraction;
+  p.elastic_speed = l.elastic_speed;
+  p.slow_down_broken_fraction = l.slow_down_broken_fraction;
   if constexpr (requires { p.confining_stress; }) {
     p.confining_stress = l.confining_stress;
     p.servo_relaxation = l.servo_relaxation;
@@ -204,11 +245,14 @@ struct UcsTest {
       "§1), 3D or 2D; the unconfined compressive strength and the ISRM moduli.";
   struct Params {
     double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
+    double elastic_speed = 0.0, slow_down_broken_fraction = 0.0;
   };
-  static constexpr std::array<ParamField<Params>, 4> fields() {
+  static constexpr std::array<ParamField<Params>, 6> fields() {
     return compression_fields<Params>();
   }
-  static void check(const Params&, const SampleInfo&, const std::string&) {}
+  static void check(const Params& p, const SampleInfo&, const std::string& where) {
+    check_platen_speeds(p, where);
+  }
   static PlatenLoading loading(const Params& p) { return platen_loading(p); }
   static void set_loading(Params& p, const PlatenLoading& l) { set_platen_loading(p, l); }
   static bool runs_at(double sigma3, int) { return !(sigma3 > 0.0); }  // unconfined
@@ -239,6 +283,7 @@ struct ConfinedCompressionTest {
   struct Params {
     double platen_speed = 0.02, ramp_time = 0.0;
     double max_strain = Dim == 2 ? 0.103 : 0.03, stop_fraction = Dim == 2 ? 0.0 : 0.6;
+    double elastic_speed = 0.0, slow_down_broken_fraction = 0.0;
     double confining_stress = 5e6, servo_relaxation = 0.5;
     bool membrane = Dim == 2;  // 2D: flexible membranes (true) or servo walls
   };
@@ -259,7 +304,8 @@ struct ConfinedCompressionTest {
               "to sigma_3 (servo_relaxation)"}});
     }
   }
-  static void check(const Params&, const SampleInfo& s, const std::string& where) {
+  static void check(const Params& p, const SampleInfo& s, const std::string& where) {
+    check_platen_speeds(p, where);
     if (s.dimension != Dim)
       throw InputError(where, "test.kind", "\"" + std::string(name) + "\"",
                        Dim == 3 ? "a triaxial test needs a 3D sample; 2D samples take \"biaxial\""
@@ -283,6 +329,8 @@ struct ConfinedCompressionTest {
     s.ramp_time = p.ramp_time;
     s.max_strain = p.max_strain;
     s.stop_fraction = p.stop_fraction;
+    s.elastic_speed = p.elastic_speed;
+    s.slow_down_broken_fraction = p.slow_down_broken_fraction;
     s.confining_stress = p.confining_stress;
     s.servo_relaxation = p.servo_relaxation;
     return s;

@@ -139,6 +139,11 @@ class StressStrainTest {
   virtual double max_strain() const noexcept = 0;        // where the test stops at the latest
   virtual double platen_speed() const noexcept = 0;      // m/s, each platen
   virtual std::string lateral_boundary() const = 0;      // "none", "walls", "membranes", ...
+  // The grains' kinetic energy beyond the motion the loading prescribes, which the quasi-static
+  // check weighs against the stored strain energy (docs/physics.md §6.1); by default all of it.
+  virtual double fluctuating_kinetic_energy(const Simulation& sim) const {
+    return sim.ledger().kinetic();
+  }
   // What the test adds to summary.json from its curve's analysis (the Brazilian test reads its
   // peak as the tensile strength); most add nothing.
   virtual void summarise_curve(const analysis::CompressionResult&, nlohmann::json&) const {}

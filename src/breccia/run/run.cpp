@@ -193,7 +193,9 @@ void record_row(Session& ss, const AxialState& a) {
   const double fbar = 0.5 * (a.force_bottom + a.force_top);
   const double stored = sim.ledger().bond.total() + sim.ledger().contact;
   L.imbalance.push_back(fbar > 0.0 ? std::abs(a.force_top - a.force_bottom) / fbar : 0.0);
-  L.ke_ratio.push_back(stored > 0.0 ? sim.ledger().kinetic() / stored : 0.0);
+  const StressStrainTest* curve = ss.test->stress_strain();
+  const double kinetic = curve ? curve->fluctuating_kinetic_energy(sim) : sim.ledger().kinetic();
+  L.ke_ratio.push_back(stored > 0.0 ? kinetic / stored : 0.0);
   const double sigma3 = confining_stress(*ss.test);
   if (sigma3 > 0.0) L.confine_err.push_back(std::abs(a.confining_stress - sigma3) / sigma3);
 }

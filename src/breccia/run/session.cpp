@@ -22,11 +22,11 @@ constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // recorders in registry order, the next snapshot's strain with the snapshots; 14: the contact law
 // and the bond and joint sets by law name; 15: bond states without their section (derived from
 // the radius and the run's geometry, which the laws' parameters carry); 16: one force per pair
-// instead of a result slot (the pair pass sums loads per particle block), no wall-load arrays. A
-// new law, lab test or
-// recorder needs no new number: laws and tests are found by name, and each recorder checks its
-// own label.
-constexpr std::uint32_t kCheckpointFormat = 16;
+// instead of a result slot (the pair pass sums loads per particle block), no wall-load arrays; 17:
+// a wall's velocity ramp starts from a factor (platens slowing down), and platen compression
+// keeps its elastic-phase speed. A new law, lab test or recorder needs no new number: laws and
+// tests are found by name, and each recorder checks its own label.
+constexpr std::uint32_t kCheckpointFormat = 17;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
