@@ -358,6 +358,7 @@ Built assemble(const ExperimentSpec& s, const std::function<void(const std::stri
   for (ParticleSpec& q : g.particles) q.density *= s.density_scaling;
   sort_spatially(g);
   ParticleStore ps = g.make_store(s.grain_body());
+  decltype(g.particles)().swap(g.particles);  // the store holds them now
   EngineConfig cfg = s.engine;
   cfg.gravity = s.dimension == 2 ? Vec3{0, -s.gravity, 0} : Vec3{0, 0, -s.gravity};
   Simulation sim(std::move(ps), cfg, contact_model(s));
@@ -368,6 +369,7 @@ Built assemble(const ExperimentSpec& s, const std::function<void(const std::stri
     else
       sim.bond_touching_pairs<Law>(s.bond_gap_tolerance);
   });
+  decltype(g.bonds)().swap(g.bonds);  // the bond sets hold them now
   add_joints(s, sim);
   std::unique_ptr<Protocol> protocol;
   visit_lab_test(s.test, [&]<class T>(const typename T::Params& p) {

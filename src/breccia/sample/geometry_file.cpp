@@ -3,11 +3,13 @@
 #include <fmt/format.h>
 #include <fmt/os.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/text_file.hpp"
@@ -22,24 +24,19 @@ struct Line {
   std::vector<std::string> tokens;
 };
 
+// Reads the text one line at a time: a million-grain file holds tens of millions of numbers,
+// and keeping each as a token string would take several times the file's size.
 class Reader {
  public:
-  Reader(const std::string& text, std::string source) : source_(std::move(source)) {
-    std::istringstream in(text);
-    std::string raw;
-    std::size_t n = 0;
-    while (std::getline(in, raw)) {
-      ++n;
-      if (const auto hash = raw.find('#'); hash != std::string::npos) raw.resize(hash);
-      std::istringstream ls(raw);
-      Line line{n, {}};
-      for (std::string tok; ls >> tok;) line.tokens.push_back(tok);
-      if (!line.tokens.empty()) lines_.push_back(std::move(line));
-    }
+  Reader(const std::string& text, std::string source) : text_(text), source_(std::move(source)) {
+    advance();
   }
-  bool done() const { return pos_ >= lines_.size(); }
-  const Line& peek() const { return lines_[pos_]; }
-  const Line& next() { return lines_[pos_++]; }
+  bool done() const { return !has_line_; }
+  Line next() {
+    Line l = std::move(line_);
+    advance();
+    return l;
+  }
   std::string where(const Line& l) const { return source_ + ":" + std::to_string(l.number); }
   std::string where_end() const { return source_ + ": end of file"; }
 
@@ -61,9 +58,37 @@ class Reader {
   }
 
  private:
+  // Moves to the next line with a token (comments after '#' and blank lines are skipped).
+  void advance() {
+    has_line_ = false;
+    line_ = Line{};
+    while (pos_ < text_.size()) {
+      std::size_t end = text_.find('\n', pos_);
+      if (end == std::string::npos) end = text_.size();
+      std::string_view raw(text_.data() + pos_, end - pos_);
+      pos_ = end + 1;
+      ++number_;
+      if (const auto hash = raw.find('#'); hash != std::string_view::npos)
+        raw = raw.substr(0, hash);
+      constexpr std::string_view kSpace = " \t\r\v\f";
+      for (std::size_t b = raw.find_first_not_of(kSpace); b != std::string_view::npos;) {
+        const std::size_t e = std::min(raw.find_first_of(kSpace, b), raw.size());
+        line_.tokens.emplace_back(raw.substr(b, e - b));
+        b = raw.find_first_not_of(kSpace, e);
+      }
+      if (!line_.tokens.empty()) {
+        line_.number = number_;
+        has_line_ = true;
+        return;
+      }
+    }
+  }
+
+  const std::string& text_;
   std::string source_;
-  std::vector<Line> lines_;
-  std::size_t pos_ = 0;
+  std::size_t pos_ = 0, number_ = 0;
+  Line line_;
+  bool has_line_ = false;
 };
 
 }  // namespace
