@@ -1,0 +1,67 @@
+#!/bin/bash
+# Seed 001's full-size Tumlin UCS and its geometrically similar smaller cylinders (run by hand,
+# not by CI; README.md has the figures). Each step can be run alone:
+#
+#   validation/tumlin-full-size/run.sh pack  SCALE        # pack and bond the cylinder (SCALE = 1: 75 mm tall)
+#   validation/tumlin-full-size/run.sh run   SCALE LOADING [--stop-at-step N]
+#   validation/tumlin-full-size/run.sh resume RUN_FOLDER  [--stop-at-step N]
+#   validation/tumlin-full-size/run.sh table LABEL=RUN_FOLDER[,TIME_LOG] ...
+#
+# SCALE shrinks the cylinder (0.25: 9.4 x 18.75 mm, about 18,000 grains; 0.5: 145,000; 1: the
+# seed's 1.16 million) with the same grains, so the steps a loading needs grow with SCALE.
+# LOADING is "calibrated" (the preset's: platens at 0.03 m/s, safety factor 0.3) or "fast"
+# (0.24 m/s until 0.1 % of the bonds have broken, then 0.06 m/s; safety factor 0.6).
+# Output goes to runs/tumlin/ (samples, run folders, and `/usr/bin/time -v` logs beside them).
+# BRECCIA (default build-bench/breccia, a native build: cmake -S . -B build-bench -G Ninja
+# -DCMAKE_BUILD_TYPE=Release -DBRECCIA_NATIVE=ON -DBRECCIA_BUILD_TESTS=OFF) and THREADS
+# (default 2) can be set in the environment.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+BRECCIA=${BRECCIA:-build-bench/breccia}
+THREADS=${THREADS:-2}
+EXPERIMENT=validation/tumlin-full-size/tumlin-full-size.toml
+OUT=runs/tumlin
+mkdir -p "$OUT"
+
+geometry() {  # the cylinder's size at a scale
+  python3 -c "import sys; s = float(sys.argv[1]); print(f'--set sample.diameter={0.0375 * s:.6g} --set sample.height={0.075 * s:.6g}')" "$1"
+}
+
+loading() {
+  case "$1" in
+    calibrated) echo "--set test.platen_speed=0.03 --set engine.safety_factor=0.3" ;;
+    fast) echo "--set test.platen_speed=0.06 --set test.elastic_speed=0.24 --set test.slow_down_broken_fraction=1e-3 --set engine.safety_factor=0.6" ;;
+    *) echo "LOADING must be calibrated or fast, not '$1'" >&2; exit 2 ;;
+  esac
+}
+
+case "${1:-}" in
+  pack)
+    scale=$2
+    # shellcheck disable=SC2046
+    /usr/bin/time -v -o "$OUT/pack-$scale.time" "$BRECCIA" generate "$EXPERIMENT" \
+      $(geometry "$scale") --set engine.threads="$THREADS" --output "$OUT/cylinder-$scale.geom"
+    ;;
+  run)
+    scale=$2 load=$3
+    shift 3
+    [ -f "$OUT/cylinder-$scale.geom" ] || { echo "pack the sample first: $0 pack $scale" >&2; exit 2; }
+    # shellcheck disable=SC2046
+    /usr/bin/time -v -o "$OUT/run-$scale-$load.time" "$BRECCIA" run "$EXPERIMENT" --threads "$THREADS" \
+      $(geometry "$scale") $(loading "$load") --set sample.source=file \
+      --set sample.file="$PWD/$OUT/cylinder-$scale.geom" --set output.directory="$OUT/$scale-$load" "$@"
+    ;;
+  resume)
+    folder=$2
+    shift 2
+    /usr/bin/time -v -o "$folder.resume-$(date +%s).time" "$BRECCIA" resume "$folder" --threads "$THREADS" "$@"
+    ;;
+  table)
+    shift
+    /usr/bin/python3 validation/tumlin-full-size/table.py "$@"
+    ;;
+  *)
+    sed -n '2,19p' "$0"
+    exit 2
+    ;;
+esac
