@@ -448,15 +448,9 @@ void PlatenCompression::check_restored(const Simulation& sim, const std::string&
 // --- registered tests ---
 
 std::unique_ptr<Protocol> UcsTest::create(Simulation& sim, const Params& p, const SampleInfo& s) {
-  PlatenCompressionSettings st;
-  st.platen_speed = p.platen_speed;
-  st.ramp_time = p.ramp_time;
-  st.max_strain = p.max_strain;
-  st.stop_fraction = p.stop_fraction;
-  st.elastic_speed = p.elastic_speed;
-  st.slow_down_broken_fraction = p.slow_down_broken_fraction;
   return std::make_unique<PlatenCompression>(
-      sim, st, s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism, "ucs");
+      sim, platen_settings(platen_loading(p)),
+      s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism, "ucs");
 }
 
 }  // namespace breccia

@@ -223,6 +223,20 @@ PlatenLoading platen_loading(const P& p) {
   return l;
 }
 
+// The engine's settings for a test's loading (the other settings keep their defaults).
+inline PlatenCompressionSettings platen_settings(const PlatenLoading& l) {
+  PlatenCompressionSettings s;
+  s.platen_speed = l.platen_speed;
+  s.ramp_time = l.ramp_time;
+  s.max_strain = l.max_strain;
+  s.stop_fraction = l.stop_fraction;
+  s.elastic_speed = l.elastic_speed;
+  s.slow_down_broken_fraction = l.slow_down_broken_fraction;
+  s.confining_stress = l.confining_stress;
+  s.servo_relaxation = l.servo_relaxation;
+  return s;
+}
+
 template <class P>
 void set_platen_loading(P& p, const PlatenLoading& l) {
   p.platen_speed = l.platen_speed;
@@ -315,26 +329,14 @@ struct ConfinedCompressionTest {
   static void set_loading(Params& p, const PlatenLoading& l) { set_platen_loading(p, l); }
   static bool runs_at(double sigma3, int dimension) { return sigma3 > 0.0 && dimension == Dim; }
   static std::unique_ptr<Protocol> create(Simulation& sim, const Params& p, const SampleInfo& s) {
-    return std::make_unique<PlatenCompression>(sim, confined_settings(p), lateral_of(p, s),
-                                               name.data());
+    return std::make_unique<PlatenCompression>(sim, platen_settings(platen_loading(p)),
+                                               lateral_of(p, s), name.data());
   }
   static std::unique_ptr<Protocol> restore(ArchiveReader& a) {
     return PlatenCompression::restore(a);
   }
 
  private:
-  static PlatenCompressionSettings confined_settings(const Params& p) {
-    PlatenCompressionSettings s;
-    s.platen_speed = p.platen_speed;
-    s.ramp_time = p.ramp_time;
-    s.max_strain = p.max_strain;
-    s.stop_fraction = p.stop_fraction;
-    s.elastic_speed = p.elastic_speed;
-    s.slow_down_broken_fraction = p.slow_down_broken_fraction;
-    s.confining_stress = p.confining_stress;
-    s.servo_relaxation = p.servo_relaxation;
-    return s;
-  }
   static LateralBoundary lateral_of(const Params& p, const SampleInfo& s) {
     if (Dim == 2) return p.membrane ? LateralBoundary::Membrane : LateralBoundary::Prism;
     return s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism;
