@@ -25,7 +25,8 @@ Simulation pulled_chain(std::uint64_t seed, double damping) {
             .radius = R,
             .density = 2650});
   const double v = 0.02;
-  ps.motion[0] = ps.motion[4] = Motion::Driven;
+  ps.set_motion(0, Motion::Driven);
+  ps.set_motion(4, Motion::Driven);
   ps.drive_vel[0] = ps.vel[0] = {-v, 0, 0};
   ps.drive_vel[4] = ps.vel[4] = {v, 0, 0};
   EngineConfig cfg;

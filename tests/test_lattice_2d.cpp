@@ -25,7 +25,7 @@ Moduli measure(double rate, double contact_modulus) {
   const std::size_t centre = 4 * 9 + 4;
   const Vec3 xc = ps.pos_rad[centre].x;
   for (std::size_t i = 0; i < ps.size(); ++i) {
-    ps.motion[i] = Motion::Driven;
+    ps.set_motion(i, Motion::Driven);
     ps.drive_vel[i] = {-rate * (ps.pos_rad[i].x.x - xc.x), 0, 0};
     ps.vel[i] = ps.drive_vel[i];
   }

@@ -295,7 +295,9 @@ Simulation Simulation::restore(ArchiveReader& a) {
   };
   if (s.walls_.size() != std::visit([](const auto& v) { return v.size(); }, s.wall_contacts_))
     fail("walls");
-  if (s.x_at_build_.size() != n) fail("per-particle arrays");
+  if (s.x_at_build_.size() != n ||
+      (!s.drive_force_prev_.empty() && s.drive_force_prev_.size() != 2 * n))
+    fail("per-particle arrays");
   std::visit(
       [&](const auto& c) {
         if (c.history.size() != c.pairs.size() || c.force.size() != c.pairs.size() ||

@@ -94,6 +94,8 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
   const std::size_t n = p_.size();
   block_int_.assign(block_count(n), IntegrateBlock{});
   const bool has_user_force = !user_force_.empty();
+  // A particle fixed or driven after the start: its driver force starts from zero.
+  if (p_.has_drives() && drive_force_prev_.size() != 2 * n) drive_force_prev_.resize(2 * n);
   const double dt = dt_;
   const double alpha = cfg_.local_damping;
   const Vec3 gravity = cfg_.gravity;

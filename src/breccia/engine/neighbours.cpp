@@ -3,6 +3,9 @@
 // history carried over.
 #include <algorithm>
 #include <cmath>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <limits>
 #include <numeric>
 
@@ -44,10 +47,34 @@ bool Simulation::needs_rebuild() const noexcept {
   return 2.0 * (d + radius_growth_) > skin_ || d + radius_growth_ + wall > skin_;
 }
 
+namespace {
+
+// Releases a vector's memory (clear() keeps it).
+template <class T>
+void release(std::vector<T>& v) {
+  std::vector<T>().swap(v);
+}
+
+// Returns the heap's free pages to the system: a rebuild frees the old lists and the contact
+// stores of every block, small allocations that glibc would otherwise keep resident.
+void return_free_memory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
+}
+
+}  // namespace
+
 template <class CL>
 void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::apply([&](auto&... set) { (compact_bonds(set), ...); }, bonds_);
+  // What the new list replaces goes before it is built, so that old and new coexist only in the
+  // parts the history merge reads (the peak memory of a run is a rebuild's).
+  release(contacts.force);
+  std::apply([&](auto&... set) { (release(set.bond_of_pair), ...); }, bonds_);
+  std::apply([&](auto&... set) { (release(set.bond_of_pair), ...); }, joints_);
   PairList old_pairs = std::move(contacts.pairs);
+  keep_rows_only(old_pairs);
   std::vector<std::uint32_t> old_history = std::move(contacts.history);
   std::vector<std::vector<typename CL::State>> old_stores = std::move(contacts.stores);
   contacts.pairs = PairList{};
@@ -61,6 +88,9 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
   merge_history(old_pairs, old_history, old_stores, contacts.pairs, contacts.history,
                 contacts.stores, contacts.packed);
+  old_pairs = PairList{};
+  release(old_history);
+  release(old_stores);
   assign_joints();
   contacts.force.assign(contacts.pairs.size(), Vec3{});
   // Wall candidates: particles within the skin of each wall, history carried by particle index.
@@ -89,6 +119,7 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   max_disp2_ = 0.0;
   radius_growth_ = 0.0;
   ++rebuilds_;
+  return_free_memory();
 }
 
 void Simulation::rebuild() {

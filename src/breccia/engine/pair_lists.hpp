@@ -15,10 +15,12 @@ namespace breccia::engine_detail {
 
 // Carries contact history from an old sorted pair list to a new one (same particle indexing):
 // each new particle block's store gets the histories in force of its pairs, in pair order, with
-// room for a quarter more contacts before it grows.
+// room for a quarter more contacts before it grows. Of the old list only the rows (offsets,
+// second) are read; each old block's store is released once merged, so that the two stores never
+// coexist whole.
 template <class State>
 void merge_history(const PairList& old_pairs, const std::vector<std::uint32_t>& old_history,
-                   const std::vector<std::vector<State>>& old_stores, const PairList& new_pairs,
+                   std::vector<std::vector<State>>& old_stores, const PairList& new_pairs,
                    std::vector<std::uint32_t>& new_history,
                    std::vector<std::vector<State>>& new_stores,
                    std::vector<std::uint32_t>& packed) {
@@ -34,7 +36,7 @@ void merge_history(const PairList& old_pairs, const std::vector<std::uint32_t>& 
       store.reserve(16);
       return;
     }
-    const std::vector<State>& old = old_stores[blk];
+    std::vector<State> old = std::move(old_stores[blk]);
     std::size_t count = 0;
     for (const State& st : old) count += has_history(st.n_old) ? 1 : 0;
     store.reserve(count + count / 4 + 16);
@@ -52,6 +54,15 @@ void merge_history(const PairList& old_pairs, const std::vector<std::uint32_t>& 
     }
     packed[blk] = static_cast<std::uint32_t>(store.size());
   });
+}
+
+// Frees what a rebuild no longer needs of an old pair list before the new one is built: all but
+// the rows (offsets, second) that merge_history reads.
+inline void keep_rows_only(PairList& l) {
+  PairList rows;
+  rows.offsets = std::move(l.offsets);
+  rows.second = std::move(l.second);
+  l = std::move(rows);
 }
 
 // Rewrites one block's contact histories in pair order, keeping only those in force: entries

@@ -147,7 +147,7 @@ void Simulation::initialise() {
   std::apply([&](auto&... set) { (install_bonds(set), ...); }, bonds_);
   install_pending_joints();
   const std::size_t n = p_.size();
-  drive_force_prev_.assign(2 * n, {});
+  drive_force_prev_.assign(p_.has_drives() ? 2 * n : 0, {});
   double rsum = 0.0;
   for (const PosRad& q : p_.pos_rad) rsum += q.r;
   skin_ = cfg_.skin > 0.0 ? cfg_.skin : 0.4 * rsum / static_cast<double>(n);

@@ -196,9 +196,8 @@ class Simulation {
   void set_local_damping(double alpha);
 
   // The engine's own arrays per particle besides the store (run/memory_budget.cpp): positions at
-  // the last rebuild, driver loads and the pair list's three offsets.
-  static constexpr std::size_t kScratchBytesPerParticle =
-      3 * sizeof(Vec3) + 3 * sizeof(std::uint32_t);
+  // the last rebuild and the pair list's three offsets (driver loads only with driven grains).
+  static constexpr std::size_t kScratchBytesPerParticle = sizeof(Vec3) + 3 * sizeof(std::uint32_t);
 
   // --- views ---
   const ParticleStore& particles() const noexcept { return p_; }
@@ -384,7 +383,8 @@ class Simulation {
   std::vector<Vec3> x_at_build_;
   std::vector<CrossSlot> cross_slots_;  // the pair pass's cross pairs (pair_list.hpp)
   std::vector<Vec3> user_force_;        // external loads (empty when unused)
-  std::vector<Vec3> drive_force_prev_;  // driver force of driven particles, previous step
+  // Driver force and moment of driven particles in the previous step (empty without drives).
+  std::vector<Vec3> drive_force_prev_;
   double max_disp2_ = 0.0;
   double radius_growth_ = 0.0;  // largest radius increase since the last neighbour rebuild
 

@@ -80,7 +80,7 @@ AbrasionTest::AbrasionTest(Simulation& sim, const Params& p, double density_scal
   const double depth = p.base_depth > 0.0 ? p.base_depth : 2.0 * r_max;
   for (std::uint32_t i = 0; i < ps.size(); ++i)
     if (ps.pos_rad[i].x[axis_] <= lo[axis_] + depth) {
-      ps.motion[i] = Motion::Fixed;
+      ps.set_motion(i, Motion::Fixed);
       base_.push_back(i);
     }
   if (base_.empty() || base_.size() == ps.size())

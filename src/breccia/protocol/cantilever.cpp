@@ -64,7 +64,7 @@ CantileverTest::CantileverTest(Simulation& sim, const Params& p) : p_(p) {
   // The vice holds the grains whose centres lie in the clamped length.
   for (std::uint32_t i = 0; i < ps.size(); ++i)
     if (ps.pos_rad[i].x.x <= root_) {
-      ps.motion[i] = Motion::Fixed;
+      ps.set_motion(i, Motion::Fixed);
       vice_.push_back(i);
     }
   if (vice_.empty())

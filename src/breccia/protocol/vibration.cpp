@@ -59,7 +59,7 @@ VibrationTest::VibrationTest(Simulation& sim, const Params& p) : p_(p) {
   for (std::uint32_t i = 0; i < ps.size(); ++i) {
     const Vec3& x = ps.pos_rad[i].x;
     if (end ? x.x > lo.x + p.grip_length : x[axis_] > lo[axis_] + depth) continue;
-    ps.motion[i] = Motion::Driven;
+    ps.set_motion(i, Motion::Driven);
     ps.drive_vel[i] = {};
     ps.drive_angvel[i] = {};
     face_.push_back(i);

@@ -23,9 +23,12 @@ MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, s
     e.bond_bytes = bond_count * static_cast<double>(BondSet<Law>::kBytesPerBond);
   });
   visit_params<ContactLaws>(s.contact, [&]<class Law>(const typename Law::Params&) {
-    // At a rebuild the old list and history live beside the new ones. Only touching pairs hold a
-    // history; the estimate gives one to every pair (an FCC block's pairs all touch).
-    const double kept = 2.0 * (4.0 * sizeof(std::uint32_t) + sizeof(typename Law::State));
+    // A pair's list entries (first, second, transposed slot), its history index and, while it
+    // touches, a contact state with a quarter to spare; the estimate gives a state to every pair
+    // (an FCC block's pairs all touch). A rebuild frees the forces and bond indexes before it
+    // builds the new list, so the two lists coexist within that room.
+    const double kept =
+        4.0 * sizeof(std::uint32_t) + 1.25 * static_cast<double>(sizeof(typename Law::State));
     // Every pair keeps its force and one bond index; a cross pair (pair_list.hpp) also a slot
     // and its entry in the gather index.
     const double cross = kCrossPairShare * (sizeof(CrossSlot) + sizeof(std::uint32_t));

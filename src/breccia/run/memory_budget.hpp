@@ -18,9 +18,9 @@ struct MemoryEstimate {
 };
 
 // Neighbour pairs per grain assumed by the estimate (half list, skin 0.4 mean radius): above
-// the 4.4 measured on a bonded GenGeo cylinder and 5.8 on an FCC block (bench_engine), so that the
-// estimate errs high.
-inline constexpr double kPairsPerGrain3d = 8.0, kPairsPerGrain2d = 4.0;
+// the 4.2 of a packed and bonded 1.16M-grain cylinder, 4.4 on a bonded GenGeo cylinder and 5.9 on
+// an FCC block (bench_engine), so that the estimate errs high.
+inline constexpr double kPairsPerGrain3d = 6.0, kPairsPerGrain2d = 4.0;
 // Share of the pairs that cross a particle block of the pair pass (state/pair_list.hpp), above the
 // 21-23 % measured on 3D grains in spatial order (bench_engine: a 100k FCC block and a 97k random
 // cylinder; 8 % on a 2D block).

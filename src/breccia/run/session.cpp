@@ -26,7 +26,7 @@ constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // a wall's velocity ramp starts from a factor (platens slowing down), and platen compression
 // keeps its elastic-phase speed. A new law, lab test or recorder needs no new number: laws and
 // tests are found by name, and each recorder checks its own label.
-constexpr std::uint32_t kCheckpointFormat = 17;
+constexpr std::uint32_t kCheckpointFormat = 18;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of

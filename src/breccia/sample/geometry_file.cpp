@@ -238,6 +238,7 @@ GeometryData GeometryData::of_store(const ParticleStore& ps) {
 
 ParticleStore GeometryData::make_store(PlanarBody body) const {
   ParticleStore s(dimension, thickness, body);
+  s.reserve(particles.size());
   for (const ParticleSpec& p : particles) s.add(p);
   return s;
 }

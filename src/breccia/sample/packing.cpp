@@ -148,6 +148,7 @@ Simulation vessel_simulation(const std::vector<PosRad>& particles, const Region&
                              const PackingSettings& s) {
   const bool planar = region.planar();
   ParticleStore store(planar ? Dimension::Two : Dimension::Three, region.thickness, s.planar_body);
+  store.reserve(particles.size());
   for (std::size_t i = 0; i < particles.size(); ++i)
     store.add(
         {.tag = i + 1, .position = particles[i].x, .radius = particles[i].r, .density = s.density});
@@ -293,6 +294,7 @@ std::array<double, 9> contact_stress_sum(const std::vector<PosRad>& p, const Reg
                                          const PackingSettings& s) {
   ParticleStore store(region.planar() ? Dimension::Two : Dimension::Three, region.thickness,
                       s.planar_body);
+  store.reserve(p.size());
   for (std::size_t i = 0; i < p.size(); ++i)
     store.add({.tag = i + 1, .position = p[i].x, .radius = p[i].r, .density = s.density});
   EngineConfig cfg;

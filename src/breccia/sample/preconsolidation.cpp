@@ -277,7 +277,7 @@ PackedState pack_by_preconsolidation(const PackingSettings& s, const Log& log) {
   for (PosRad& q : all) q.x += Vec3{4 * rw, 2 * rw, 0};
   Simulation sim = vessel_simulation(all, box, s);
   ParticleStore& P = sim.particles_mut();
-  for (std::size_t i = n; i < all.size(); ++i) P.motion[i] = Motion::Driven;
+  for (std::size_t i = n; i < all.size(); ++i) P.set_motion(i, Motion::Driven);
   StageClock clock(&sim);
   grow_between_rows(sim, n, 1.0 / shrink, s.max_steps);
   st.report.stages.push_back(clock.done("growth", fmt::format("radii x {:.4f}", 1.0 / shrink)));

@@ -1,5 +1,6 @@
 #include "breccia/state/particle_store.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -61,13 +62,39 @@ std::size_t ParticleStore::add(const ParticleSpec& p) {
   inertia.push_back(inertia_of(m, p.radius));
   density.push_back(p.density);
   orientation.push_back({});
-  angle.push_back(0.0);
+  if (planar()) angle.push_back(0.0);
   displacement.push_back({});
+  motion.push_back(Motion::Free);
+  if (has_drives()) {
+    drive_vel.emplace_back();
+    drive_angvel.emplace_back();
+  }
   tag.push_back(p.tag);
-  motion.push_back(p.motion);
-  drive_vel.push_back(p.motion == Motion::Driven ? v : Vec3{});
-  drive_angvel.push_back(p.motion == Motion::Driven ? w : Vec3{});
+  set_motion(i, p.motion);
+  if (p.motion == Motion::Driven) {
+    drive_vel[i] = v;
+    drive_angvel[i] = w;
+  }
   return i;
+}
+
+void ParticleStore::reserve(std::size_t n) {
+  for (auto* v : {&vel, &angvel, &force, &torque, &displacement}) v->reserve(n);
+  for (auto* v : {&mass, &inertia, &density}) v->reserve(n);
+  pos_rad.reserve(n);
+  orientation.reserve(n);
+  if (planar()) angle.reserve(n);
+  tag.reserve(n);
+  motion.reserve(n);
+  index_.reserve(n);
+}
+
+void ParticleStore::set_motion(std::size_t i, Motion m) {
+  if (m != Motion::Free && !has_drives()) {
+    drive_vel.assign(motion.size(), Vec3{});
+    drive_angvel.assign(motion.size(), Vec3{});
+  }
+  motion[i] = m;
 }
 
 std::size_t ParticleStore::index_of(std::uint64_t t, const std::string& where) const {
@@ -107,13 +134,22 @@ void ParticleStore::save(ArchiveWriter& a) const {
 void ParticleStore::load(ArchiveReader& a) {
   transfer(a);
   const std::size_t n = tag.size();
+  // The 2D angles exist in 2D only, the prescribed velocities once a particle is not free.
+  const std::size_t angles = planar() ? n : 0;
+  const std::size_t drives = has_drives() ? n : 0;
+  const bool all_free =
+      std::all_of(motion.begin(), motion.end(), [](Motion m) { return m == Motion::Free; });
   for (const std::size_t m :
        {pos_rad.size(), vel.size(), angvel.size(), force.size(), torque.size(), mass.size(),
-        inertia.size(), density.size(), orientation.size(), angle.size(), displacement.size(),
-        motion.size(), drive_vel.size(), drive_angvel.size()})
+        inertia.size(), density.size(), orientation.size(), angle.size() + n - angles,
+        displacement.size(), motion.size(), drive_vel.size() + n - drives,
+        drive_angvel.size() + n - drives})
     if (m != n)
       throw InputError(a.where(), "particles", std::to_string(m),
                        "array lengths differ: the checkpoint is corrupt");
+  if (drives == 0 && !all_free)
+    throw InputError(a.where(), "particles", "no prescribed velocities",
+                     "some grains are fixed or driven: the checkpoint is corrupt");
   index_.clear();
   for (std::size_t i = 0; i < n; ++i) {
     if (index_.contains(tag[i]))

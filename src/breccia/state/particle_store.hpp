@@ -69,10 +69,20 @@ class ParticleStore {
   void load(ArchiveReader& a);
   double inertia_of(double mass, double radius) const noexcept;
 
-  // What each particle holds in the arrays below and the tag table (run/memory_budget.cpp).
+  // What each particle holds in the arrays below and the tag table (run/memory_budget.cpp), in a
+  // 3D sample whose grains are all free.
   static constexpr std::size_t kBytesPerParticle =
-      sizeof(PosRad) + 7 * sizeof(Vec3) + 4 * sizeof(double) + sizeof(Quat) +
+      sizeof(PosRad) + 5 * sizeof(Vec3) + 3 * sizeof(double) + sizeof(Quat) +
       sizeof(std::uint64_t) + sizeof(Motion) + 2 * sizeof(std::uint32_t);
+
+  // Room for n particles in every array, so that a sample added grain by grain does not leave
+  // the arrays with up to twice the room they need.
+  void reserve(std::size_t n);
+  // Sets a particle's motion; the prescribed velocities (drive_vel, drive_angvel) exist once a
+  // particle is not free, and are zero until the caller sets them.
+  void set_motion(std::size_t i, Motion m);
+  // Whether the prescribed-velocity arrays exist (some particle is or was fixed or driven).
+  bool has_drives() const noexcept { return !drive_vel.empty(); }
 
   // Grouped arrays (public: the engine's loops read them directly).
   std::vector<PosRad> pos_rad;
@@ -80,11 +90,13 @@ class ParticleStore {
   std::vector<Vec3> force, torque;  // total force and moment of the last step (before damping)
   std::vector<double> mass, inertia, density;
   std::vector<Quat> orientation;   // 3D orientation; in 2D a rotation about z kept in step
-  std::vector<double> angle;       // 2D orientation angle (never wrapped, §1.4)
+  std::vector<double> angle;       // 2D orientation angle (never wrapped, §1.4); empty in 3D
   std::vector<Vec3> displacement;  // accumulated displacement since the start
   std::vector<std::uint64_t> tag;
   std::vector<Motion> motion;
-  std::vector<Vec3> drive_vel, drive_angvel;  // used when motion == Driven
+  // Prescribed velocities of driven particles, one per particle, or empty while every particle
+  // is free (48 bytes a grain that a run without driven grains does not hold).
+  std::vector<Vec3> drive_vel, drive_angvel;
 
  private:
   template <class Archive>

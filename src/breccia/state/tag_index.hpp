@@ -21,6 +21,8 @@ class TagIndex {
     count_ = 0;
   }
   std::size_t size() const noexcept { return count_; }
+  // Room for tags 0..n-1 in the table.
+  void reserve(std::size_t n) { dense_.reserve(n); }
   bool contains(std::uint64_t tag) const { return find(tag).has_value(); }
   std::optional<std::size_t> find(std::uint64_t tag) const {
     if (tag < dense_.size()) {
