@@ -24,8 +24,10 @@ constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // the radius and the run's geometry, which the laws' parameters carry); 16: one force per pair
 // instead of a result slot (the pair pass sums loads per particle block), no wall-load arrays; 17:
 // a wall's velocity ramp starts from a factor (platens slowing down), and platen compression
-// keeps its elastic-phase speed. A new law, lab test or recorder needs no new number: laws and
-// tests are found by name, and each recorder checks its own label.
+// keeps its elastic-phase speed; 18: prescribed velocities, driver loads and 2D angles stored
+// only where they exist (empty while every grain is free; angles in 2D only). A new law, lab test
+// or recorder needs no new number: laws and tests are found by name, and each recorder checks its
+// own label.
 constexpr std::uint32_t kCheckpointFormat = 18;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
