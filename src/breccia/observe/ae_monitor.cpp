@@ -139,15 +139,48 @@ AeMonitor& AeMonitor::operator=(AeMonitor&& o) noexcept {
   return *this;
 }
 
+std::pair<const std::uint32_t*, const std::uint32_t*> AeMonitor::Grid::at(
+    long long a, long long b, long long c) const noexcept {
+  a -= lo[0];
+  b -= lo[1];
+  c -= lo[2];
+  if (a < 0 || b < 0 || c < 0 || a >= size[0] || b >= size[1] || c >= size[2]) return {};
+  const auto k = static_cast<std::size_t>((a * size[1] + b) * size[2] + c);
+  return {items.data() + start[k], items.data() + start[k + 1]};
+}
+
 void AeMonitor::build_grid(const Simulation& sim) {
-  grid_.clear();
   const double h = s_.source_radius;
   const auto& pr = sim.particles().pos_rad;
-  for (std::uint32_t i = 0; i < pr.size(); ++i)
-    grid_[{static_cast<long long>(std::floor(pr[i].x.x / h)),
-           static_cast<long long>(std::floor(pr[i].x.y / h)),
-           static_cast<long long>(std::floor(pr[i].x.z / h))}]
-        .push_back(i);
+  const std::size_t n = pr.size();
+  auto key = [h](const Vec3& x, int k) { return static_cast<long long>(std::floor(x[k] / h)); };
+  std::array<long long, 3> lo{}, hi{};
+  for (int k = 0; k < 3; ++k) {
+    lo[static_cast<std::size_t>(k)] = n ? key(pr[0].x, k) : 0;
+    hi[static_cast<std::size_t>(k)] = lo[static_cast<std::size_t>(k)];
+  }
+  for (const PosRad& q : pr)
+    for (std::size_t k = 0; k < 3; ++k) {
+      const long long c = key(q.x, static_cast<int>(k));
+      lo[k] = std::min(lo[k], c);
+      hi[k] = std::max(hi[k], c);
+    }
+  Grid& g = grid_;
+  g.lo = lo;
+  for (std::size_t k = 0; k < 3; ++k) g.size[k] = hi[k] - lo[k] + 1;
+  g.start.assign(static_cast<std::size_t>(g.size[0] * g.size[1] * g.size[2]) + 1, 0);
+  g.cell.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const long long a = key(pr[i].x, 0) - lo[0], b = key(pr[i].x, 1) - lo[1],
+                    c = key(pr[i].x, 2) - lo[2];
+    g.cell[i] = static_cast<std::uint32_t>((a * g.size[1] + b) * g.size[2] + c);
+    ++g.start[g.cell[i] + 1];
+  }
+  for (std::size_t k = 1; k < g.start.size(); ++k) g.start[k] += g.start[k - 1];
+  g.items.resize(n);
+  // A stable fill: each cell lists its particles in index order.
+  std::vector<std::uint32_t> fill(g.start.begin(), g.start.end() - 1);
+  for (std::uint32_t i = 0; i < n; ++i) g.items[fill[g.cell[i]]++] = i;
 }
 
 void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
@@ -160,10 +193,9 @@ void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
   for (long long da = -1; da <= 1; ++da)
     for (long long db = -1; db <= 1; ++db)
       for (long long dc = -1; dc <= 1; ++dc) {
-        const auto it = grid_.find({a + da, b + db, c + dc});
-        if (it == grid_.end()) continue;
-        for (std::uint32_t i : it->second)
-          if (norm2(p.pos_rad[i].x - x) <= h * h) add.push_back({i, kinetic(p, i)});
+        const auto [first, last] = grid_.at(a + da, b + db, c + dc);
+        for (const std::uint32_t* it = first; it != last; ++it)
+          if (norm2(p.pos_rad[*it].x - x) <= h * h) add.push_back({*it, kinetic(p, *it)});
       }
   for (const Watched& w : add) {
     const auto pos =
