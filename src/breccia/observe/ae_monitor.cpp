@@ -169,18 +169,17 @@ void AeMonitor::build_grid(const Simulation& sim) {
   g.lo = lo;
   for (std::size_t k = 0; k < 3; ++k) g.size[k] = hi[k] - lo[k] + 1;
   g.start.assign(static_cast<std::size_t>(g.size[0] * g.size[1] * g.size[2]) + 1, 0);
-  g.cell.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const long long a = key(pr[i].x, 0) - lo[0], b = key(pr[i].x, 1) - lo[1],
-                    c = key(pr[i].x, 2) - lo[2];
-    g.cell[i] = static_cast<std::uint32_t>((a * g.size[1] + b) * g.size[2] + c);
-    ++g.start[g.cell[i] + 1];
-  }
+  // Cell of a particle, computed in both passes rather than kept (4 bytes a grain).
+  auto cell_of = [&](const Vec3& x) {
+    const long long a = key(x, 0) - lo[0], b = key(x, 1) - lo[1], c = key(x, 2) - lo[2];
+    return static_cast<std::size_t>((a * g.size[1] + b) * g.size[2] + c);
+  };
+  for (const PosRad& q : pr) ++g.start[cell_of(q.x) + 1];
   for (std::size_t k = 1; k < g.start.size(); ++k) g.start[k] += g.start[k - 1];
   g.items.resize(n);
   // A stable fill: each cell lists its particles in index order.
   std::vector<std::uint32_t> fill(g.start.begin(), g.start.end() - 1);
-  for (std::uint32_t i = 0; i < n; ++i) g.items[fill[g.cell[i]]++] = i;
+  for (std::uint32_t i = 0; i < n; ++i) g.items[fill[cell_of(pr[i].x)]++] = i;
 }
 
 void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {

@@ -146,7 +146,7 @@ class AeMonitor : public Recorder {
   // counting pass rather than a map of vectors.
   struct Grid {
     std::array<long long, 3> lo{}, size{};
-    std::vector<std::uint32_t> start, items, cell;  // cell: scratch, per particle
+    std::vector<std::uint32_t> start, items;
     // Particles of cell (a, b, c), empty outside the grid.
     std::pair<const std::uint32_t*, const std::uint32_t*> at(long long a, long long b,
                                                              long long c) const noexcept;
