@@ -155,10 +155,8 @@ void AeMonitor::build_grid(const Simulation& sim) {
   const std::size_t n = pr.size();
   auto key = [h](const Vec3& x, int k) { return static_cast<long long>(std::floor(x[k] / h)); };
   std::array<long long, 3> lo{}, hi{};
-  for (int k = 0; k < 3; ++k) {
-    lo[static_cast<std::size_t>(k)] = n ? key(pr[0].x, k) : 0;
-    hi[static_cast<std::size_t>(k)] = lo[static_cast<std::size_t>(k)];
-  }
+  if (n > 0)
+    for (int k = 0; k < 3; ++k) lo[k] = hi[k] = key(pr[0].x, k);
   for (const PosRad& q : pr)
     for (std::size_t k = 0; k < 3; ++k) {
       const long long c = key(q.x, static_cast<int>(k));
