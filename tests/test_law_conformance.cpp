@@ -117,6 +117,53 @@ TYPED_TEST(ContactLawConformance, NewtonsThirdLawForForcesAndMoments) {
   check_newton_third_law<TypeParam>();
 }
 
+// A contact law that reads only the pair's shape for some parameters (`needs_motion_with` false:
+// frictionless, without dashpots) must give through `compute`, whose engine call then carries no
+// velocities, exactly what its general law gives with them: the same forces, stored energy and
+// dissipation, bit for bit, while the pair approaches, slides and spins, unloads, separates and
+// touches again. The motion handed to `compute` is NaN, so a shortcut that read it would show.
+TYPED_TEST(ContactLawConformance, ShapeOnlyShortcutAgreesWithTheGeneralLaw) {
+  using Law = TypeParam;
+  if constexpr (requires(const typename Law::Params& p) { Law::needs_motion_with(p); }) {
+    EXPECT_TRUE(Law::needs_motion_with(Law::example_params()));  // with friction: the motion
+    typename Law::Params p = Law::example_params();
+    p.friction = 0.0;
+    p.normal_damping_ratio = 0.0;
+    p.shear_damping_ratio = 0.0;
+    ASSERT_FALSE(Law::needs_motion_with(p));
+    auto s = loaded_pair<Law>(17, 0.0, 0.0);
+    const Vec3 n = unit(s.b.x - s.a.x);
+    const Vec3 slide = in_plane<Law>(unit(cross(n, Vec3{0, 0, 1}))) * 0.7;
+    s.a.w = about_z<Law>({3e3, -1e3, 2e3});
+    typename Law::State ref{};
+    PairDissipation dis_fast, dis_ref;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    int touching = 0, apart = 0;
+    for (int k = 0; k < 600; ++k) {
+      // Along the normal: in by 1 um, out by 6 um (apart from about step 250), in again.
+      s.b.v = n * (k < 100 ? -1.0 : k < 400 ? 2.0 : -2.0) + slide;
+      const PairGeometry g = make_geometry(s.a, s.b, s.planar, s.thickness, s.planar_sphere);
+      (g.delta > 0.0 ? touching : apart) += 1;
+      const PairForce r = Law::compute_with_motion(p, ref, g, s.dt, dis_ref);
+      PairGeometry blind = g;
+      blind.vc = blind.w1 = blind.w2 = {nan, nan, nan};
+      blind.m1 = blind.m2 = nan;
+      const PairForce f = Law::compute(p, s.state, blind, s.dt, dis_fast);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(f.force[c], r.force[c]) << "step " << k;
+        EXPECT_EQ(f.couple[c], r.couple[c]) << "step " << k;
+      }
+      EXPECT_EQ(Law::stored_energy(p, s.state), Law::stored_energy(p, ref)) << "step " << k;
+      s.move();
+    }
+    EXPECT_GT(touching, 280);  // the walk did load, part and reload the contact
+    EXPECT_GT(apart, 50);
+    EXPECT_EQ(dis_fast.slip, dis_ref.slip);
+    EXPECT_EQ(dis_fast.viscous, dis_ref.viscous);
+    EXPECT_EQ(dis_fast.deleted, dis_ref.deleted);
+  }
+}
+
 template <class Law>
 void check_rigid_motion_invariance() {
   // The same motion seen in a rotated and translated frame gives the rotated forces.

@@ -40,6 +40,7 @@ class Simulation::PairWalk {
       : sim_(sim),
         c_(c),
         dt_(sim.dt_),
+        contact_motion_(contact_needs_motion<CL>(c.params)),
         fails_(fails),
         g_(g),
         dissipation_(dissipation),
@@ -170,7 +171,7 @@ class Simulation::PairWalk {
     const PosRad& b = sim_.p_.pos_rad[j_];
     const double reach = a.r + b.r;
     if (norm2(b.x - a.x) >= reach * reach && !loaded()) return false;
-    need(true);
+    need(contact_motion_);
     return true;
   }
 
@@ -191,7 +192,7 @@ class Simulation::PairWalk {
       (*store_)[h] = {};
     }
     if (contact_off_ || !(g_.delta > 0.0 || was_loaded)) return {};
-    need(true);
+    need(contact_motion_);
     if (h == kNoHistory) {
       h = static_cast<std::uint32_t>(store_->size());
       store_->emplace_back();
@@ -220,6 +221,7 @@ class Simulation::PairWalk {
   Simulation& sim_;
   ContactSet<CL>& c_;
   const double dt_;
+  const bool contact_motion_;  // whether the contact law reads the pair's velocities
   std::vector<Failure>& fails_;
   std::vector<typename CL::State>* store_ = nullptr;  // the block's contact histories
   PairGeometry& g_;                                   // the pair in hand's

@@ -81,25 +81,56 @@ struct HertzMindlin {
            (0.1631 * p.poisson_ratio + 0.8766);
   }
 
+  // The Hertz quantities at the pair's overlap: contact radius a = sqrt(R* delta), normal force
+  // 4/3 E* sqrt(R*) delta^(3/2), tangential stiffness 8 G* a.
+  struct Hertz {
+    double r_star, a, e_star, fn, kt;
+  };
+  static Hertz hertz(const Params& p, const PairGeometry& g) noexcept {
+    Hertz h;
+    h.r_star = r_star(g);
+    h.a = std::sqrt(h.r_star * g.delta);
+    h.e_star = e_star(p, g.wall);
+    h.fn = 4.0 / 3.0 * h.e_star * h.a * g.delta;
+    h.kt = 8.0 * g_star(p, g.wall) * h.a;
+    return h;
+  }
+  // Separated: the contact is deleted; its shear spring energy leaves without work.
+  static PairForce separate(State& s, PairDissipation& dis) noexcept {
+    if (s.kt > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) / s.kt;
+    s = State{};
+    return {};
+  }
+
+  // Frictionless and without dashpots, the shear force stays zero and the force is the Hertz
+  // normal force alone: a function of the pair's shape, so the pair pass need not load the
+  // grains' velocities (the packings' vessel runs so).
+  static bool needs_motion_with(const Params& p) noexcept {
+    return p.friction > 0.0 || p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0;
+  }
+
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, double dt,
                            PairDissipation& dis) noexcept {
-    if (g.delta <= 0.0) {
-      if (s.kt > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) / s.kt;
-      s = State{};
-      return {};
-    }
-    const double Rs = r_star(g);
-    const double a = std::sqrt(Rs * g.delta);
-    const double Es = e_star(p, g.wall);
-    const double fn = 4.0 / 3.0 * Es * a * g.delta;  // 4/3 E* sqrt(R*) delta^(3/2)
-    const double kt = 8.0 * g_star(p, g.wall) * a;
+    if (needs_motion_with(p)) return compute_with_motion(p, s, g, dt, dis);
+    // What compute_with_motion gives with a zero friction limit, without reading g's motion.
+    if (g.delta <= 0.0) return separate(s, dis);
+    const Hertz h = hertz(p, g);
+    s = State{{}, g.n, h.fn, g.delta, h.kt};
+    return {g.n * h.fn, {}};
+  }
 
+  // The general law; with needs_motion_with false it is the reference of compute's shortcut.
+  static PairForce compute_with_motion(const Params& p, State& s, const PairGeometry& g, double dt,
+                                       PairDissipation& dis) noexcept {
+    if (g.delta <= 0.0) return separate(s, dis);
+    const Hertz h = hertz(p, g);
+    const double fn = h.fn, kt = h.kt;
     Vec3 fs;
     if (s.kt > 0.0) {
       fs = carry_shear(s.shear_force, s.n_old, g, dt);
       const double e_before = 0.5 * norm2(fs) / s.kt;
-      const double a_old = std::sqrt(Rs * s.overlap);
-      if (p.unloading_rescale && a < a_old) fs *= a / a_old;
+      const double a_old = std::sqrt(h.r_star * s.overlap);
+      if (p.unloading_rescale && h.a < a_old) fs *= h.a / a_old;
       // Energy the shear spring loses (or gains) when its stiffness changes, not by work (§2.4).
       dis.deleted += e_before - 0.5 * norm2(fs) / kt;
     }
@@ -116,9 +147,9 @@ struct HertzMindlin {
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
       // Tsuji form with the tangent stiffnesses (§2.2).
       const double c = 2.0 * std::sqrt(5.0 / 6.0), m = g.m_star();
-      force +=
-          dashpot_force(g, fn, vn, vt, c * p.normal_damping_ratio * std::sqrt(2.0 * Es * a * m),
-                        c * p.shear_damping_ratio * std::sqrt(kt * m), shear.sliding, dt, dis);
+      force += dashpot_force(g, fn, vn, vt,
+                             c * p.normal_damping_ratio * std::sqrt(2.0 * h.e_star * h.a * m),
+                             c * p.shear_damping_ratio * std::sqrt(kt * m), shear.sliding, dt, dis);
     }
     return {force, {}};
   }

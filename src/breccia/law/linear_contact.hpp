@@ -61,15 +61,30 @@ struct LinearContact {
     ks = kn / p.stiffness_ratio;
   }
 
+  // Frictionless and without dashpots, the force is the normal spring's alone: a function of the
+  // pair's shape, so the pair pass need not load the grains' velocities.
+  static bool needs_motion_with(const Params& p) noexcept {
+    return p.friction > 0.0 || p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0;
+  }
+
   // One step of the contact. Returns the force on particle 2; books dissipation into `dis`.
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, double dt,
                            PairDissipation& dis) noexcept {
-    if (g.delta <= 0.0) {
-      // Separated: the contact is deleted; its shear spring energy leaves without work.
-      if (s.kn > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) * p.stiffness_ratio / s.kn;
-      s = State{};
-      return {};
-    }
+    if (needs_motion_with(p)) return compute_with_motion(p, s, g, dt, dis);
+    // What compute_with_motion gives with a zero friction limit, without reading g's motion.
+    if (g.delta <= 0.0) return separate(p, s, dis);
+    if (s.kn == 0.0) s.kn = normal_stiffness(p, g);
+    const double fn = s.kn * g.delta;
+    s.shear_force = {};
+    s.n_old = g.n;
+    s.normal_force = fn;
+    return {g.n * fn, {}};
+  }
+
+  // The general law; with needs_motion_with false it is the reference of compute's shortcut.
+  static PairForce compute_with_motion(const Params& p, State& s, const PairGeometry& g, double dt,
+                                       PairDissipation& dis) noexcept {
+    if (g.delta <= 0.0) return separate(p, s, dis);
     const bool has_history = s.kn != 0.0;
     if (!has_history) s.kn = normal_stiffness(p, g);
     const double kn = s.kn;
@@ -91,6 +106,13 @@ struct LinearContact {
                         2.0 * p.shear_damping_ratio * std::sqrt(m * ks), shear.sliding, dt, dis);
     }
     return {force, {}};
+  }
+
+  // Separated: the contact is deleted; its shear spring energy leaves without work.
+  static PairForce separate(const Params& p, State& s, PairDissipation& dis) noexcept {
+    if (s.kn > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) * p.stiffness_ratio / s.kn;
+    s = State{};
+    return {};
   }
 
   // Elastic energy stored in the contact (§3.6).

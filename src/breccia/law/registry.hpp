@@ -50,6 +50,16 @@ consteval bool reads_motion() {
 }
 template <class Law>
 constexpr bool law_needs_motion = reads_motion<Law>();
+// Whether a contact law with these parameters reads the pair's motion: a law that declares
+// `needs_motion_with(params)` may spare the pair pass the velocities for some parameters (a
+// frictionless contact without dashpots); without the declaration a contact reads it.
+template <class CL>
+bool contact_needs_motion(const typename CL::Params& p) noexcept {
+  if constexpr (requires { CL::needs_motion_with(p); })
+    return CL::needs_motion_with(p);
+  else
+    return true;
+}
 
 // The chosen laws' parameters (the experiment's [contact] and [bond] tables).
 using ContactParams = ParamsVariant<ContactLaws>;
