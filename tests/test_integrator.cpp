@@ -274,3 +274,68 @@ TEST(Integrator, DriveArraysExistOnlyOnceAGrainIsDriven) {
   EXPECT_NEAR(sim.particles().pos_rad[1].x.y - x1.y, v.y * 100 * 1e-6, 1e-15);
   EXPECT_EQ(sim.particles().vel[0], (Vec3{0.1, 0, 0}));  // untouched: the grains never meet
 }
+
+namespace {
+
+// Overlapping frictionless Hertz spheres on a frictionless floor that push apart under local
+// damping; with `far_fixed_grain` one more grain, fixed and touching nothing, which turns the
+// central-force shortcut off (a driven grain does) without changing any other grain's sums.
+Simulation frictionless_heap(bool far_fixed_grain) {
+  const double R = 0.5e-3;
+  ParticleStore ps = fcc_block(4, 4, 4, R * 0.999, 2650);
+  double z_min = 1.0, x_max = -1.0;
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    ps.pos_rad[i].r = R;
+    z_min = std::min(z_min, ps.pos_rad[i].x.z);
+    x_max = std::max(x_max, ps.pos_rad[i].x.x);
+    for (int k = 0; k < 3; ++k) ps.vel[i][k] = 0.01 * standard_normal(23, k, i);
+  }
+  if (far_fixed_grain) {
+    const Vec3 far{x_max + 10 * R, 2 * R, z_min + 3 * R};  // off the floor, off the heap
+    ps.add({.tag = 100000, .position = far, .radius = R, .density = 2650});
+    ps.set_motion(ps.size() - 1, Motion::Fixed);
+  }
+  EngineConfig cfg;
+  cfg.local_damping = 0.7;
+  HertzMindlin::Params hp;
+  hp.friction = 0.0;
+  Simulation sim(std::move(ps), cfg, make_contact_model<HertzMindlin>(hp, hp));
+  sim.add_wall(Wall::plane("floor", {0, 0, z_min - 0.998 * R}, {0, 0, 1}));
+  sim.initialise();
+  return sim;
+}
+
+}  // namespace
+
+// Central forces only (frictionless contacts without dashpots, no bond): the pair pass leaves out
+// the torques, which are rounding, and the integrator turns no grain; every translation is the
+// full computation's to the bit.
+TEST(Integrator, CentralForcesMoveTheGrainsAsTheFullComputation) {
+  Simulation central = frictionless_heap(false), full = frictionless_heap(true);
+  EXPECT_EQ(central.time_step(), full.time_step());
+  const ParticleStore start = central.particles();
+  central.run(1);
+  EXPECT_GT(central.walls()[0].contacts, 0u);  // the floor's torques are left out too
+  central.run(399);
+  full.run(400);
+  const ParticleStore &a = central.particles(), &b = full.particles();
+  ASSERT_EQ(b.size(), a.size() + 1);
+  double moved = 0.0, v_max = 0.0, w_full = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(a.pos_rad[i].x[k], b.pos_rad[i].x[k]) << "grain " << i;
+      EXPECT_EQ(a.vel[i][k], b.vel[i][k]) << "grain " << i;
+    }
+    EXPECT_EQ(a.angvel[i], Vec3{}) << "grain " << i;
+    EXPECT_EQ(a.orientation[i], start.orientation[i]) << "grain " << i;
+    moved = std::max(moved, norm(a.pos_rad[i].x - start.pos_rad[i].x));
+    v_max = std::max(v_max, norm(a.vel[i]));
+    w_full = std::max(w_full, norm(b.angvel[i]));
+  }
+  EXPECT_GT(moved, 1e-7);  // the overlaps (1 um) pushed the grains apart
+  EXPECT_EQ(central.neighbour_rebuilds(), full.neighbour_rebuilds());
+  // The full computation's spins are the rounding of central torques: their contact-point
+  // speeds are far below the grains' speeds.
+  EXPECT_GT(w_full, 0.0);  // so the zero spins above are the shortcut's
+  EXPECT_LT(w_full * 0.5e-3, 1e-9 * v_max);
+}

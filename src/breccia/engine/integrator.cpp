@@ -102,6 +102,7 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
   const double alpha = cfg_.local_damping;
   const Vec3 gravity = cfg_.gravity;
   const bool planar = p_.planar();
+  const bool turning = !central_forces_only(c);
   for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
     IntegrateBlock acc;
     for (std::size_t i = begin; i < end; ++i) {
@@ -122,6 +123,7 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
         t.x = 0.0;
         t.y = 0.0;
       }
+      if (!turning) t = {};  // the walls' torques too are rounding then
       Kick k{p_.vel[i], p_.angvel[i], {}, {}};
       if (p_.motion[i] == Motion::Free)
         kick_free(f, t, m, inertia, dt, alpha, sample, k, acc);
@@ -142,7 +144,7 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
       p_.displacement[i] += dx;
       if (planar)
         p_.angle[i] += k.w_new.z * dt;
-      else
+      else if (turning || norm2(k.w_new) > 0.0)  // central forces leave a grain at rest unturned
         p_.orientation[i] = integrate_orientation(p_.orientation[i], k.w_new, dt);
       acc.max_disp2 = std::max(acc.max_disp2, norm2(p_.pos_rad[i].x - x_at_build_[i]));
       if (sample) {

@@ -41,6 +41,7 @@ class Simulation::PairWalk {
         c_(c),
         dt_(sim.dt_),
         contact_motion_(contact_needs_motion<CL>(c.params)),
+        torques_(!sim.central_forces_only(c)),
         fails_(fails),
         g_(g),
         dissipation_(dissipation),
@@ -67,11 +68,14 @@ class Simulation::PairWalk {
       if (held_law_ != kNoHeldBond) judge_held_bond(contact_force, kBondLaws);
       c_.force[k] = force_;
       force[i_] -= force_;
-      torque[i_] += cross(g_.r1, -force_) - couple_;
-      const Vec3 torque2 = cross(g_.r2, force_) + couple_;
+      Vec3 torque2;
+      if (torques_) {
+        torque[i_] += cross(g_.r1, -force_) - couple_;
+        torque2 = cross(g_.r2, force_) + couple_;
+      }
       if (j_ < owned_end) {
         force[j_] += force_;
-        torque[j_] += torque2;
+        if (torques_) torque[j_] += torque2;
       } else {
         sim_.cross_slots_[next_cross++] = {force_, torque2};
       }
@@ -222,6 +226,7 @@ class Simulation::PairWalk {
   ContactSet<CL>& c_;
   const double dt_;
   const bool contact_motion_;  // whether the contact law reads the pair's velocities
+  const bool torques_;         // false with central forces only (no torque but rounding)
   std::vector<Failure>& fails_;
   std::vector<typename CL::State>* store_ = nullptr;  // the block's contact histories
   PairGeometry& g_;                                   // the pair in hand's

@@ -298,6 +298,21 @@ class Simulation {
   void compute_walls_for(ContactSet<CL>& contacts);
   template <class CL>
   void integrate_for(ContactSet<CL>& contacts, bool sample);
+  // Central forces only: no bond or joint, no driven grain, and contacts with grains and walls
+  // that read only the pair's shape, whose forces act along the line through the centres. Their
+  // torques are zero but for rounding, so the pair pass leaves them out and the integrator
+  // turns no grain; the translations are those of the full computation to the bit (the
+  // packing vessel runs so).
+  template <class CL>
+  bool central_forces_only(const ContactSet<CL>& c) const noexcept {
+    if (contact_needs_motion<CL>(c.params) || contact_needs_motion<CL>(c.wall_params) ||
+        p_.has_drives())
+      return false;
+    bool none = true;
+    std::apply([&](const auto&... set) { ((none = none && set.size() == 0), ...); }, bonds_);
+    std::apply([&](const auto&... set) { ((none = none && set.size() == 0), ...); }, joints_);
+    return none;
+  }
   template <class CL>
   void sample_stored_energy_for(ContactSet<CL>& contacts);
   template <class Law>
