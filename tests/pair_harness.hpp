@@ -89,6 +89,8 @@ struct PairStepper {
     PairForce pf;
     if constexpr (is_joint_law<Law>)
       pf = Law::compute(params, state, g, dt, dissipation, failure);
+    else if constexpr (is_bond_law<Law> && law_dissipates<Law>)
+      pf = Law::compute(params, state, g, {a.q, b.q}, dt, dissipation, failure);
     else if constexpr (is_bond_law<Law>)
       pf = Law::compute(params, state, g, {a.q, b.q}, dt, failure);
     else

@@ -228,7 +228,10 @@ def sample_text(spec, summary):
     radii = (f"; radii {fmt(s.get('radius_min', 0) * 1e6, '{:g}')}-"
              f"{fmt(s.get('radius_max', 0) * 1e6, '{:g}')} um") if source == "generate" else ""
     return (f"{'2D' if planar else '3D'} {s.get('shape', '?')}, {size} ({how}{radii}); "
-            f"{summary.get('particles')} grains, {summary.get('bonds_initial')} bonds")
+            f"{summary.get('particles')} grains, {summary.get('bonds_initial')} bonds"
+            + (f" ({summary['bond_sites_initial']} bonded elements)"
+               if summary.get("bond_sites_initial", summary.get("bonds_initial"))
+               != summary.get("bonds_initial") else ""))
 
 
 TARGET_NAMES = {"youngs_modulus": "E", "uniaxial_strength": "UCS", "tensile_strength": "TS",

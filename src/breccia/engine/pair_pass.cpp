@@ -138,11 +138,15 @@ class Simulation::PairWalk {
         held_bond_ = b;
       } else {
         BondFailure f;
-        const PairForce pf =
-            Law::compute(set.params, set.state[b], g_, sim_.frames<Law>(i_, j_), dt_, f);
-        if (f.broken) {
-          fails_.push_back({LawIndex, b, f});
-        } else {
+        PairForce pf;
+        if constexpr (law_dissipates<Law>)
+          pf = Law::compute(set.params, set.state[b], g_, sim_.frames<Law>(i_, j_), dt_,
+                            dissipation_, f);
+        else
+          pf = Law::compute(set.params, set.state[b], g_, sim_.frames<Law>(i_, j_), dt_, f);
+        if (f.broken) fails_.push_back({LawIndex, b, f});
+        // A broken element leaves its bond in place (the flat joint): its force is applied.
+        if (!f.broken || f.outcome == BondOutcome::ElementBroken) {
           force_ += pf.force;
           couple_ += pf.couple;
           contact_off_ = contact_off_ || !Law::contact_while_bonded(set.params);
@@ -308,9 +312,11 @@ void Simulation::compute_pairs() {
 
 template <class Law>
 void Simulation::process_failure(BondSet<Law>& set, std::uint32_t bond, const BondFailure& info) {
-  set.intact[bond] = 0;
-  ++set.broken_since_compaction;
-  record_crack(set, bond, info);
+  if (info.outcome != BondOutcome::ElementBroken) {
+    set.intact[bond] = 0;
+    ++set.broken_since_compaction;
+  }
+  if (info.outcome != BondOutcome::Released) record_crack(set, bond, info);
 }
 
 template <class Law>
@@ -330,7 +336,7 @@ void Simulation::record_crack(const BondSet<Law>& set, std::uint32_t bond,
   r.id2 = p_.tag[swap ? i : j];
   r.R1 = swap ? g.R2 : g.R1;
   r.R2 = swap ? g.R1 : g.R2;
-  r.position = p_.pos_rad[i].x + g.r1 + g.n * info.point_shift;
+  r.position = p_.pos_rad[i].x + g.r1 + g.n * info.point_shift + info.point_offset;
   r.normal = swap ? -g.n : g.n;
   r.mode = info.mode;
   r.bond_radius = info.bond_radius;

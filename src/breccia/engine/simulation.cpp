@@ -122,8 +122,8 @@ void Simulation::install_bonds(BondSet<Law>& set) {
   prepare_params<Law>(set.params);
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint32_t i = set.pairs.first[k], j = set.pairs.second[k];
-    set.state[k] =
-        Law::install(set.params, geometry(i, j), frames<Law>(i, j), cfg_.seed, set.tag[k]);
+    set.state[k] = Law::install(set.params, geometry(i, j),
+                                {body_orientation(i), body_orientation(j)}, cfg_.seed, set.tag[k]);
   }
 }
 
@@ -215,6 +215,21 @@ void Simulation::run(std::uint64_t steps) {
 std::size_t Simulation::intact_bonds() const noexcept {
   std::size_t n = 0;
   std::apply([&](const auto&... set) { ((n += set.intact_count()), ...); }, bonds_);
+  return n;
+}
+
+std::size_t Simulation::intact_bond_sites() const noexcept {
+  std::size_t n = 0;
+  const auto one = [&]<class Law>(const BondSet<Law>& set) {
+    for (std::size_t k = 0; k < set.state.size(); ++k)
+      if (set.intact[k]) {
+        if constexpr (requires { Law::bonded_sites(set.params, set.state[k]); })
+          n += static_cast<std::size_t>(Law::bonded_sites(set.params, set.state[k]));
+        else
+          ++n;
+      }
+  };
+  std::apply([&](const auto&... set) { (one(set), ...); }, bonds_);
   return n;
 }
 

@@ -220,6 +220,9 @@ class Simulation {
   std::size_t bonded_joints() const noexcept;
   const ContactModel& contact_model() const noexcept { return contact_; }
   std::size_t intact_bonds() const noexcept;
+  // The places where bonds can still break, each a crack: an intact bond, or a bonded element of
+  // a law that breaks element by element (the flat joint).
+  std::size_t intact_bond_sites() const noexcept;
   // The particle index pairs of the intact bonds of every law (fragments, wear).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> intact_bond_pairs() const;
   // The moduli of the bond law called `law` with this simulation's parameters (crack records

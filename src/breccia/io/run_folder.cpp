@@ -202,8 +202,13 @@ std::string summarise_run(const fs::path& file) {
                      mpa(j, "crack_initiation_stress_pa"), mpa(j, "crack_damage_stress_pa"),
                      mpa(j, "residual_strength_pa"));
   }
-  s += fmt::format("  {} particles, {} bonds; {} cracks ({} tensile, {} shear)\n",
-                   plain(j, "particles", "{:.0f}"), plain(j, "bonds_initial", "{:.0f}"),
+  // A flat joint's elements break one by one: its bonded elements are the crack sites.
+  const std::string sites =
+      j.has("bond_sites_initial") && j.number("bond_sites_initial") != j.number("bonds_initial")
+          ? " (" + plain(j, "bond_sites_initial", "{:.0f}") + " bonded elements)"
+          : "";
+  s += fmt::format("  {} particles, {} bonds{}; {} cracks ({} tensile, {} shear)\n",
+                   plain(j, "particles", "{:.0f}"), plain(j, "bonds_initial", "{:.0f}"), sites,
                    plain(j, "bonds_broken", "{:.0f}"), plain(j, "cracks_tensile", "{:.0f}"),
                    plain(j, "cracks_shear", "{:.0f}"));
   if (const auto fr = j.find("fragments"))

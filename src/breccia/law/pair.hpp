@@ -143,11 +143,17 @@ struct BondModuli {
 
 enum class CrackMode : std::uint8_t { Tensile = 0, Shear = 1 };
 
+// What a failure does to the bond: it breaks (a crack; the bond is removed), one of its elements
+// breaks (a crack; the bond stays and its force of the step is applied: the flat joint), or it is
+// released without a crack (a fully broken interface whose faces have parted).
+enum class BondOutcome : std::uint8_t { Broken = 0, ElementBroken = 1, Released = 2 };
+
 // A bond's loads against its strength, as its law judges them (each bond law's `assess` reads its
 // state after the step's update): the failure decision of one step with the quantities the
 // crack record needs (§4.0), and what snapshots show of intact bonds.
 struct BondFailure {
   bool broken = false;
+  BondOutcome outcome = BondOutcome::Broken;  // what `broken` does
   CrackMode mode = CrackMode::Tensile;
   double Fn = 0.0;  // compression-positive
   double Fs = 0.0;
@@ -162,6 +168,7 @@ struct BondFailure {
   // From the §0.2 contact point to the law's own point on the branch, along n (beam bonds act
   // at x1 + d R1 / (R1 + R2), §4.2 step 8): where the crack record places the crack.
   double point_shift = 0.0;
+  Vec3 point_offset;  // and from there across the interface (the flat joint's element)
   BondEnergy energy;  // released energy by component
 };
 

@@ -20,15 +20,17 @@ struct Range {
   double min = -kInf, max = kInf;
   bool min_inclusive = true, max_inclusive = true;
   std::string unit = "-";  // "-" for dimensionless
+  bool whole = false;      // whole numbers only (counts)
 
   bool contains(double v) const noexcept {
     if (!std::isfinite(v)) return false;
+    if (whole && v != std::floor(v)) return false;
     if (min_inclusive ? v < min : v <= min) return false;
     if (max_inclusive ? v > max : v >= max) return false;
     return true;
   }
   std::string allowed() const {
-    std::string s = "allowed: ";
+    std::string s = whole ? "allowed: a whole number, " : "allowed: ";
     if (min > -kInf && max < kInf)
       s += num(min) + (min_inclusive ? " <= " : " < ") + "value" +
            (max_inclusive ? " <= " : " < ") + num(max);
@@ -53,10 +55,11 @@ struct ParamField {
   bool min_inclusive = true;
   bool max_inclusive = true;
   std::string_view doc;
+  bool whole = false;  // a count: whole numbers only
 
   bool is_flag() const noexcept { return std::holds_alternative<bool P::*>(member); }
 
-  Range range() const { return {min, max, min_inclusive, max_inclusive, std::string(unit)}; }
+  Range range() const { return {min, max, min_inclusive, max_inclusive, std::string(unit), whole}; }
   std::string allowed() const { return is_flag() ? "must be true or false" : range().allowed(); }
   bool in_range(double v) const noexcept { return range().contains(v); }
 

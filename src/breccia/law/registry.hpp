@@ -6,6 +6,7 @@
 
 #include "breccia/core/type_list.hpp"
 #include "breccia/law/brittle_beam.hpp"
+#include "breccia/law/flat_joint.hpp"
 #include "breccia/law/hertz_mindlin.hpp"
 #include "breccia/law/linear_contact.hpp"
 #include "breccia/law/parallel_bond.hpp"
@@ -16,7 +17,7 @@
 namespace breccia {
 
 using ContactLaws = TypeList<LinearContact, HertzMindlin>;
-using BondLaws = TypeList<ParallelBond, BrittleBeam, QuaternionBond, RicebalBond>;
+using BondLaws = TypeList<ParallelBond, BrittleBeam, QuaternionBond, RicebalBond, FlatJoint>;
 // Laws of the pairs that a joint plane cuts (docs/physics.md §5): they replace the pair's bond and
 // contact law, and the experiment's [joint] table places them.
 using JointLaws = TypeList<SmoothJoint>;
@@ -27,6 +28,20 @@ using JointLaws = TypeList<SmoothJoint>;
 template <class Law>
 constexpr bool judged_on_interface = requires(typename Law::State& s, const PairGeometry& g) {
   Law::loads(s, g, 0.0);
+};
+// A bond law whose kernel books losses (the flat joint's sliding elements) takes the pair's
+// PairDissipation after the step's interval.
+template <class Law>
+constexpr bool law_dissipates = requires(const typename Law::Params& p, typename Law::State& s,
+                                         const PairGeometry& g, const BodyFrames& fr,
+                                         PairDissipation& d, BondFailure& f) {
+  Law::compute(p, s, g, fr, 0.0, d, f);
+};
+// A bond law whose elements break one at a time, each a crack, while the bond stays in place
+// until it is released (BondOutcome; the flat joint).
+template <class Law>
+constexpr bool law_breaks_by_element = requires {
+  Law::breaks_by_element;
 };
 // A law defined for disks and planar spheres only (2D).
 template <class Law>

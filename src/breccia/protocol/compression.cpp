@@ -314,8 +314,8 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
   broken_at_start_ = sim.cracks().size();
   arm_strain_ = speed * ramp / h0_;
   slow_down_cracks_ = std::max<std::size_t>(
-      1, static_cast<std::size_t>(
-             std::ceil(st_.slow_down_broken_fraction * static_cast<double>(sim.intact_bonds()))));
+      1, static_cast<std::size_t>(std::ceil(st_.slow_down_broken_fraction *
+                                            static_cast<double>(sim.intact_bond_sites()))));
   return sim.step_count() - step0;
 }
 

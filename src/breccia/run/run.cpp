@@ -411,6 +411,7 @@ json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult&
                {"dimension", spec.dimension},
                {"particles", r.particles},
                {"bonds_initial", r.bonds},
+               {"bond_sites_initial", ss.loop.bond_sites_initial},
                {"bonds_broken", r.cracks},
                {"cracks_tensile", r.tensile},
                {"cracks_shear", r.shear},
@@ -636,6 +637,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   loop.warnings = sim.warnings();
   loop.consolidation_steps = b.consolidation_steps;
   loop.bonds_initial = sim.intact_bonds();
+  loop.bond_sites_initial = sim.intact_bond_sites();
   const double sigma3 = confining_stress(test);
   loop.series.confining_stress = sigma3;
   if (sigma3 > 0.0 && !test.stress_strain()->consolidated())

@@ -28,7 +28,8 @@ struct LoopState {
   double wall_seconds = 0.0;  // spent in earlier sessions of this run (updated when saved)
   std::uint64_t consolidation_steps = 0;
   std::uint64_t bonds_initial = 0;
-  std::vector<std::string> warnings;  // those of the set-up
+  std::uint64_t bond_sites_initial = 0;  // Simulation::intact_bond_sites at the start
+  std::vector<std::string> warnings;     // those of the set-up
   // Reference state of the loading stage for the failure analysis.
   double volume0 = 0.0, porosity0 = 0.0, length_min = 0.0;
   std::string wave_speed_method;
@@ -50,6 +51,7 @@ struct LoopState {
     a.value(wall_seconds);
     a.value(consolidation_steps);
     a.value(bonds_initial);
+    a.value(bond_sites_initial);
     a.sized(warnings, 8);
     for (std::string& w : warnings) a.string(w);
     a.value(volume0);

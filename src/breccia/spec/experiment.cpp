@@ -208,10 +208,12 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
       s.geometry_file.empty())
     throw InputError(source, "sample.file", "\"\"",
                      "a file is required when source = \"" + s.sample_source + "\"");
-  visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params&) {
+  visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params& p) {
     if (planar_only_law<Law> && s.dimension != 2)
       throw InputError(source, "bond.law", "\"" + std::string(Law::name) + "\"",
                        "a 2D law of disks and planar spheres: it needs engine.dimension = 2");
+    if constexpr (requires { Law::check(p, source, s.dimension); })
+      Law::check(p, source, s.dimension);
   });
   if (s.dimension == 2 && s.contact_law() == "hertz_mindlin" && s.planar_body == "disk")
     throw InputError(source, "contact.law", "\"hertz_mindlin\"",
