@@ -55,14 +55,13 @@ class Simulation::PairWalk {
     store_ = &store;
     Vec3* const force = sim_.p_.force.data();
     Vec3* const torque = sim_.p_.torque.data();
-    const std::uint32_t* const cross_slot = c_.pairs.cross_slot.data();
     for (std::size_t k = begin; k < end; ++k) {
       start(k);
       bond_parts(kBondLaws);
       joint_parts(kJointLaws);
       if (!have_geometry_ && !touching_or_loaded()) {
         c_.force[k] = {};
-        if (j_ >= owned_end) sim_.cross_slots_[cross_slot[next_cross++]] = CrossSlot{};
+        if (j_ >= owned_end) sim_.cross_slots_[next_cross++] = CrossSlot{};
         continue;
       }
       const Vec3 contact_force = contact_part();
@@ -78,7 +77,7 @@ class Simulation::PairWalk {
         force[j_] += force_;
         if (torques_) torque[j_] += torque2;
       } else {
-        sim_.cross_slots_[cross_slot[next_cross++]] = {force_, torque2};
+        sim_.cross_slots_[next_cross++] = {force_, torque2};
       }
     }
   }

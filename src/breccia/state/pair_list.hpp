@@ -14,11 +14,8 @@ namespace breccia {
 // (b + 1) kParticleBlock) and the pairs whose first particle it owns, and sums their loads into its
 // own particles' totals directly. A pair whose second particle belongs to a later block is a cross
 // pair: its second particle's share goes through a cross slot, which the integrator adds. The
-// slots lie in the order the integrator reads them (by second particle, then pair order), so that
-// its reads stream; the pair pass's writes scatter instead, and a store that misses the cache
-// does not stall the core as a load does (the reads in pair order took a quarter of a packing's
-// integrator). The blocks depend on the particle count only, so the order of every sum, and with it
-// every result, is the same for any number of threads.
+// blocks depend on the particle count only, so the order of every sum, and with it every result,
+// is the same for any number of threads.
 inline constexpr std::size_t kParticleBlock = 512;
 
 // A cross pair's loads on its second particle, written by the pair pass, read by the integrator.
@@ -31,10 +28,10 @@ struct PairList {
   std::vector<std::uint32_t> first, second;  // sorted by (first, second)
   std::vector<std::uint32_t> offsets;        // pairs with first == i: [offsets[i], offsets[i+1])
   std::vector<std::uint32_t> in_offsets, in_slot;  // pairs with second == i, ascending slot
-  // Cross pairs (above), numbered in pair order: block b's are numbers [cross_begin[b],
-  // cross_begin[b + 1]). Cross pair c's loads go to slot cross_slot[c]; particle i's, as the
-  // second particle, are slots [cross_in_offsets[i], cross_in_offsets[i + 1]), in pair order.
-  std::vector<std::uint32_t> cross_begin, cross_in_offsets, cross_slot;
+  // Cross pairs (above): block b's are cross slots [cross_begin[b], cross_begin[b + 1]) in pair
+  // order; particle i's, as the second particle, are cross_in[cross_in_offsets[i] ...
+  // cross_in_offsets[i + 1]), ascending.
+  std::vector<std::uint32_t> cross_begin, cross_in_offsets, cross_in;
 
   std::size_t size() const noexcept { return first.size(); }
 
@@ -56,7 +53,7 @@ struct PairList {
       in_slot[fill[second[k]]++] = static_cast<std::uint32_t>(k);
   }
 
-  std::size_t cross_slots() const noexcept { return cross_slot.size(); }
+  std::size_t cross_slots() const noexcept { return cross_in.size(); }
 
   // Rebuilds the cross-pair index for n particles (after build_index).
   void build_cross_index(std::size_t n) {
@@ -74,13 +71,13 @@ struct PairList {
       cross_begin[b + 1] = cross_begin[b] + count;
     }
     for (std::size_t i = 0; i < n; ++i) cross_in_offsets[i + 1] += cross_in_offsets[i];
-    cross_slot.resize(cross_begin[blocks]);
+    cross_in.resize(cross_begin[blocks]);
     std::vector<std::uint32_t> fill(cross_in_offsets.begin(), cross_in_offsets.end() - 1);
-    std::uint32_t c = 0;
+    std::uint32_t slot = 0;
     for (std::size_t b = 0; b < blocks; ++b) {
       const std::size_t end = std::min(n, (b + 1) * kParticleBlock);
       for (std::uint32_t k = offsets[b * kParticleBlock]; k < offsets[end]; ++k)
-        if (second[k] >= end) cross_slot[c++] = fill[second[k]]++;
+        if (second[k] >= end) cross_in[fill[second[k]]++] = slot++;
     }
   }
 };
@@ -89,7 +86,7 @@ struct PairList {
 inline void gather_cross(const PairList& list, const std::vector<CrossSlot>& slots, std::size_t i,
                          Vec3& force, Vec3& torque) noexcept {
   for (std::uint32_t m = list.cross_in_offsets[i]; m < list.cross_in_offsets[i + 1]; ++m) {
-    const CrossSlot& s = slots[m];
+    const CrossSlot& s = slots[list.cross_in[m]];
     force += s.force;
     torque += s.torque;
   }
