@@ -158,25 +158,34 @@ TEST(FlatJoint, SlidingBreaksEveryElementInShearAtTheCohesion) {
 
 namespace {
 
-// A 2D flat joint of two segments, [-R, 0] bonded and [0, R] unbonded, turned by theta (grain 2
-// about z): returns the couple on grain 2 about z.
-double half_broken_couple(double theta) {
+// A 2D flat joint of two segments, [-R, 0] and [0, R], bonded or not as `bonded` says, pressed by
+// delta and turned by theta (grain 2 about z) over 100 steps: the loads on grain 2 at rest there.
+PairResult two_segment_interface(bool first_bonded, bool second_bonded, double delta,
+                                 double theta) {
   PairStepper<FlatJoint> s;
   s.planar = true;
   s.thickness = 1e-3;
   s.params.radial_elements = 2;
   s.b.x = {2 * kR, 0, 0};
   s.install();
-  s.state.bond[1] = flat::kUnbonded;
+  s.state.bond[0] = first_bonded ? flat::kBonded : flat::kUnbonded;
+  s.state.bond[1] = second_bonded ? flat::kBonded : flat::kUnbonded;
   s.evaluate();
   const int steps = 100;
+  s.b.v = {-delta / (steps * s.dt), 0, 0};
   s.b.w = {0, 0, theta / (steps * s.dt)};
   for (int k = 0; k < steps; ++k) {
     s.move();
     s.evaluate();
   }
+  s.b.v = {};
   s.b.w = {};
-  return s.evaluate().couple.z;
+  return s.evaluate();
+}
+
+// [-R, 0] bonded and [0, R] unbonded, turned by theta: the couple on grain 2 about z.
+double half_broken_couple(double theta) {
+  return two_segment_interface(true, false, 0.0, theta).couple.z;
 }
 
 }  // namespace
@@ -193,27 +202,10 @@ TEST(FlatJoint, HalfBrokenInterfaceResistsBendingFullyOneWayAndHalfTheOther) {
 
 namespace {
 
-// A broken (all-unbonded) 2D interface pressed by delta and turned by theta (grain 2 about z):
-// the normal force on grain 2 along n and the couple about z.
+// A broken (all-unbonded) 2D interface pressed by delta and turned by theta: the normal force on
+// grain 2 along n and the couple about z.
 std::pair<double, double> broken_interface(double delta, double theta) {
-  PairStepper<FlatJoint> s;
-  s.planar = true;
-  s.thickness = 1e-3;
-  s.params.radial_elements = 2;
-  s.b.x = {2 * kR, 0, 0};
-  s.install();
-  s.state.bond.fill(flat::kUnbonded);
-  s.evaluate();
-  const int steps = 100;
-  s.b.v = {-delta / (steps * s.dt), 0, 0};
-  s.b.w = {0, 0, theta / (steps * s.dt)};
-  for (int k = 0; k < steps; ++k) {
-    s.move();
-    s.evaluate();
-  }
-  s.b.v = {};
-  s.b.w = {};
-  const PairResult r = s.evaluate();
+  const PairResult r = two_segment_interface(false, false, delta, theta);
   return {r.f2.x, r.couple.z};
 }
 
@@ -297,6 +289,18 @@ TEST(FlatJoint, BadParametersAreRefusedByName) {
           "gapped_fraction", "at most 1");
   refused("bonded_fraction = 0.5\ngapped_fraction = 0.3\n", "installation_gap", "> 0");
   refused("friction = -0.1\n", "friction", ">= 0");
+  // Parameters built in C++ meet the same check when the engine takes them.
+  {
+    FlatJoint::Params p;
+    p.radial_elements = 3;
+    p.circumferential_elements = 3;
+    try {
+      make_pair(p);
+      ADD_FAILURE() << "a 3 x 3 interface was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("at most 8"), std::string::npos) << e.what();
+    }
+  }
   // In 2D only N_r counts: 8 segments are allowed whatever N_alpha says.
   EXPECT_NO_THROW(parse_experiment(
       "[engine]\ndimension = 2\n[sample]\nshape = \"rectangle\"\n[bond]\nlaw = \"flat_joint\"\n"

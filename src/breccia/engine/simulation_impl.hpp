@@ -1,6 +1,8 @@
 #pragma once
 // Public template members of Simulation (included at the end of simulation.hpp).
 #include <algorithm>
+#include <cstdint>
+#include <string>
 
 #include "breccia/core/error.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
@@ -28,7 +30,11 @@ std::uint64_t Simulation::add_bond(std::uint64_t tag1, std::uint64_t tag2) {
 
 template <class Law>
 void Simulation::set_bond_params(const typename Law::Params& params) {
-  validate_params<Law>(params, std::string("bond law '") + std::string(Law::name) + "'");
+  const std::string where = std::string("bond law '") + std::string(Law::name) + "'";
+  validate_params<Law>(params, where);
+  // The combinations a law refuses in experiment files, refused here too (Params built in C++).
+  if constexpr (requires { Law::check(params, where, std::int64_t{3}); })
+    Law::check(params, where, p_.planar() ? 2 : 3);
   auto& set = std::get<BondSet<Law>>(bonds_);
   set.params = params;
   prepare_params<Law>(set.params);

@@ -153,6 +153,8 @@ struct FlatJoint {
   static void prepare(Params& p) noexcept {
     p.tan_friction = std::tan(p.friction_angle_deg * kDegree);
     p.shear_fraction = 1.0 / p.stiffness_ratio;
+    // The table and check() refuse counts past 8 before any run (files and Simulation alike);
+    // the bounds here only keep the arrays safe.
     const int nr = std::clamp(static_cast<int>(p.radial_elements), 1, flat::kMaxElements);
     const int na = p.run.planar ? 1 : std::max(1, static_cast<int>(p.circumferential_elements));
     p.elements = std::min(nr * na, flat::kMaxElements);
