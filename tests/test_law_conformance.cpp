@@ -46,6 +46,18 @@ PairStepper<Law> loaded_pair(std::uint64_t seed, double speed = 1e-3, double spi
   return s;
 }
 
+// Turns on a contact law's rolling and twisting resistance (docs/physics.md §3.5): with
+// `elastic`, limits so high that the springs never slip and no dashpot, so that the pair stays a
+// potential.
+template <class Law>
+void with_rolling(PairStepper<Law>& s, bool elastic = false) {
+  if constexpr (requires { s.params.rolling_friction; }) {
+    s.params.rolling_friction = elastic ? 1e6 : 0.3;
+    s.params.twisting_friction = elastic ? 1e6 : 0.2;
+    s.params.rolling_damping_ratio = elastic ? 0.0 : 0.3;
+  }
+}
+
 double scale_of(const PairResult& r) {
   return norm(r.f2) + 1e-300;
 }
@@ -95,8 +107,9 @@ TYPED_TEST(ContactLawConformance, ZeroForceWhenNotOverlapping) {
 }
 
 template <class Law>
-void check_newton_third_law() {
+void check_newton_third_law(bool rolling = false) {
   auto s = loaded_pair<Law>(11);
+  if (rolling) with_rolling(s);
   for (int k = 0; k < 200; ++k) {
     const PairResult r = s.evaluate();
     const double f = scale_of(r);
@@ -115,6 +128,7 @@ TYPED_TEST(JointLawConformance, NewtonsThirdLawForForcesAndMoments) {
 }
 TYPED_TEST(ContactLawConformance, NewtonsThirdLawForForcesAndMoments) {
   check_newton_third_law<TypeParam>();
+  check_newton_third_law<TypeParam>(true);
 }
 
 // A contact law that reads only the pair's shape for some parameters (`needs_motion_with` false:
@@ -165,9 +179,10 @@ TYPED_TEST(ContactLawConformance, ShapeOnlyShortcutAgreesWithTheGeneralLaw) {
 }
 
 template <class Law>
-void check_rigid_motion_invariance() {
+void check_rigid_motion_invariance(bool rolling = false) {
   // The same motion seen in a rotated and translated frame gives the rotated forces.
   auto s = loaded_pair<Law>(5);
+  if (rolling) with_rolling(s);
   // 2D laws: a turn about z and a shift in the plane.
   const Quat q = planar_only_law<Law> ? normalized(Quat{0.7, 0.0, 0.0, 0.3})
                                       : normalized(Quat{0.7, 0.1, -0.4, 0.3});
@@ -219,10 +234,11 @@ TYPED_TEST(JointLawConformance, InvariantUnderRigidRotationAndTranslation) {
 }
 TYPED_TEST(ContactLawConformance, InvariantUnderRigidRotationAndTranslation) {
   check_rigid_motion_invariance<TypeParam>();
+  check_rigid_motion_invariance<TypeParam>(true);
 }
 
 template <class Law>
-void check_force_is_energy_gradient(double speed, double spin, int steps) {
+void check_force_is_energy_gradient(double speed, double spin, int steps, bool rolling = false) {
   // The work the interaction does on the two particles along a smooth elastic path equals minus
   // the change of its stored energy, plus what the law books as lost without work (the Hertz
   // shear spring whose stiffness follows the overlap, docs/physics.md §2.4). Trapezoidal work over
@@ -230,6 +246,7 @@ void check_force_is_energy_gradient(double speed, double spin, int steps) {
   // stiffness, or an unbooked loss, fails it.
   auto s = loaded_pair<Law>(7, speed, spin);
   if constexpr (requires { s.params.friction; }) s.params.friction = 1e6;  // no Coulomb slip
+  if (rolling) with_rolling(s, true);
   PairResult r0 = s.evaluate();
   const double e0 = s.energy();
   double work = 0.0, e_scale = std::abs(e0);
@@ -277,6 +294,7 @@ TYPED_TEST(JointLawConformance, ForceIsMinusEnergyGradient) {
 }
 TYPED_TEST(ContactLawConformance, ForceIsMinusEnergyGradient) {
   check_force_is_energy_gradient<TypeParam>(5e-3, 10.0, 2000);
+  check_force_is_energy_gradient<TypeParam>(5e-3, 10.0, 2000, true);
 }
 
 template <class Law>

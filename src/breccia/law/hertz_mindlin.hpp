@@ -9,6 +9,7 @@
 
 #include "breccia/law/frictional.hpp"
 #include "breccia/law/param_table.hpp"
+#include "breccia/law/rolling_resistance.hpp"
 
 namespace breccia {
 
@@ -24,9 +25,12 @@ struct HertzMindlin {
     double normal_damping_ratio = 0;
     double shear_damping_ratio = 0;
     bool unloading_rescale = true;
+    double rolling_friction = 0;  // mu_r (§3.5)
+    double twisting_friction = 0;
+    double rolling_damping_ratio = 0;
   };
-  static constexpr std::array<ParamField<Params>, 6> fields() {
-    return {{
+  static constexpr std::array<ParamField<Params>, 9> fields() {
+    return with_rolling_fields<Params, 6>({{
         {"shear_modulus", "Pa", &Params::shear_modulus, 0, kInf, false, true,
          "grain shear modulus G"},
         {"poisson_ratio", "-", &Params::poisson_ratio, -1, 0.5, false, false,
@@ -39,7 +43,7 @@ struct HertzMindlin {
          "damping ratio of the tangential dashpot (0 = none)"},
         {"unloading_rescale", "-", &Params::unloading_rescale, 0, 0, true, true,
          "scale the stored shear force by a_new/a_old when the contact radius shrinks"},
-    }};
+    }});
   }
   static Params example_params() { return {}; }
 
@@ -49,6 +53,7 @@ struct HertzMindlin {
     double normal_force = 0.0;  // elastic Hertz force
     double overlap = 0.0;       // delta of the last step
     double kt = 0.0;            // tangential stiffness of the last step
+    RollingSpring rolling;      // rolling and twisting moments (§3.5)
   };
 
   // Effective modulus E* and shear modulus G* for identical grains, or grain on a rigid wall.
@@ -97,7 +102,7 @@ struct HertzMindlin {
   }
   // Separated: the contact is deleted; its shear spring energy leaves without work.
   static PairForce separate(State& s, PairDissipation& dis) noexcept {
-    if (s.kt > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) / s.kt;
+    if (s.kt > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) / s.kt + rolling_energy(s.rolling);
     s = State{};
     return {};
   }
@@ -106,7 +111,8 @@ struct HertzMindlin {
   // normal force alone: a function of the pair's shape, so the pair pass need not load the
   // grains' velocities (the packings' vessel runs so).
   static bool needs_motion_with(const Params& p) noexcept {
-    return p.friction > 0.0 || p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0;
+    return p.friction > 0.0 || p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0 ||
+           rolling_limits(p).on();
   }
 
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, double dt,
@@ -115,7 +121,7 @@ struct HertzMindlin {
     // What compute_with_motion gives with a zero friction limit, without reading g's motion.
     if (g.delta <= 0.0) return separate(s, dis);
     const Hertz h = hertz(p, g);
-    s = State{{}, g.n, h.fn, g.delta, h.kt};
+    s = State{{}, g.n, h.fn, g.delta, h.kt, {}};
     return {g.n * h.fn, {}};
   }
 
@@ -126,8 +132,9 @@ struct HertzMindlin {
     const Hertz h = hertz(p, g);
     const double fn = h.fn, kt = h.kt;
     Vec3 fs;
+    const PlaneCarry carry = contact_carry(s.n_old, g, dt, s.kt > 0.0);
     if (s.kt > 0.0) {
-      fs = carry_shear(s.shear_force, s.n_old, g, dt);
+      fs = carry.apply(s.shear_force);
       const double e_before = 0.5 * norm2(fs) / s.kt;
       const double a_old = std::sqrt(h.r_star * s.overlap);
       if (p.unloading_rescale && h.a < a_old) fs *= h.a / a_old;
@@ -144,6 +151,11 @@ struct HertzMindlin {
     s.kt = kt;
 
     Vec3 force = g.n * fn + shear.force;
+    Vec3 couple;
+    if (const RollingLimits roll = rolling_limits(p); roll.on()) {
+      if (s.rolling.k > 0.0) s.rolling.moment = carry.apply(s.rolling.moment);
+      couple = rolling_step(roll, s.rolling, g, kt, fn, dt, dis);
+    }
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
       // Tsuji form with the tangent stiffnesses (§2.2).
       const double c = 2.0 * std::sqrt(5.0 / 6.0), m = g.m_star();
@@ -151,12 +163,13 @@ struct HertzMindlin {
                              c * p.normal_damping_ratio * std::sqrt(2.0 * h.e_star * h.a * m),
                              c * p.shear_damping_ratio * std::sqrt(kt * m), shear.sliding, dt, dis);
     }
-    return {force, {}};
+    return {force, couple};
   }
 
   static double stored_energy(const Params&, const State& s) noexcept {
     if (s.kt == 0.0) return 0.0;
-    return 0.4 * s.normal_force * s.overlap + 0.5 * norm2(s.shear_force) / s.kt;
+    return 0.4 * s.normal_force * s.overlap + 0.5 * norm2(s.shear_force) / s.kt +
+           rolling_energy(s.rolling);
   }
 };
 

@@ -9,6 +9,7 @@
 
 #include "breccia/law/frictional.hpp"
 #include "breccia/law/param_table.hpp"
+#include "breccia/law/rolling_resistance.hpp"
 
 namespace breccia {
 
@@ -23,9 +24,12 @@ struct LinearContact {
     double friction = 0.5;            // mu
     double normal_damping_ratio = 0;  // beta_n
     double shear_damping_ratio = 0;   // beta_s
+    double rolling_friction = 0;      // mu_r (§3.5)
+    double twisting_friction = 0;     // mu_t
+    double rolling_damping_ratio = 0;
   };
-  static constexpr std::array<ParamField<Params>, 5> fields() {
-    return {{
+  static constexpr std::array<ParamField<Params>, 8> fields() {
+    return with_rolling_fields<Params, 5>({{
         {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
          "effective contact modulus E_c; k_n = A E_c / L with A = pi r^2 (2 r t in 2D), "
          "r = min(R1, R2), L = R1 + R2 (wall: r = L = R)"},
@@ -37,7 +41,7 @@ struct LinearContact {
          "critical damping ratio of the normal dashpot (0 = none)"},
         {"shear_damping_ratio", "-", &Params::shear_damping_ratio, 0, 1, true, false,
          "critical damping ratio of the shear dashpot (0 = none)"},
-    }};
+    }});
   }
   static Params example_params() { return {}; }
 
@@ -46,6 +50,7 @@ struct LinearContact {
     Vec3 n_old;                 // normal of the previous step (zero: new contact)
     double normal_force = 0.0;  // spring part of F_n, kept for energy and output
     double kn = 0.0;            // normal stiffness of this pair (set at first touch)
+    RollingSpring rolling;      // rolling and twisting moments (§3.5)
   };
 
   static double normal_stiffness(const Params& p, const PairGeometry& g) noexcept {
@@ -64,7 +69,8 @@ struct LinearContact {
   // Frictionless and without dashpots, the force is the normal spring's alone: a function of the
   // pair's shape, so the pair pass need not load the grains' velocities.
   static bool needs_motion_with(const Params& p) noexcept {
-    return p.friction > 0.0 || p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0;
+    return p.friction > 0.0 || p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0 ||
+           rolling_limits(p).on();
   }
 
   // One step of the contact. Returns the force on particle 2; books dissipation into `dis`.
@@ -89,7 +95,8 @@ struct LinearContact {
     if (!has_history) s.kn = normal_stiffness(p, g);
     const double kn = s.kn;
     const double ks = kn / p.stiffness_ratio;
-    const Vec3 fs = has_history ? carry_shear(s.shear_force, s.n_old, g, dt) : Vec3{};
+    const PlaneCarry carry = contact_carry(s.n_old, g, dt, has_history);
+    const Vec3 fs = has_history ? carry.apply(s.shear_force) : Vec3{};
     const double vn = g.vn();
     const Vec3 vt = g.vc - g.n * vn;
     const double fn = kn * g.delta;
@@ -99,18 +106,25 @@ struct LinearContact {
     s.normal_force = fn;
 
     Vec3 force = g.n * fn + shear.force;
+    Vec3 couple;
+    if (const RollingLimits roll = rolling_limits(p); roll.on()) {
+      if (has_history) s.rolling.moment = carry.apply(s.rolling.moment);
+      couple = rolling_step(roll, s.rolling, g, ks, fn, dt, dis);
+    }
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
       const double m = g.m_star();
       force +=
           dashpot_force(g, fn, vn, vt, 2.0 * p.normal_damping_ratio * std::sqrt(m * kn),
                         2.0 * p.shear_damping_ratio * std::sqrt(m * ks), shear.sliding, dt, dis);
     }
-    return {force, {}};
+    return {force, couple};
   }
 
   // Separated: the contact is deleted; its shear spring energy leaves without work.
   static PairForce separate(const Params& p, State& s, PairDissipation& dis) noexcept {
-    if (s.kn > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) * p.stiffness_ratio / s.kn;
+    if (s.kn > 0.0)
+      dis.deleted +=
+          0.5 * norm2(s.shear_force) * p.stiffness_ratio / s.kn + rolling_energy(s.rolling);
     s = State{};
     return {};
   }
@@ -119,7 +133,8 @@ struct LinearContact {
   static double stored_energy(const Params& p, const State& s) noexcept {
     if (s.kn == 0.0) return 0.0;
     return 0.5 * (s.normal_force * s.normal_force + norm2(s.shear_force) * p.stiffness_ratio) /
-           s.kn;
+               s.kn +
+           rolling_energy(s.rolling);
   }
 };
 

@@ -28,7 +28,7 @@ constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // only where they exist (empty while every grain is free; angles in 2D only). A new law, lab test
 // or recorder needs no new number: laws and tests are found by name, and each recorder checks its
 // own label.
-constexpr std::uint32_t kCheckpointFormat = 18;
+constexpr std::uint32_t kCheckpointFormat = 19;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
