@@ -91,9 +91,15 @@ constexpr FreeKeyInfo kFreeKeys[] = {
     {"bond.tensile_strength_sd", CalibrationStage::Strength},
     {"bond.cohesion_sd", CalibrationStage::Strength},
     {"bond.moment_factor", CalibrationStage::Strength},
+    {"bond.bonded_fraction", CalibrationStage::Strength},
+    {"bond.gapped_fraction", CalibrationStage::Strength},
+    {"bond.installation_gap", CalibrationStage::Strength},
     {"contact.friction", CalibrationStage::Friction},
+    {"contact.rolling_friction", CalibrationStage::Friction},
+    {"contact.twisting_friction", CalibrationStage::Friction},
     {"bond.friction_angle_deg", CalibrationStage::Friction},
     {"bond.friction", CalibrationStage::Friction},
+    {"bond.residual_cohesion", CalibrationStage::Friction},
 };
 
 std::string free_key_list() {

@@ -42,6 +42,9 @@ class Simulation::PairWalk {
         dt_(sim.dt_),
         contact_motion_(contact_needs_motion<CL>(c.params)),
         torques_(!sim.central_forces_only(c)),
+        bond_beta_n_(sim.cfg_.bond_normal_damping_ratio),
+        bond_beta_s_(sim.cfg_.bond_shear_damping_ratio),
+        bond_damped_(bond_beta_n_ > 0.0 || bond_beta_s_ > 0.0),
         fails_(fails),
         g_(g),
         dissipation_(dissipation),
@@ -129,7 +132,7 @@ class Simulation::PairWalk {
     // A run uses one bond law: the others' sets are empty, and keep no index.
     const std::uint32_t b = set.bond_at_pair(k_);
     if (b != BondSet<Law>::kNoBond && set.intact[b]) {
-      need(law_needs_motion<Law>);
+      need(law_needs_motion<Law> || bond_damped_);
       if constexpr (judged_on_interface<Law>) {
         // Judged on the interface totals (§4.4): it waits for the pair's contact force.
         held_ = Law::loads(set.state[b], g_, dt_);
@@ -148,10 +151,26 @@ class Simulation::PairWalk {
         if (!f.broken || f.outcome == BondOutcome::ElementBroken) {
           force_ += pf.force;
           couple_ += pf.couple;
+          if (bond_damped_) force_ += bond_dashpot<Law>(set.params, set.state[b]);
           contact_off_ = contact_off_ || !Law::contact_while_bonded(set.params);
         }
       }
     }
+  }
+
+  // The dashpots in parallel with an intact bond (docs/physics.md §2.2): c = 2 beta sqrt(m* k) on
+  // the bond's normal and shear stiffness, against the relative velocity of the contact point. A
+  // bond carries tension, so no no-tension rule; the loss is booked as viscous.
+  template <class Law>
+  [[gnu::always_inline]] Vec3 bond_dashpot(const typename Law::Params& p,
+                                           const typename Law::State& s) {
+    const double m = g_.m_star();
+    const double cn = 2.0 * bond_beta_n_ * std::sqrt(m * Law::normal_stiffness(p, s));
+    const double cs = 2.0 * bond_beta_s_ * std::sqrt(m * Law::shear_stiffness(p, s));
+    const double vn = g_.vn();
+    const Vec3 vt = g_.vc - g_.n * vn;
+    dissipation_.viscous += (cn * vn * vn + cs * norm2(vt)) * dt_;
+    return g_.n * (-cn * vn) - vt * cs;
   }
 
   // A joint replaces the pair's contact law (docs/physics.md §5); a bonded joint that breaks goes
@@ -222,6 +241,7 @@ class Simulation::PairWalk {
       } else {
         force_ += held_.force;
         couple_ += held_.couple;
+        if (bond_damped_) force_ += bond_dashpot<Law>(set.params, set.state[held_bond_]);
       }
     }
   }
@@ -231,6 +251,8 @@ class Simulation::PairWalk {
   const double dt_;
   const bool contact_motion_;  // whether the contact law reads the pair's velocities
   const bool torques_;         // false with central forces only (no torque but rounding)
+  const double bond_beta_n_, bond_beta_s_;  // bond dashpots' critical-damping ratios
+  const bool bond_damped_;
   std::vector<Failure>& fails_;
   std::vector<typename CL::State>* store_ = nullptr;  // the block's contact histories
   PairGeometry& g_;                                   // the pair in hand's

@@ -31,6 +31,11 @@ Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactMode
                      "allowed: 0 < value <= 1");
   if (!(cfg_.local_damping >= 0.0 && cfg_.local_damping < 1.0))
     throw InputError(where, "local_damping", num(cfg_.local_damping), "allowed: 0 <= value < 1");
+  for (const auto& [key, value] :
+       {std::pair{"bond_normal_damping_ratio", cfg_.bond_normal_damping_ratio},
+        std::pair{"bond_shear_damping_ratio", cfg_.bond_shear_damping_ratio}})
+    if (!(value >= 0.0 && value <= 1.0))
+      throw InputError(where, key, num(value), "allowed: 0 <= value <= 1");
   if (!(cfg_.skin >= 0.0) || !std::isfinite(cfg_.skin))
     throw InputError(where, "skin", num(cfg_.skin), "must be >= 0 m (0 = automatic)");
   std::visit(

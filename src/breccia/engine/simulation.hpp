@@ -24,10 +24,14 @@ class ArchiveWriter;
 class ArchiveReader;
 
 struct EngineConfig {
-  double time_step = 0.0;               // s; 0 = use the critical estimate times safety_factor
-  double safety_factor = 0.3;           // S of §1.5
-  double hertz_rayleigh_factor = 0.2;   // fraction of the Rayleigh time step for Hertz contacts
-  double local_damping = 0.0;           // Cundall alpha (§2.1)
+  double time_step = 0.0;              // s; 0 = use the critical estimate times safety_factor
+  double safety_factor = 0.3;          // S of §1.5
+  double hertz_rayleigh_factor = 0.2;  // fraction of the Rayleigh time step for Hertz contacts
+  double local_damping = 0.0;          // Cundall alpha (§2.1)
+  // Dashpots in parallel with every intact bond, as critical-damping ratios of its normal and
+  // shear stiffness (§2.2); 0 = none.
+  double bond_normal_damping_ratio = 0.0;
+  double bond_shear_damping_ratio = 0.0;
   Vec3 gravity;                         // m/s^2
   double skin = 0.0;                    // m; 0 = 0.4 x the mean radius
   std::uint64_t seed = 1;               // strengths and anything else random

@@ -234,6 +234,10 @@ struct BeamLaw {
     return std::max(c.kb, c.kt);
   }
   template <class Params>
+  static double normal_stiffness(const Params& p, const State& s) noexcept {
+    return section(p, s).kr;
+  }
+  template <class Params>
   static double shear_stiffness(const Params& p, const State& s) noexcept {
     return section(p, s).ks;
   }

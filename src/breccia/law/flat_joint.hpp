@@ -312,6 +312,9 @@ struct FlatJoint {
   static double max_stiffness(const Params& p, const State& s) noexcept {
     return s.kn * std::max(1.0, p.shear_fraction) * section(p, s).area;
   }
+  static double normal_stiffness(const Params& p, const State& s) noexcept {
+    return s.kn * section(p, s).area;
+  }
   static double shear_stiffness(const Params& p, const State& s) noexcept {
     return s.kn * p.shear_fraction * section(p, s).area;
   }

@@ -149,6 +149,9 @@ struct ParallelBond {
     const Section c = section(p, s);
     return std::max(c.kb, c.kt);
   }
+  static double normal_stiffness(const Params& p, const State& s) noexcept {
+    return section(p, s).kn;
+  }
   static double shear_stiffness(const Params& p, const State& s) noexcept {
     return section(p, s).ks;
   }

@@ -106,6 +106,7 @@ struct RicebalBond {
     return std::max(s.kn, s.ks);
   }
   static double max_moment_stiffness(const Params&, const State& s) noexcept { return s.km; }
+  static double normal_stiffness(const Params&, const State& s) noexcept { return s.kn; }
   static double shear_stiffness(const Params&, const State& s) noexcept { return s.ks; }
 
   // The bond's own loads of this step (forces on particle 2), before the failure check.

@@ -227,6 +227,15 @@ std::vector<SpecField> engine_fields() {
        "fraction of the critical time step used", 0, 1, false, true},
       {"engine", "local_damping", "", engine_at<&EngineConfig::local_damping>,
        "Cundall local damping coefficient alpha (§2.1); 0.7 is quasi-static", 0, 1, true, false},
+      {"engine", "bond_normal_damping_ratio", "",
+       engine_at<&EngineConfig::bond_normal_damping_ratio>,
+       "critical-damping ratio of a dashpot along every intact bond's normal, on its normal "
+       "stiffness (§2.2); 0 = none",
+       0, 1},
+      {"engine", "bond_shear_damping_ratio", "", engine_at<&EngineConfig::bond_shear_damping_ratio>,
+       "critical-damping ratio of a dashpot across every intact bond, on its shear stiffness "
+       "(§2.2); 0 = none",
+       0, 1},
       {"engine", "skin", "m", engine_at<&EngineConfig::skin>, "Verlet skin; 0 = 0.4 x mean radius",
        0, kInf},
       {"engine", "gravity", "m/s^2", at<&S::gravity>,
