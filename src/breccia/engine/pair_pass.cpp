@@ -42,9 +42,6 @@ class Simulation::PairWalk {
         dt_(sim.dt_),
         contact_motion_(contact_needs_motion<CL>(c.params)),
         torques_(!sim.central_forces_only(c)),
-        bond_beta_n_(sim.cfg_.bond_normal_damping_ratio),
-        bond_beta_s_(sim.cfg_.bond_shear_damping_ratio),
-        bond_damped_(bond_beta_n_ > 0.0 || bond_beta_s_ > 0.0),
         fails_(fails),
         g_(g),
         dissipation_(dissipation),
@@ -132,7 +129,7 @@ class Simulation::PairWalk {
     // A run uses one bond law: the others' sets are empty, and keep no index.
     const std::uint32_t b = set.bond_at_pair(k_);
     if (b != BondSet<Law>::kNoBond && set.intact[b]) {
-      need(law_needs_motion<Law> || bond_damped_);
+      need(law_needs_motion<Law> || bond_damped());
       if constexpr (judged_on_interface<Law>) {
         // Judged on the interface totals (§4.4): it waits for the pair's contact force.
         held_ = Law::loads(set.state[b], g_, dt_);
@@ -151,11 +148,16 @@ class Simulation::PairWalk {
         if (!f.broken || f.outcome == BondOutcome::ElementBroken) {
           force_ += pf.force;
           couple_ += pf.couple;
-          if (bond_damped_) force_ += bond_dashpot<Law>(set.params, set.state[b]);
+          if (bond_damped()) force_ += bond_dashpot<Law>(set.params, set.state[b]);
           contact_off_ = contact_off_ || !Law::contact_while_bonded(set.params);
         }
       }
     }
+  }
+
+  // Whether intact bonds carry dashpots (read where used: the walk's own members stay few).
+  [[gnu::always_inline]] bool bond_damped() const {
+    return sim_.cfg_.bond_normal_damping_ratio > 0.0 || sim_.cfg_.bond_shear_damping_ratio > 0.0;
   }
 
   // The dashpots in parallel with an intact bond (docs/physics.md §2.2): c = 2 beta sqrt(m* k) on
@@ -165,8 +167,10 @@ class Simulation::PairWalk {
   [[gnu::always_inline]] Vec3 bond_dashpot(const typename Law::Params& p,
                                            const typename Law::State& s) {
     const double m = g_.m_star();
-    const double cn = 2.0 * bond_beta_n_ * std::sqrt(m * Law::normal_stiffness(p, s));
-    const double cs = 2.0 * bond_beta_s_ * std::sqrt(m * Law::shear_stiffness(p, s));
+    const double cn =
+        2.0 * sim_.cfg_.bond_normal_damping_ratio * std::sqrt(m * Law::normal_stiffness(p, s));
+    const double cs =
+        2.0 * sim_.cfg_.bond_shear_damping_ratio * std::sqrt(m * Law::shear_stiffness(p, s));
     const double vn = g_.vn();
     const Vec3 vt = g_.vc - g_.n * vn;
     dissipation_.viscous += (cn * vn * vn + cs * norm2(vt)) * dt_;
@@ -241,7 +245,7 @@ class Simulation::PairWalk {
       } else {
         force_ += held_.force;
         couple_ += held_.couple;
-        if (bond_damped_) force_ += bond_dashpot<Law>(set.params, set.state[held_bond_]);
+        if (bond_damped()) force_ += bond_dashpot<Law>(set.params, set.state[held_bond_]);
       }
     }
   }
@@ -251,8 +255,6 @@ class Simulation::PairWalk {
   const double dt_;
   const bool contact_motion_;  // whether the contact law reads the pair's velocities
   const bool torques_;         // false with central forces only (no torque but rounding)
-  const double bond_beta_n_, bond_beta_s_;  // bond dashpots' critical-damping ratios
-  const bool bond_damped_;
   std::vector<Failure>& fails_;
   std::vector<typename CL::State>* store_ = nullptr;  // the block's contact histories
   PairGeometry& g_;                                   // the pair in hand's

@@ -9,11 +9,8 @@
 namespace breccia {
 
 // The rotation that carries a contact's stored shear force and moments from the previous contact
-// plane (normal n_old) into the current one: exact tilt, then the spin of the pair about n. A new
-// contact (no history) gets the identity.
-inline PlaneCarry contact_carry(const Vec3& n_old, const PairGeometry& g, double dt,
-                                bool has_history) noexcept {
-  if (!has_history) return PlaneCarry(g.n, g.n, 0.0);
+// plane (normal n_old) into the current one: exact tilt, then the spin of the pair about n.
+inline PlaneCarry contact_carry(const Vec3& n_old, const PairGeometry& g, double dt) noexcept {
   return PlaneCarry(n_old, g.n, 0.5 * dot(g.w1 + g.w2, g.n) * dt);
 }
 

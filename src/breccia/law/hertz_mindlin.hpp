@@ -131,10 +131,12 @@ struct HertzMindlin {
     if (g.delta <= 0.0) return separate(s, dis);
     const Hertz h = hertz(p, g);
     const double fn = h.fn, kt = h.kt;
+    const RollingLimits roll = rolling_limits(p);
     Vec3 fs;
-    const PlaneCarry carry = contact_carry(s.n_old, g, dt, s.kt > 0.0);
     if (s.kt > 0.0) {
+      const PlaneCarry carry = contact_carry(s.n_old, g, dt);
       fs = carry.apply(s.shear_force);
+      if (roll.on()) s.rolling.moment = carry.apply(s.rolling.moment);
       const double e_before = 0.5 * norm2(fs) / s.kt;
       const double a_old = std::sqrt(h.r_star * s.overlap);
       if (p.unloading_rescale && h.a < a_old) fs *= h.a / a_old;
@@ -152,10 +154,7 @@ struct HertzMindlin {
 
     Vec3 force = g.n * fn + shear.force;
     Vec3 couple;
-    if (const RollingLimits roll = rolling_limits(p); roll.on()) {
-      if (s.rolling.k > 0.0) s.rolling.moment = carry.apply(s.rolling.moment);
-      couple = rolling_step(roll, s.rolling, g, kt, fn, dt, dis);
-    }
+    if (roll.on()) couple = rolling_step(roll, s.rolling, g, kt, fn, dt, dis);
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
       // Tsuji form with the tangent stiffnesses (§2.2).
       const double c = 2.0 * std::sqrt(5.0 / 6.0), m = g.m_star();

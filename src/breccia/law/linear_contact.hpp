@@ -95,8 +95,13 @@ struct LinearContact {
     if (!has_history) s.kn = normal_stiffness(p, g);
     const double kn = s.kn;
     const double ks = kn / p.stiffness_ratio;
-    const PlaneCarry carry = contact_carry(s.n_old, g, dt, has_history);
-    const Vec3 fs = has_history ? carry.apply(s.shear_force) : Vec3{};
+    const RollingLimits roll = rolling_limits(p);
+    Vec3 fs;
+    if (has_history) {
+      const PlaneCarry carry = contact_carry(s.n_old, g, dt);
+      fs = carry.apply(s.shear_force);
+      if (roll.on()) s.rolling.moment = carry.apply(s.rolling.moment);
+    }
     const double vn = g.vn();
     const Vec3 vt = g.vc - g.n * vn;
     const double fn = kn * g.delta;
@@ -107,10 +112,7 @@ struct LinearContact {
 
     Vec3 force = g.n * fn + shear.force;
     Vec3 couple;
-    if (const RollingLimits roll = rolling_limits(p); roll.on()) {
-      if (has_history) s.rolling.moment = carry.apply(s.rolling.moment);
-      couple = rolling_step(roll, s.rolling, g, ks, fn, dt, dis);
-    }
+    if (roll.on()) couple = rolling_step(roll, s.rolling, g, ks, fn, dt, dis);
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
       const double m = g.m_star();
       force +=
