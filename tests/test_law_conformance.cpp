@@ -51,7 +51,7 @@ PairStepper<Law> loaded_pair(std::uint64_t seed, double speed = 1e-3, double spi
 // potential.
 template <class Law>
 void with_rolling(PairStepper<Law>& s, bool elastic = false) {
-  if constexpr (requires { s.params.rolling_friction; }) {
+  if constexpr (requires { s.state.rolling; }) {
     s.params.rolling_friction = elastic ? 1e6 : 0.3;
     s.params.twisting_friction = elastic ? 1e6 : 0.2;
     s.params.rolling_damping_ratio = elastic ? 0.0 : 0.3;
@@ -70,7 +70,9 @@ TYPED_TEST_SUITE(BondLawConformance, GTypes<BondLaws>::type);
 
 template <class Law>
 class ContactLawConformance : public ::testing::Test {};
-TYPED_TEST_SUITE(ContactLawConformance, GTypes<ContactLaws>::type);
+// Every contact law in both state layouts: the one with the rolling moments runs the checks with
+// rolling and twisting resistance on where a check says so (with_rolling).
+TYPED_TEST_SUITE(ContactLawConformance, GTypes<EngineContactLaws>::type);
 
 // Joint laws (docs/physics.md §5) with their example parameters (a bonded joint, so that tension
 // and compression both load it), on a plane tilted from the branch.

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <type_traits>
+#include <variant>
 
 #include "breccia/engine/simulation.hpp"
 #include "pair_harness.hpp"
@@ -13,11 +15,14 @@ using namespace breccia::test;
 
 namespace {
 
+// The linear law in its state layout with the moments (make_contact_model picks it in a run).
+using RollingLinear = LinearContactLaw<true>;
+
 // Two spheres of R = 0.5 mm overlapping by 1 um under the linear law (E_c = 10 GPa, kappa 2.5):
 // k_n = pi r^2 E_c / (2R) = 7.854e6 N/m, F_n = 7.854 N, k_s = 3.1416e6 N/m; R = 0.25 mm, so the
 // rolling stiffness k_s R^2 = 0.19635 N m/rad.
-PairStepper<LinearContact> pressed_pair(double mu_r, double mu_t) {
-  PairStepper<LinearContact> s;
+PairStepper<RollingLinear> pressed_pair(double mu_r, double mu_t) {
+  PairStepper<RollingLinear> s;
   s.params.modulus = 10e9;
   s.params.stiffness_ratio = 2.5;
   s.params.friction = 0.5;
@@ -31,7 +36,7 @@ constexpr double kFn = 7.853981633974483;
 constexpr double kKr = 7.853981633974483e6 / 2.5 * 0.25e-3 * 0.25e-3;
 
 // Turns particle 2 at w about `axis` for `steps` steps (positions stay: only the couple is read).
-Vec3 turn(PairStepper<LinearContact>& s, const Vec3& w, int steps) {
+Vec3 turn(PairStepper<RollingLinear>& s, const Vec3& w, int steps) {
   s.b.w = w;
   PairResult r;
   for (int k = 0; k < steps; ++k) {
@@ -50,7 +55,7 @@ TEST(RollingResistance, SpringStiffnessAndLimitMoment) {
   EXPECT_NEAR(m.y, -kKr * 5e-4, 1e-12 * kKr * 5e-4);
   EXPECT_NEAR(m.x, 0.0, 1e-18);
   EXPECT_NEAR(m.z, 0.0, 1e-18);
-  EXPECT_NEAR(LinearContact::stored_energy(s.params, s.state) -
+  EXPECT_NEAR(RollingLinear::stored_energy(s.params, s.state) -
                   0.5 * (kFn * kFn / 7.853981633974483e6 +
                          norm2(s.state.shear_force) * 2.5 / 7.853981633974483e6),
               0.5 * kKr * 25e-8, 1e-12);
@@ -210,4 +215,25 @@ TEST(RollingResistance, SpinningSphereStopsAtTheTwistingLimit) {
                                                  {}, {0, 0, 10});
   sim.run(50000);  // 1 ms
   EXPECT_NEAR(sim.particles().angvel[0].z, 10 - 4905.0 * 1e-3, 2e-3 * 4.905);
+}
+
+TEST(RollingResistance, TheEngineHoldsTheMomentsOnlyWhenRollingIsOn) {
+  // Without rolling resistance a contact's state keeps its size (the moments cost nothing).
+  static_assert(std::is_empty_v<RollingSlot<false>>);
+  EXPECT_EQ(sizeof(RollingLinear::State), sizeof(LinearContact::State) + sizeof(RollingSpring));
+  LinearContact::Params off, on;
+  on.rolling_friction = 0.1;
+  EXPECT_TRUE(std::holds_alternative<ContactSet<LinearContact>>(
+      make_contact_model<LinearContact>(off, off)));
+  EXPECT_TRUE(std::holds_alternative<ContactSet<RollingLinear>>(
+      make_contact_model<LinearContact>(off, on)));
+  EXPECT_TRUE(std::holds_alternative<ContactSet<HertzMindlinLaw<true>>>(
+      make_contact_model<HertzMindlin>(HertzMindlin::Params{.twisting_friction = 0.1}, {})));
+  // A model put together by hand with the moments dropped is refused.
+  ContactSet<LinearContact> wrong;
+  wrong.params = on;
+  ParticleStore ps(Dimension::Three, 1.0);
+  EXPECT_THROW(Simulation(std::move(ps), EngineConfig{},
+                          ContactModel{std::in_place_type<ContactSet<LinearContact>>, wrong}),
+               InputError);
 }

@@ -146,13 +146,14 @@ void Simulation::transfer_contacts(Archive& a) {
   // By name, like the bond sets: the registry's order does not matter.
   std::string contact_law;
   if constexpr (!Archive::reading)
-    std::visit([&]<class CL>(const ContactSet<CL>&) { contact_law = CL::name; }, contact_);
+    std::visit([&]<class CL>(const ContactSet<CL>&) { contact_law = contact_layout_name<CL>(); },
+               contact_);
   a.string(contact_law);
   if constexpr (Archive::reading) {
     constexpr std::size_t kLaws = std::variant_size_v<ContactModel>;
     std::size_t law = kLaws, index = 0;
-    for_each_type<ContactLaws>([&]<class CL>() {
-      if (CL::name == contact_law) law = index;
+    for_each_type<EngineContactLaws>([&]<class CL>() {
+      if (contact_layout_name<CL>() == contact_law) law = index;
       ++index;
     });
     if (law >= kLaws)

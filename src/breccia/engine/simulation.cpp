@@ -43,6 +43,11 @@ Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactMode
         validate_params<Law>(c.params, std::string("contact law '") + std::string(Law::name) + "'");
         validate_params<Law>(c.wall_params,
                              std::string("wall contact law '") + std::string(Law::name) + "'");
+        // make_contact_model picks the layout; one built by hand must not lose the moments.
+        if (!Law::rolling && (rolling_limits(c.params).on() || rolling_limits(c.wall_params).on()))
+          throw InputError(std::string("contact law '") + std::string(Law::name) + "'",
+                           "rolling_friction", num(c.params.rolling_friction),
+                           "rolling resistance needs the contact model of make_contact_model");
         wall_contacts_ = std::vector<WallContacts<Law>>{};
       },
       contact_);
@@ -137,7 +142,7 @@ void Simulation::initialise() {
   if (p_.size() == 0)
     throw InputError("simulation", "particles", "0", "at least one particle is needed");
   if (p_.planar() && p_.planar_body() == PlanarBody::Disk &&
-      std::holds_alternative<ContactSet<HertzMindlin>>(contact_))
+      std::visit([](const auto& c) { return c.law_name() == HertzMindlin::name; }, contact_))
     throw InputError("contact law", "law", "hertz_mindlin",
                      "Hertz contacts need 3D spheres or 2D planar spheres (docs/physics.md §3.4); "
                      "use 'linear' for 2D disks");

@@ -81,7 +81,7 @@ template <class... Laws>
 struct ContactVariantOf<TypeList<Laws...>> {
   using type = std::variant<ContactSet<Laws>...>;
 };
-using ContactModel = ContactVariantOf<ContactLaws>::type;
+using ContactModel = ContactVariantOf<EngineContactLaws>::type;
 
 template <class List>
 struct BondTupleOf;
@@ -102,14 +102,20 @@ struct WallContactVariantOf<TypeList<Laws...>> {
   using type = std::variant<std::vector<WallContacts<Laws>>...>;
 };
 
-// Builds the contact model for a law with its particle and wall parameters.
+// Builds the contact model for a law with its particle and wall parameters: the law's state
+// layout with the rolling and twisting moments when either set of parameters turns them on.
 template <class Law>
 ContactModel make_contact_model(const typename Law::Params& particle,
                                 const typename Law::Params& wall) {
-  ContactSet<Law> c;
-  c.params = particle;
-  c.wall_params = wall;
-  return ContactModel{std::in_place_type<ContactSet<Law>>, std::move(c)};
+  auto make = [&]<class Layout>() {
+    ContactSet<Layout> c;
+    c.params = particle;
+    c.wall_params = wall;
+    return ContactModel{std::in_place_type<ContactSet<Layout>>, std::move(c)};
+  };
+  if (rolling_limits(particle).on() || rolling_limits(wall).on())
+    return make.template operator()<typename Law::template with_rolling<true>>();
+  return make.template operator()<typename Law::template with_rolling<false>>();
 }
 
 // Per-block partial sums of the integrator (kept in a member: no allocation per step).
@@ -397,7 +403,7 @@ class Simulation {
   std::uint32_t joint_law_ = 0;  // position in JointLaws of the law that new joints get
   std::vector<PendingJoint> pending_joints_;
   std::vector<Wall> walls_;
-  WallContactVariantOf<ContactLaws>::type wall_contacts_;
+  WallContactVariantOf<EngineContactLaws>::type wall_contacts_;
 
   double dt_ = 0.0, dt_crit_ = 0.0, time_ = 0.0, skin_ = 0.0;
   std::uint64_t step_ = 0, rebuilds_ = 0, next_bond_tag_ = 1;

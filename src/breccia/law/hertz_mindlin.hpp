@@ -13,22 +13,29 @@
 
 namespace breccia {
 
-struct HertzMindlin {
+// The parameters, shared by the law's two state layouts (see LinearContactLaw).
+struct HertzMindlinParams {
+  double shear_modulus = 29e9;  // G of the grain material
+  double poisson_ratio = 0.2;   // nu
+  double friction = 0.5;
+  double normal_damping_ratio = 0;
+  double shear_damping_ratio = 0;
+  bool unloading_rescale = true;
+  double rolling_friction = 0;  // mu_r (§3.5)
+  double twisting_friction = 0;
+  double rolling_damping_ratio = 0;
+};
+
+template <bool Rolling>
+struct HertzMindlinLaw {
   static constexpr std::string_view name = "hertz_mindlin";
   static constexpr std::string_view summary =
       "Hertz normal force, Mindlin no-slip tangential stiffness, Coulomb friction.";
+  static constexpr bool rolling = Rolling;
+  template <bool R>
+  using with_rolling = HertzMindlinLaw<R>;
 
-  struct Params {
-    double shear_modulus = 29e9;  // G of the grain material
-    double poisson_ratio = 0.2;   // nu
-    double friction = 0.5;
-    double normal_damping_ratio = 0;
-    double shear_damping_ratio = 0;
-    bool unloading_rescale = true;
-    double rolling_friction = 0;  // mu_r (§3.5)
-    double twisting_friction = 0;
-    double rolling_damping_ratio = 0;
-  };
+  using Params = HertzMindlinParams;
   static constexpr std::array<ParamField<Params>, 9> fields() {
     return with_rolling_fields<Params, 6>({{
         {"shear_modulus", "Pa", &Params::shear_modulus, 0, kInf, false, true,
@@ -47,13 +54,12 @@ struct HertzMindlin {
   }
   static Params example_params() { return {}; }
 
-  struct State {
+  struct State : RollingSlot<Rolling> {
     Vec3 shear_force;
     Vec3 n_old;
     double normal_force = 0.0;  // elastic Hertz force
     double overlap = 0.0;       // delta of the last step
     double kt = 0.0;            // tangential stiffness of the last step
-    RollingSpring rolling;      // rolling and twisting moments (§3.5)
   };
 
   // Effective modulus E* and shear modulus G* for identical grains, or grain on a rigid wall.
@@ -102,7 +108,7 @@ struct HertzMindlin {
   }
   // Separated: the contact is deleted; its shear spring energy leaves without work.
   static PairForce separate(State& s, PairDissipation& dis) noexcept {
-    if (s.kt > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) / s.kt + rolling_energy(s.rolling);
+    if (s.kt > 0.0) dis.deleted += 0.5 * norm2(s.shear_force) / s.kt + rolling_energy(s);
     s = State{};
     return {};
   }
@@ -112,7 +118,7 @@ struct HertzMindlin {
   // grains' velocities (the packings' vessel runs so).
   static bool needs_motion_with(const Params& p) noexcept {
     return p.friction > 0.0 || p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0 ||
-           rolling_limits(p).on();
+           (Rolling && rolling_limits(p).on());
   }
 
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, double dt,
@@ -121,7 +127,11 @@ struct HertzMindlin {
     // What compute_with_motion gives with a zero friction limit, without reading g's motion.
     if (g.delta <= 0.0) return separate(s, dis);
     const Hertz h = hertz(p, g);
-    s = State{{}, g.n, h.fn, g.delta, h.kt, {}};
+    s = State{};
+    s.n_old = g.n;
+    s.normal_force = h.fn;
+    s.overlap = g.delta;
+    s.kt = h.kt;
     return {g.n * h.fn, {}};
   }
 
@@ -131,12 +141,11 @@ struct HertzMindlin {
     if (g.delta <= 0.0) return separate(s, dis);
     const Hertz h = hertz(p, g);
     const double fn = h.fn, kt = h.kt;
-    const RollingLimits roll = rolling_limits(p);
     Vec3 fs;
     if (s.kt > 0.0) {
       const PlaneCarry carry = contact_carry(s.n_old, g, dt);
       fs = carry.apply(s.shear_force);
-      if (roll.on()) s.rolling.moment = carry.apply(s.rolling.moment);
+      if constexpr (Rolling) s.rolling.moment = carry.apply(s.rolling.moment);
       const double e_before = 0.5 * norm2(fs) / s.kt;
       const double a_old = std::sqrt(h.r_star * s.overlap);
       if (p.unloading_rescale && h.a < a_old) fs *= h.a / a_old;
@@ -154,7 +163,7 @@ struct HertzMindlin {
 
     Vec3 force = g.n * fn + shear.force;
     Vec3 couple;
-    if (roll.on()) couple = rolling_step(roll, s.rolling, g, kt, fn, dt, dis);
+    if constexpr (Rolling) couple = rolling_step(rolling_limits(p), s.rolling, g, kt, fn, dt, dis);
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
       // Tsuji form with the tangent stiffnesses (§2.2).
       const double c = 2.0 * std::sqrt(5.0 / 6.0), m = g.m_star();
@@ -167,9 +176,10 @@ struct HertzMindlin {
 
   static double stored_energy(const Params&, const State& s) noexcept {
     if (s.kt == 0.0) return 0.0;
-    return 0.4 * s.normal_force * s.overlap + 0.5 * norm2(s.shear_force) / s.kt +
-           rolling_energy(s.rolling);
+    return 0.4 * s.normal_force * s.overlap + 0.5 * norm2(s.shear_force) / s.kt + rolling_energy(s);
   }
 };
+
+using HertzMindlin = HertzMindlinLaw<false>;
 
 }  // namespace breccia

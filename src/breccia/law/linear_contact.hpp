@@ -13,21 +13,32 @@
 
 namespace breccia {
 
-struct LinearContact {
+// The parameters, shared by the law's two state layouts (below).
+struct LinearContactParams {
+  double modulus = 10e9;            // E_c
+  double stiffness_ratio = 2.5;     // kappa = k_n / k_s
+  double friction = 0.5;            // mu
+  double normal_damping_ratio = 0;  // beta_n
+  double shear_damping_ratio = 0;   // beta_s
+  double rolling_friction = 0;      // mu_r (§3.5)
+  double twisting_friction = 0;     // mu_t
+  double rolling_damping_ratio = 0;
+};
+
+// Rolling: whether each contact's state holds the rolling and twisting moments (§3.5). The
+// registry names the law without them; the engine takes the variant with them when the
+// parameters turn rolling resistance on (make_contact_model), so that runs without it keep a
+// 64-byte state.
+template <bool Rolling>
+struct LinearContactLaw {
   static constexpr std::string_view name = "linear";
   static constexpr std::string_view summary =
       "Linear spring with Coulomb friction; k_n = A E_c / L (PFC 5+ deformability).";
+  static constexpr bool rolling = Rolling;
+  template <bool R>
+  using with_rolling = LinearContactLaw<R>;
 
-  struct Params {
-    double modulus = 10e9;            // E_c
-    double stiffness_ratio = 2.5;     // kappa = k_n / k_s
-    double friction = 0.5;            // mu
-    double normal_damping_ratio = 0;  // beta_n
-    double shear_damping_ratio = 0;   // beta_s
-    double rolling_friction = 0;      // mu_r (§3.5)
-    double twisting_friction = 0;     // mu_t
-    double rolling_damping_ratio = 0;
-  };
+  using Params = LinearContactParams;
   static constexpr std::array<ParamField<Params>, 8> fields() {
     return with_rolling_fields<Params, 5>({{
         {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
@@ -45,12 +56,11 @@ struct LinearContact {
   }
   static Params example_params() { return {}; }
 
-  struct State {
+  struct State : RollingSlot<Rolling> {
     Vec3 shear_force;           // F_s, kept in the current contact plane
     Vec3 n_old;                 // normal of the previous step (zero: new contact)
     double normal_force = 0.0;  // spring part of F_n, kept for energy and output
     double kn = 0.0;            // normal stiffness of this pair (set at first touch)
-    RollingSpring rolling;      // rolling and twisting moments (§3.5)
   };
 
   static double normal_stiffness(const Params& p, const PairGeometry& g) noexcept {
@@ -70,7 +80,7 @@ struct LinearContact {
   // pair's shape, so the pair pass need not load the grains' velocities.
   static bool needs_motion_with(const Params& p) noexcept {
     return p.friction > 0.0 || p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0 ||
-           rolling_limits(p).on();
+           (Rolling && rolling_limits(p).on());
   }
 
   // One step of the contact. Returns the force on particle 2; books dissipation into `dis`.
@@ -95,12 +105,11 @@ struct LinearContact {
     if (!has_history) s.kn = normal_stiffness(p, g);
     const double kn = s.kn;
     const double ks = kn / p.stiffness_ratio;
-    const RollingLimits roll = rolling_limits(p);
     Vec3 fs;
     if (has_history) {
       const PlaneCarry carry = contact_carry(s.n_old, g, dt);
       fs = carry.apply(s.shear_force);
-      if (roll.on()) s.rolling.moment = carry.apply(s.rolling.moment);
+      if constexpr (Rolling) s.rolling.moment = carry.apply(s.rolling.moment);
     }
     const double vn = g.vn();
     const Vec3 vt = g.vc - g.n * vn;
@@ -112,7 +121,7 @@ struct LinearContact {
 
     Vec3 force = g.n * fn + shear.force;
     Vec3 couple;
-    if (roll.on()) couple = rolling_step(roll, s.rolling, g, ks, fn, dt, dis);
+    if constexpr (Rolling) couple = rolling_step(rolling_limits(p), s.rolling, g, ks, fn, dt, dis);
     if (p.normal_damping_ratio > 0.0 || p.shear_damping_ratio > 0.0) {
       const double m = g.m_star();
       force +=
@@ -125,8 +134,7 @@ struct LinearContact {
   // Separated: the contact is deleted; its shear spring energy leaves without work.
   static PairForce separate(const Params& p, State& s, PairDissipation& dis) noexcept {
     if (s.kn > 0.0)
-      dis.deleted +=
-          0.5 * norm2(s.shear_force) * p.stiffness_ratio / s.kn + rolling_energy(s.rolling);
+      dis.deleted += 0.5 * norm2(s.shear_force) * p.stiffness_ratio / s.kn + rolling_energy(s);
     s = State{};
     return {};
   }
@@ -136,8 +144,10 @@ struct LinearContact {
     if (s.kn == 0.0) return 0.0;
     return 0.5 * (s.normal_force * s.normal_force + norm2(s.shear_force) * p.stiffness_ratio) /
                s.kn +
-           rolling_energy(s.rolling);
+           rolling_energy(s);
   }
 };
+
+using LinearContact = LinearContactLaw<false>;
 
 }  // namespace breccia

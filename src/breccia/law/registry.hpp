@@ -2,6 +2,7 @@
 // The one list of laws. Adding a law is one new header and one entry here: the experiment file's
 // [contact] and [bond] tables, their validation, the generated docs, the engine's law sets and the
 // conformance tests (tests/test_law_conformance.cpp) all follow from the lists.
+#include <string>
 #include <string_view>
 
 #include "breccia/core/type_list.hpp"
@@ -17,6 +18,21 @@
 namespace breccia {
 
 using ContactLaws = TypeList<LinearContact, HertzMindlin>;
+// The contact laws as the engine holds them: each in its two state layouts, without and with the
+// rolling and twisting moments (law/rolling_resistance.hpp; make_contact_model picks one).
+template <class List>
+struct WithRollingLayouts;
+template <class... Laws>
+struct WithRollingLayouts<TypeList<Laws...>> {
+  using type = TypeList<typename Laws::template with_rolling<false>...,
+                        typename Laws::template with_rolling<true>...>;
+};
+using EngineContactLaws = WithRollingLayouts<ContactLaws>::type;
+// The name a contact state layout is saved under in a checkpoint.
+template <class CL>
+std::string contact_layout_name() {
+  return std::string(CL::name) + (CL::rolling ? "+rolling" : "");
+}
 using BondLaws = TypeList<ParallelBond, BrittleBeam, QuaternionBond, RicebalBond, FlatJoint>;
 // Laws of the pairs that a joint plane cuts (docs/physics.md §5): they replace the pair's bond and
 // contact law, and the experiment's [joint] table places them.

@@ -2,8 +2,9 @@
 // Rolling and twisting resistance of a contact (docs/physics.md §3.5): the elastic-plastic
 // spring-dashpot of Ai et al. (2011, "type C"), with PFC's `rrlinear` stiffness k_r = k_s R^2.
 // Every contact law carries it the same way: three fields appended to its parameter table, a
-// RollingSpring in its state, and one call after its shear update. Off (mu_r = mu_t = 0) it costs
-// a branch and no work; the state still holds the spring (32 bytes per touching contact).
+// RollingSlot base of its state, and one call after its shear update. A law comes in two state
+// layouts, with and without the moments (`Law::with_rolling<bool>`); the engine holds the one its
+// parameters need (make_contact_model), so a run without rolling resistance pays nothing for it.
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -48,6 +49,14 @@ struct RollingSpring {
   double k = 0.0;
 };
 
+// The moments in a contact's state, or nothing.
+template <bool On>
+struct RollingSlot {};
+template <>
+struct RollingSlot<true> {
+  RollingSpring rolling;
+};
+
 struct RollingLimits {
   double rolling_friction = 0.0, twisting_friction = 0.0, damping_ratio = 0.0;
   bool on() const noexcept { return rolling_friction > 0.0 || twisting_friction > 0.0; }
@@ -76,9 +85,15 @@ inline double rolling_inertia(const PairGeometry& g) noexcept {
   return i1 * i2 / (i1 + i2);
 }
 
-// Elastic energy of the spring.
+// Elastic energy of the springs of a contact's state (none without the slot).
 inline double rolling_energy(const RollingSpring& s) noexcept {
   return s.k > 0.0 ? 0.5 * norm2(s.moment) / s.k : 0.0;
+}
+inline double rolling_energy(const RollingSlot<true>& s) noexcept {
+  return rolling_energy(s.rolling);
+}
+inline double rolling_energy(const RollingSlot<false>&) noexcept {
+  return 0.0;
 }
 
 // One step of the spring. `s.moment` must already be carried into the current contact plane;

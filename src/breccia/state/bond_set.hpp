@@ -4,6 +4,7 @@
 // the engine's single pass over interacting pairs (one geometry and one summed load per pair),
 // through `bond_of_pair`, rebuilt with the neighbour list.
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "breccia/state/pair_list.hpp"
@@ -52,6 +53,7 @@ inline constexpr std::uint32_t kNoHistory = 0xffffffffu;
 template <class Law>
 struct ContactSet {
   using State = typename Law::State;
+  static constexpr std::string_view law_name() noexcept { return Law::name; }
   typename Law::Params params;       // particle-particle
   typename Law::Params wall_params;  // particle-wall (wall friction differs)
   PairList pairs;
