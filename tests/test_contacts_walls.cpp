@@ -48,6 +48,33 @@ TEST(LinearContact, CoulombLimitAndSlipDissipation) {
   EXPECT_NEAR(s.dissipation.slip, 0.3 * fn * slip, 2e-3 * 0.3 * fn * slip);
 }
 
+TEST(LinearContact, BallStiffnessConventionOfPotyondyAndCundall) {
+  // PFC 3.x/4: balls of k = 4 R E_c in series. E_c = 10 GPa, R = 0.5 mm: 2 R E_c = 1e7 N/m for
+  // equal spheres (PFC 5+: pi/2 R E_c = 7.854e6, 27 % softer); 0.5 and 1 mm give
+  // 4 E_c (0.5 x 1 / 1.5) mm = 1.3333e7 N/m; a wall the ball's own 4 R E_c; 2D disks t E_c.
+  LinearContact::Params p;
+  p.modulus = 10e9;
+  p.ball_stiffness = true;
+  PairGeometry g;
+  g.R1 = g.R2 = 0.5e-3;
+  EXPECT_NEAR(LinearContact::normal_stiffness(p, g), 1e7, 1e-3);
+  g.R2 = 1e-3;
+  EXPECT_NEAR(LinearContact::normal_stiffness(p, g), 4e10 * 0.5e-3 * 1e-3 / 1.5e-3, 1e-3);
+  g.wall = true;
+  g.R1 = 0.0;
+  EXPECT_NEAR(LinearContact::normal_stiffness(p, g), 4e10 * 1e-3, 1e-3);
+  g.wall = false;
+  g.R1 = 0.5e-3;
+  g.planar = true;
+  g.thickness = 1e-3;
+  EXPECT_NEAR(LinearContact::normal_stiffness(p, g), 1e7, 1e-3);
+  // The force follows the stiffness: 1 um overlap of equal spheres, 10 N.
+  PairStepper<LinearContact> s;
+  s.params = p;
+  s.b.x = {1e-3 - 1e-6, 0, 0};
+  EXPECT_NEAR(s.evaluate().f2.x, 10.0, 1e-9);
+}
+
 TEST(HertzMindlin, HandValuesOfPhysicsSection8) {
   PairStepper<HertzMindlin> s;
   s.params.shear_modulus = 4e9;  // E = 10 GPa, nu = 0.25

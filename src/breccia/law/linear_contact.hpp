@@ -23,6 +23,7 @@ struct LinearContactParams {
   double rolling_friction = 0;      // mu_r (§3.5)
   double twisting_friction = 0;     // mu_t
   double rolling_damping_ratio = 0;
+  bool ball_stiffness = false;  // PFC 3.x/4 convention (Potyondy & Cundall 2004)
 };
 
 // Rolling: whether each contact's state holds the rolling and twisting moments (§3.5). The
@@ -39,8 +40,8 @@ struct LinearContactLaw {
   using with_rolling = LinearContactLaw<R>;
 
   using Params = LinearContactParams;
-  static constexpr std::array<ParamField<Params>, 8> fields() {
-    return with_rolling_fields<Params, 5>({{
+  static constexpr std::array<ParamField<Params>, 9> fields() {
+    return with_rolling_fields<Params, 6>({{
         {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
          "effective contact modulus E_c; k_n = A E_c / L with A = pi r^2 (2 r t in 2D), "
          "r = min(R1, R2), L = R1 + R2 (wall: r = L = R)"},
@@ -52,6 +53,10 @@ struct LinearContactLaw {
          "critical damping ratio of the normal dashpot (0 = none)"},
         {"shear_damping_ratio", "-", &Params::shear_damping_ratio, 0, 1, true, false,
          "critical damping ratio of the shear dashpot (0 = none)"},
+        {"ball_stiffness", "-", &Params::ball_stiffness, 0, 0, true, true,
+         "PFC 3.x/4 convention (Potyondy & Cundall 2004): each ball has k_n = 4 R E_c (2D: "
+         "2 t E_c) and a contact the two in series, 4 E_c R1 R2 / (R1 + R2) (2D: t E_c); a wall "
+         "takes the ball's own; false: the PFC 5+ deformability above"},
     }});
   }
   static Params example_params() { return {}; }
@@ -64,6 +69,11 @@ struct LinearContactLaw {
   };
 
   static double normal_stiffness(const Params& p, const PairGeometry& g) noexcept {
+    if (p.ball_stiffness) {
+      const double one = g.planar ? 2.0 * g.thickness * p.modulus : 4.0 * g.R2 * p.modulus;
+      if (g.wall) return one;
+      return g.planar ? 0.5 * one : 4.0 * p.modulus * g.R1 * g.R2 / (g.R1 + g.R2);
+    }
     const double r = g.wall ? g.R2 : std::min(g.R1, g.R2);
     const double L = g.wall ? g.R2 : g.R1 + g.R2;
     const double area = g.planar ? 2.0 * r * g.thickness : std::numbers::pi * r * r;
