@@ -123,24 +123,32 @@ double analytic_restitution(double beta) {
   return -xd(0.5 * (lo + hi));
 }
 
-double simulated_restitution(double beta) {
-  const double R = 0.5e-3, E = 10e9, v0 = 0.1;
+// Spheres of R = 0.5 mm under the linear law (E_c = 10 GPa) with a normal dashpot of ratio beta,
+// 2000 steps per contact. A grain on a wall (k_n = pi R E_c, mass m) and two equal grains
+// (k_n = pi R E_c / 2, reduced mass m / 2) share the contact time pi sqrt(m / (pi R E_c)).
+constexpr double kCollisionR = 0.5e-3, kCollisionE = 10e9, kCollisionV = 0.1;
+Simulation collision(ParticleStore ps, double beta) {
+  const double R = kCollisionR;
   const double m = 2650 * 4.0 / 3.0 * std::numbers::pi * R * R * R;
-  const double k = std::numbers::pi * R * E;  // wall contact stiffness
-  const double tc = std::numbers::pi * std::sqrt(m / k);
+  const double tc = std::numbers::pi * std::sqrt(m / (std::numbers::pi * R * kCollisionE));
+  EngineConfig cfg;
+  cfg.time_step = tc / 2000;
+  cfg.energy_interval = 0;
+  LinearContact::Params lp;
+  lp.modulus = kCollisionE;
+  lp.normal_damping_ratio = beta;
+  return Simulation(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+}
+
+double simulated_restitution(double beta) {
+  const double R = kCollisionR, v0 = kCollisionV;
   ParticleStore ps(Dimension::Three, 1.0);
   ps.add({.tag = 1,
           .position = {0, 0, R + 1e-9},
           .radius = R,
           .density = 2650,
           .velocity = {0, 0, -v0}});
-  EngineConfig cfg;
-  cfg.time_step = tc / 2000;
-  cfg.energy_interval = 0;
-  LinearContact::Params lp;
-  lp.modulus = E;
-  lp.normal_damping_ratio = beta;
-  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  Simulation sim = collision(std::move(ps), beta);
   sim.add_wall(Wall::plane("floor", {0, 0, 0}, {0, 0, 1}));
   sim.initialise();
   while (sim.particles().pos_rad[0].x.z < R + 2e-9 || sim.particles().vel[0].z < 0) sim.step();
@@ -151,10 +159,7 @@ double simulated_restitution(double beta) {
 // with the reduced mass m* = m/2, so the same restitution. Returns the exit ratio and the
 // ledger's relative residual after the collision.
 std::pair<double, double> grain_collision(double beta) {
-  const double R = 0.5e-3, E = 10e9, v0 = 0.1;
-  const double m = 2650 * 4.0 / 3.0 * std::numbers::pi * R * R * R;
-  const double k = std::numbers::pi * R * E / 2;  // k_n = pi r^2 E_c / (2 R)
-  const double tc = std::numbers::pi * std::sqrt(0.5 * m / k);
+  const double R = kCollisionR, v0 = kCollisionV;
   ParticleStore ps(Dimension::Three, 1.0);
   ps.add({.tag = 1,
           .position = {-R - 1e-9, 0, 0},
@@ -166,13 +171,7 @@ std::pair<double, double> grain_collision(double beta) {
           .radius = R,
           .density = 2650,
           .velocity = {-0.5 * v0, 0, 0}});
-  EngineConfig cfg;
-  cfg.time_step = tc / 2000;
-  cfg.energy_interval = 0;
-  LinearContact::Params lp;
-  lp.modulus = E;
-  lp.normal_damping_ratio = beta;
-  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  Simulation sim = collision(std::move(ps), beta);
   sim.initialise();
   sim.request_energy_sample();
   sim.step();
