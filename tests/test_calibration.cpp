@@ -278,7 +278,8 @@ TEST(MaterialLibrary, EveryPresetShipsWithItsCalibrationRecord) {
 }
 
 // The honesty checks catch what they name: a UCS without shear cracks, a crushed end, and a
-// triaxial test without shear cracks; a record that meets them passes.
+// triaxial test without shear cracks; a record that meets them passes, whatever its Brazilian
+// disc's crack modes.
 TEST(MaterialLibrary, HonestyChecksCatchMissingShearCracksAndCrushedEnds) {
   auto record = [](double ucs_shear, double ucs_end, double triaxial_shear) {
     nlohmann::json seed = {
@@ -301,6 +302,12 @@ TEST(MaterialLibrary, HonestyChecksCatchMissingShearCracksAndCrushedEnds) {
   ASSERT_EQ(c.size(), 1u);
   EXPECT_NE(c[0].find("triaxial-10MPa"), std::string::npos) << c[0];
   EXPECT_FALSE(honesty_failures({"empty", "", "{}"}).empty());
+  // A Brazilian disc splits in tension: a record whose disc broke no bond in shear passes.
+  auto with_disc = nlohmann::json::parse(good);
+  for (auto& seed : with_disc["verification"])
+    seed["tests"]["brazilian"] = {{"shear_crack_fraction", 0.0},
+                                  {"largest_end_quarter_share", 0.5}};
+  EXPECT_TRUE(honesty_failures({"disc", "", with_disc.dump()}).empty());
 }
 
 // Each preset loads, validates and runs a tiny UCS (an FCC block of 16 grains: seconds).

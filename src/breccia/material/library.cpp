@@ -86,6 +86,13 @@ std::vector<std::string> verification_tests(const json& r) {
   return tests;
 }
 
+// The shear-crack check applies to the compression tests (UCS, triaxial, biaxial), where a
+// rock that breaks no bond in shear has been bent to its targets; a Brazilian disc splits in
+// tension by design.
+bool is_compression_test(const std::string& test) {
+  return test != "brazilian";
+}
+
 std::string verdict(bool pass) {
   return pass ? "passes" : "**FAILS**";
 }
@@ -137,13 +144,18 @@ std::string record_section(const EmbeddedMaterial& m) {
        ".\n";
   s += fmt::format(
       "- Honesty checks over the verification seeds (mean, range; a preset ships only when "
-      "all pass: a shear share of at least {:g} % in every test, no end quarter with more than "
+      "all pass: a shear share of at least {:g} % in every compression test, no end quarter with "
+      "more than "
       "{:g} % of the UCS cracks on average):\n",
       100 * kMinShearShare, 100 * kMaxEndQuarterShare);
   for (const auto& test : verification_tests(r)) {
-    s += fmt::format("  - shear share of the microcracks, {}: {}, {}\n", test,
-                     seeds_stat(r, test, "shear_crack_fraction", 100, "{:.1f} %"),
-                     verdict(seeds_mean(r, test, "shear_crack_fraction") >= kMinShearShare));
+    // A Brazilian disc splits in tension: its shear share is shown, not checked.
+    const bool checked = is_compression_test(test);
+    s +=
+        fmt::format("  - shear share of the microcracks, {}: {}, {}\n", test,
+                    seeds_stat(r, test, "shear_crack_fraction", 100, "{:.1f} %"),
+                    checked ? verdict(seeds_mean(r, test, "shear_crack_fraction") >= kMinShearShare)
+                            : std::string("not checked (a splitting test)"));
     s += fmt::format("  - largest share of the cracks in an end quarter, {}: {}{}\n", test,
                      seeds_stat(r, test, "largest_end_quarter_share", 100, "{:.0f} %"),
                      test == "ucs"
@@ -197,6 +209,7 @@ std::vector<std::string> honesty_failures(const EmbeddedMaterial& m) {
   const auto tests = verification_tests(r);
   if (tests.empty()) failures.push_back("no verification tests with crack counts in the record");
   for (const auto& test : tests) {
+    if (!is_compression_test(test)) continue;
     const double shear = seeds_mean(r, test, "shear_crack_fraction");
     if (!(shear >= kMinShearShare))
       failures.push_back(fmt::format("{}: shear share of the microcracks {:.2f} %, below {:g} %",
@@ -321,16 +334,15 @@ std::string law_limits_notes() {
          "`lac_du_bonnet_2d` misses it (34.9 +/- 9.9 degrees over three packings, where one "
          "biaxial test per packing makes the angle scatter). The seed's own granite had a UCS of "
          "234 MPa at E 42.5 GPa, a softer and different model from the lab targets used here. "
-         "Bonded spheres with parallel bonds give a UCS about 4 times the Brazilian tensile "
-         "strength, where rocks show 10 to 20 (seed 003 says its parallel-bond model overestimates "
-         "the tensile strength 5-6 times; PFC answers with clumps and flat joints). A calibration "
-         "that targets both cannot meet both: the calibration file then names the one the preset "
-         "honours, and the other is reported here with its miss rather than bent by a parameter "
-         "nothing else would justify. `lac_du_bonnet` honours the UCS: its Brazilian strength, "
-         "29.3 MPa on a disc 10 mm across and 5 mm thick (2,287 grains; `breccia run "
-         "examples/brazilian.toml --set material.preset=lac_du_bonnet --set "
-         "sample.radius_min=0.22e-3 --set sample.radius_max=0.36e-3`, split along the loaded "
-         "diameter), is 3.2 times the lab's 9.3 MPa: UCS/TS 7.0 against the granite's 21.5. "
+         "Bonded spheres with parallel bonds give a UCS about 4 to 7 times the Brazilian "
+         "tensile strength, where rocks show 10 to 25 (seed 003 says its parallel-bond model "
+         "overestimates the tensile strength 5-6 times; PFC answers with clumps and flat "
+         "joints). `lac_du_bonnet` honours the UCS: its Brazilian strength, 29.3 MPa on a disc "
+         "10 mm across and 5 mm thick (2,287 grains; `breccia run examples/brazilian.toml --set "
+         "material.preset=lac_du_bonnet --set sample.radius_min=0.22e-3 --set "
+         "sample.radius_max=0.36e-3`, split along the loaded diameter), is 3.2 times the lab's "
+         "9.3 MPa: UCS/TS 7.0 against the granite's 21.5. Flat joints reach "
+         "higher ratios (next section). "
          "Poisson's ratio has a limit of its own: in a "
          "packing that deforms affinely, nu = (kappa - 1) / (4 kappa + 1) for a normal-to-shear "
          "stiffness ratio kappa, which tends to 1/4 as kappa grows (1/3 in 2D). Read between the "
@@ -356,10 +368,79 @@ std::string law_limits_notes() {
          "depend on it, so a sample of other grains should be calibrated again.\n";
 }
 
+// The verification mean of one target of a record; NaN when the record has no such target.
+double verdict_mean(const json& r, const std::string& target) {
+  for (const auto& v : r.value("verdicts", json::array()))
+    if (v.value("target", "") == target) return number(v, "mean");
+  return std::nan("");
+}
+
+// UCS over Brazilian strength and the friction angle: one row per preset that has either as a
+// target (from its record), then the probes that show where each law's ratio comes from.
+std::string law_reach_notes() {
+  std::string s =
+      "\n## What each law reaches\n\n"
+      "Rocks show a UCS 10 to 25 times their Brazilian strength and peak friction angles up to "
+      "about 60 degrees at low confinement. The presets that have them as targets reach (means "
+      "over their verification packings; the friction angle from the UCS and the triaxial "
+      "tests of the record):\n\n"
+      "| preset | laws | UCS | TS | UCS/TS | friction angle |\n|---|---|---|---|---|---|\n";
+  for (const auto& m : embedded_materials()) {
+    const json r = record_of(m);
+    const double ucs = verdict_mean(r, "uniaxial_strength");
+    const double ts = verdict_mean(r, "tensile_strength");
+    const double phi = verdict_mean(r, "friction_angle_deg");
+    if (!std::isfinite(ts) && !std::isfinite(phi)) continue;
+    s += fmt::format(
+        "| `{}` | {}D, `{}` | {} | {} | {} | {} |\n", m.name, r.value("dimension", 3),
+        r.value("bond_law", "?"), shown("uniaxial_strength", ucs),
+        std::isfinite(ts) ? shown("tensile_strength", ts) : "not a target",
+        std::isfinite(ts) && std::isfinite(ucs) ? fmt::format("{:.1f}", ucs / ts) : "n/a",
+        std::isfinite(phi) ? shown("friction_angle_deg", phi) : "not a target");
+  }
+  s += "\nProbes, a UCS and a Brazilian test each (and a 10 MPa triaxial test where a friction "
+       "angle is given), in 3D on the "
+       "calibration grains (0.22-0.36 mm; a 6 x 6 x 12 mm prism of 2,520 grains and a disc 8 mm "
+       "across and 4 mm thick of 1,173 grains), Hertz-Mindlin grains (G 30 GPa, friction 0.5), "
+       "at 38933f4; the flat joints with E* 100 GPa, kappa* 2, sigma_b 20 MPa, phi_b 40 "
+       "degrees, unbonded friction 0.6, one ring of three sectors:\n\n"
+       "| law and parameters | UCS | TS | UCS/TS | friction angle | shear cracks in the UCS |\n"
+       "|---|---|---|---|---|---|\n"
+       "| parallel bond, `lac_du_bonnet` (sigma_c = c = 266 MPa; 5,900-grain prism, 10 mm "
+       "disc) | 206.4 MPa | 29.3 MPa | 7.0 | not measured | 3.2 % |\n"
+       "| flat joint, c_b = 10 sigma_b, all interfaces bonded | 122.0 MPa | 8.3 MPa | 14.7 | "
+       "55.3 deg | 4.6 % |\n"
+       "| flat joint, c_b = 20 sigma_b | 209.1 MPa | 10.0 MPa | 20.9 | not measured | 2.7 % |\n"
+       "| flat joint, c_b = 10 sigma_b, 20 % of the interfaces slit | 62.0 MPa | 6.1 MPa | "
+       "10.2 | not measured | 1.9 % |\n\n"
+       "The ratio follows the bonded elements' cohesion over their tensile strength: the disc "
+       "splits in tension at about half of sigma_b, while the prism holds until its cracked "
+       "interfaces can no longer carry the load by cohesion and friction. A parallel bond's "
+       "ratio also grows with c / sigma_c (11.5 against the flat joint's 10.5 at c = 4 "
+       "sigma on a 740-grain prism), but a parallel bond made that strong in shear stops "
+       "breaking in shear (the 2D granite with c = 19 sigma_c broke 0.3 % of its UCS cracks in "
+       "shear) and its grains roll "
+       "free once it breaks; a broken flat joint keeps its faces, which resist rolling and "
+       "slide by friction, and the flat-joint probes keep 2-5 % shear cracks in the UCS and "
+       "reach 55 degrees of friction. Installing interfaces slit lowers the ratio "
+       "(they carry no tension but also hold less in compression). The price: the flat-joint "
+       "rock cracks from a quarter of its peak (crack initiation 0.22-0.38 of the UCS), so E_t50 "
+       "and Poisson's ratio at half the peak are read on a cracking, dilating sample. Poisson's "
+       "ratio then rises steeply with kappa* (on the calibration packing, E* 122-144 GPa: 0.15 "
+       "at 0.8, 0.29 at 1.09, 0.35 at 1.2, 0.48 at 1.31) and moves by up to 0.09 between "
+       "trials at the same kappa* (examples/calibrate-lac-du-bonnet-fj.toml). In 2D, the RICEBAL "
+       "granite stays "
+       "below 35 degrees (above), and rolling friction 0.3 adds 2 to 4 degrees "
+       "(validation/rolling-resistance-granite-2d); a 2D flat-joint granite is not yet "
+       "calibrated.\n";
+  return s;
+}
+
 }  // namespace
 
 std::string materials_docs() {
-  std::string s = verdict_table() + provenance_notes() + gauge_notes() + law_limits_notes();
+  std::string s =
+      verdict_table() + provenance_notes() + gauge_notes() + law_limits_notes() + law_reach_notes();
   s += pending_section();
   for (const auto& m : embedded_materials()) s += record_section(m);
   return s;

@@ -19,7 +19,8 @@ const std::vector<EmbeddedMaterial>& embedded_materials();
 // One line for `material.preset`'s allowed values: the rock, the laws and the verdicts.
 std::string describe_material(const EmbeddedMaterial& m);
 // The honesty checks a shipped preset must pass, over its verification tests: both crack modes
-// occur (a shear share of at least kMinShearShare in every test) and the UCS does not crush an
+// occur (a shear share of at least kMinShearShare in every compression test; a Brazilian disc
+// splits in tension and is not checked) and the UCS does not crush an
 // end (no end quarter holds more than kMaxEndQuarterShare of the cracks, on average). Returns
 // one line per failed check; empty when all pass.
 inline constexpr double kMinShearShare = 0.01;
