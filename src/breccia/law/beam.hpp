@@ -20,20 +20,25 @@ inline double unit_part_length(double a, double b) noexcept {
   return std::sqrt(a * a + b * b);
 }
 
-// atan2(y, x) for the angles of a bond, which stay small until it breaks: for x > 0 and
-// |y| <= x / 16 the series of atan(t), t = y / x, to t^13 (the next term is below 1e-18 t), and
-// std::atan2 otherwise. Within 2 ulp of std::atan2 (tests/test_quaternion_bond.cpp) and about three
-// times faster on the small angles, which are nearly all of them.
-inline double bond_angle(double y, double x) noexcept {
-  if (!(x > 0.0 && std::abs(y) <= 0.0625 * x)) return std::atan2(y, x);
-  const double t = y / x, z = t * t;
+// atan(t) / t for z = t^2 <= 1/256: the series to t^12 (the next term is below 1e-18).
+inline double atan_over_t(double z) noexcept {
   double p = 1.0 / 13.0;
   p = p * z - 1.0 / 11.0;
   p = p * z + 1.0 / 9.0;
   p = p * z - 1.0 / 7.0;
   p = p * z + 1.0 / 5.0;
   p = p * z - 1.0 / 3.0;
-  return t + t * (z * p);
+  return 1.0 + z * p;
+}
+
+// atan2(y, x) for the angles of a bond, which stay small until it breaks: for x > 0 and
+// |y| <= x / 16 the series of atan(t), t = y / x, and std::atan2 otherwise. Within 2 ulp of
+// std::atan2 (tests/test_quaternion_bond.cpp) and about three times faster on the small angles,
+// which are nearly all of them.
+inline double bond_angle(double y, double x) noexcept {
+  if (!(x > 0.0 && std::abs(y) <= 0.0625 * x)) return std::atan2(y, x);
+  const double t = y / x;
+  return t * atan_over_t(t * t);
 }
 
 // Shortest-arc rotation taking z to the unit vector r (§4.2 step 4).
@@ -160,13 +165,14 @@ inline double point_shift(const PairGeometry& g) noexcept {
   return g.d * arm1 - g.R1 + 0.5 * g.delta;
 }
 
-// Force and couple on particle 2 (§0.3) from the present configuration (§4.2 steps 1-8), with
+// The reference computation of loads() below, step by step in the frames of §4.2: force and
+// couple on particle 2 (§0.3) from the present configuration (§4.2 steps 1-8), with
 // the shear arm `arm` of the branch rotation and `arm_theta` of the rotation-induced shear (d0
 // for ESyS's beam, d for LAMMPS's bpm/rotational). Stores the magnitudes of step 9 in `s`. The
 // couple includes moving the force to the beam point, so that the engine's lever-arm torques are
 // the beam's.
-inline PairForce loads(BeamState& s, const BeamSection& c, const PairGeometry& g,
-                       const BodyFrames& fr, double arm, double arm_theta) noexcept {
+inline PairForce reference_loads(BeamState& s, const BeamSection& c, const PairGeometry& g,
+                                 const BodyFrames& fr, double arm, double arm_theta) noexcept {
   const Quat to_body1 = conj(fr.q1);
   const Deformation f =
       deform(rotate(to_body1, g.n), g.d, s.r0, s.d0, to_body1 * fr.q2 * conj(s.q0));
@@ -185,6 +191,97 @@ inline PairForce loads(BeamState& s, const BeamSection& c, const PairGeometry& g
   s.bend_moment = norm(m_bend);
   s.twist_moment = c.kt * f.twist;
   return {force, couple + cross(g.n * point_shift(g), force)};
+}
+
+// Force and couple on particle 2 (§0.3), as reference_loads() but in the world frame: the angle
+// between two directions and the swing-twist split of a rotation about an axis do not depend on
+// the frame they are read in, so the branch, the reference and the relative rotation are taken
+// to the world frame once (one rotation, two products) instead of the bond and body frames and
+// back (six rotations and the shortest arc's roots). With the relative rotation's vector part v,
+// its twist part v.n and its swing part v_perp = v - (v.n) n, the bond frame's bending axis
+// (w x - y z, w y + x z, 0) / (|(w, z)| |(x, y)|) is (w v_perp + (v.n) n x v_perp) / (...) in any
+// frame. Agrees with reference_loads() to round-off (tests/test_beam_kernels.cpp). loads() below
+// takes it for angles past the series' range.
+inline PairForce loads_any_angle(BeamState& s, const BeamSection& c, const PairGeometry& g,
+                                 const BodyFrames& fr, double arm, double arm_theta) noexcept {
+  const Vec3& n = g.n;
+  const Vec3 r0 = rotate(fr.q1, s.r0);
+  Quat q = fr.q2 * conj(s.q0) * conj(fr.q1);  // q1 (q1* q2 q0*) q1*
+  if (q.w < 0.0) q = {-q.w, -q.x, -q.y, -q.z};
+  const double stretch = g.d - s.d0;
+  const double cos_gamma = dot(n, r0);
+  const double gamma = bond_angle(norm(cross(n, r0)), cos_gamma);
+  Vec3 shear_gamma{};
+  if (gamma >= 1e-12) shear_gamma = unit(r0 - n * cos_gamma) * gamma;
+  const Vec3 v{q.x, q.y, q.z};
+  const double along = dot(v, n);
+  const Vec3 v_perp = v - n * along;
+  const double xy = norm(v_perp), wz = unit_part_length(q.w, along);
+  double twist = 2.0 * bond_angle(along, q.w);
+  const double bend = 2.0 * bond_angle(xy, wz);
+  Vec3 bend_axis{};
+  if (xy > 0.0) {
+    if (wz > 0.0) {
+      bend_axis = (v_perp * q.w + cross(n, v_perp) * along) * (1.0 / (wz * xy));
+    } else {
+      twist = 0.0;  // bent by pi: no twist is defined
+      bend_axis = v_perp * (1.0 / xy);
+    }
+  }
+  // Loads on particle 1, world frame; particle 2 takes their opposites.
+  const Vec3 shear =
+      shear_gamma * (-c.ks * arm) + cross(n, bend_axis) * (0.5 * c.ks * arm_theta * bend);
+  const Vec3 force = -(n * (c.kr * stretch) + shear);
+  const Vec3 couple = -(bend_axis * (c.kb * bend) + n * (c.kt * twist));
+  s.normal_force = -c.kr * stretch;
+  s.shear_force = norm(shear);
+  s.bend_moment = xy > 0.0 ? c.kb * bend : 0.0;
+  s.twist_moment = c.kt * twist;
+  return {force, couple + cross(n * point_shift(g), force)};
+}
+
+// loads_any_angle() for the small angles of nearly every step (each of gamma, the bend and the
+// twist with tan(angle / 2 or 1) <= 1/16): every angle enters as angle / sin(angle) times a
+// vector, and atan(t) / t is a series in t^2, so no root is taken on the way to the loads, and
+// the three divisions share one. With t = tan(gamma) = |n x r0| / (n.r0) the branch term is
+// (r0 - (n.r0) n) atan(t) / (t (n.r0)); with t_b = |v_perp| / |(w, v.n)| the bend
+// theta = 2 atan(t_b) about the axis (w v_perp + (v.n) n x v_perp) / (|(w, v.n)| |v_perp|)
+// gives the moment (w v_perp + (v.n) n x v_perp) 2 K_b atan(t_b) / (t_b (w^2 + (v.n)^2)), and
+// n x axis, the direction of the bend's shear, is (w n x v_perp - (v.n) v_perp) / (...).
+inline PairForce loads(BeamState& s, const BeamSection& c, const PairGeometry& g,
+                       const BodyFrames& fr, double arm, double arm_theta) noexcept {
+  const Vec3& n = g.n;
+  const Vec3 r0 = rotate(fr.q1, s.r0);
+  Quat q = fr.q2 * conj(s.q0) * conj(fr.q1);
+  if (q.w < 0.0) q = {-q.w, -q.x, -q.y, -q.z};
+  const double cos_gamma = dot(n, r0), sin2_gamma = norm2(cross(n, r0));
+  const Vec3 v{q.x, q.y, q.z};
+  const double along = dot(v, n);
+  const Vec3 v_perp = v - n * along;
+  const double xy2 = norm2(v_perp), wz2 = q.w * q.w + along * along;
+  constexpr double kSeries = 1.0 / 256.0;  // (1/16)^2
+  const bool small = cos_gamma > 0.0 && sin2_gamma <= kSeries * cos_gamma * cos_gamma &&
+                     q.w > 0.0 && along * along <= kSeries * q.w * q.w && xy2 <= kSeries * wz2;
+  if (!small) return loads_any_angle(s, c, g, fr, arm, arm_theta);
+  const double inv = 1.0 / (cos_gamma * q.w * wz2);
+  const double inv_cos = inv * q.w * wz2, inv_w = inv * cos_gamma * wz2,
+               inv_wz2 = inv * cos_gamma * q.w;
+  const Vec3 shear_gamma = (r0 - n * cos_gamma) *
+                           (atan_over_t(sin2_gamma * inv_cos * inv_cos) * inv_cos);  // gamma p_hat
+  const double tb2 = xy2 * inv_wz2, bend_series = 2.0 * atan_over_t(tb2);            // theta / t_b
+  const double t_twist = along * inv_w, twist = 2.0 * t_twist * atan_over_t(t_twist * t_twist);
+  const Vec3 n_x_v = cross(n, v_perp);
+  const Vec3 m_bend = (v_perp * q.w + n_x_v * along) * (c.kb * bend_series * inv_wz2);
+  const Vec3 shear =
+      shear_gamma * (-c.ks * arm) +
+      (n_x_v * q.w - v_perp * along) * (0.5 * c.ks * arm_theta * bend_series * inv_wz2);
+  const Vec3 force = -(n * (c.kr * (g.d - s.d0)) + shear);
+  const Vec3 couple = -(m_bend + n * (c.kt * twist));
+  s.normal_force = -c.kr * (g.d - s.d0);
+  s.shear_force = norm(shear);
+  s.bend_moment = c.kb * bend_series * std::sqrt(tb2);
+  s.twist_moment = c.kt * twist;
+  return {force, couple + cross(n * point_shift(g), force)};
 }
 
 // Stored energy by component; K_b is the effective chi_b K_b (§4.0).
