@@ -73,6 +73,9 @@ inline void kick_driven(bool fixed, const Vec3& drive_v, const Vec3& drive_w, bo
   td_prev = td;
 }
 
+// How many particles ahead the integrator asks for the cross slots it will gather.
+constexpr std::size_t kCrossAhead = 4;
+
 IntegrateBlock sum_blocks(const std::vector<IntegrateBlock>& blocks) {
   IntegrateBlock total;
   for (const IntegrateBlock& s : blocks) {
@@ -106,6 +109,7 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
   for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
     IntegrateBlock acc;
     for (std::size_t i = begin; i < end; ++i) {
+      if (i + kCrossAhead < end) prefetch_cross(c.pairs, cross_slots_, i + kCrossAhead);
       Vec3 f = p_.force[i], t = p_.torque[i];
       gather_cross(c.pairs, cross_slots_, i, f, t);
       Vec3 f_user;
