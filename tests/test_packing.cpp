@@ -215,9 +215,9 @@ TEST(Packing, ExpansionMeetsTheSampleBars) {
   const PackingReport& r = p.report;
   const SampleStructure& st = r.structure;
   EXPECT_TRUE(r.converged);
-  // The servo stops with p within 2 % of p0 for 5 checks while the grains still move; the stress
-  // recomputed with the grains at rest is within another percent (floaters are placed touching
-  // without overlap, which changes no force).
+  // The servo stops with p and the mean of its last 5 checks within 2 % of p0 while the grains
+  // still move; the stress recomputed with the grains at rest is within another percent
+  // (floaters are placed touching without overlap, which changes no force).
   EXPECT_NEAR(r.locked_in_mean_stress, s.isotropic_stress, 0.03 * s.isotropic_stress);
   // Floaters: at most 1 % of the grains with fewer than 3 contacts; fewer than 3 bonds only at
   // edges and corners, 2 % at most in a sample this small.
