@@ -392,6 +392,15 @@ TEST(App, ResumedRunGivesTheSameResultAsAnUninterruptedOne) {
   for (const char* key : {"peak_deviatoric_stress_pa", "youngs_modulus_pa", "poisson_ratio",
                           "bonds_broken", "steps", "simulated_time_s", "energy", "quasi_static"})
     EXPECT_EQ(sa[key], sb[key]) << key;
+  // The loading loop's time is the last sitting's: all steps of the whole run, those after step
+  // 6001 of the resumed one, within the sitting's wall time.
+  EXPECT_EQ(sa["loading_loop"]["steps"], sa["steps"]);
+  EXPECT_EQ(sb["loading_loop"]["steps"].get<std::uint64_t>(),
+            sb["steps"].get<std::uint64_t>() - 6001);
+  for (const auto* s : {&sa, &sb}) {
+    EXPECT_GT((*s)["loading_loop"]["seconds"].get<double>(), 0.0);
+    EXPECT_LT((*s)["loading_loop"]["seconds"].get<double>(), (*s)["wall_seconds"].get<double>());
+  }
   manifest = nlohmann::json::parse(read(split / "manifest.json"));
   EXPECT_EQ(manifest["status"], "complete");
   EXPECT_EQ(manifest["resumed"].size(), 2u);

@@ -27,7 +27,7 @@ SMALL = [
 TABLES = ["history", "cracks", "events", "indicators", "fragments", "b_value_windows",
           "d2_windows"]
 # What differs between two identical runs: the clock.
-TIMING = {"wall_seconds", "particle_steps_per_second"}
+TIMING = {"wall_seconds", "particle_steps_per_second", "loading_loop"}
 
 
 def cli_run(out, overrides=SMALL, extra=()):

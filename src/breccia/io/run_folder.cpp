@@ -244,8 +244,13 @@ std::string summarise_run(const fs::path& file) {
     s += fmt::format("\n  energy balance: {} (largest relative residual {})",
                      eb->text("classification", "n/a"),
                      plain(*eb, "residual_relative_max_after_1pct_work", "{:.2e}"));
-  s += fmt::format("\n  {} steps in {} s ({} particle-steps/s)\n", plain(j, "steps", "{:.0f}"),
+  s += fmt::format("\n  {} steps in {} s ({} particle-steps/s", plain(j, "steps", "{:.0f}"),
                    plain(j, "wall_seconds", "{:.1f}"), plain(j, "particle_steps_per_second"));
+  if (const auto loop = j.find("loading_loop"))
+    s += fmt::format("; loading loop {} steps in {} s, {} particle-steps/s",
+                     plain(*loop, "steps", "{:.0f}"), plain(*loop, "seconds", "{:.1f}"),
+                     plain(*loop, "particle_steps_per_second"));
+  s += ")\n";
   for (const JsonView& w : j.elements("warnings")) s += "  warning: " + w.as_text() + "\n";
   return s;
 }

@@ -172,6 +172,11 @@ std::uint64_t history_step_interval(const ExperimentSpec& spec, const Protocol& 
 struct LoopEnd {
   std::string status = "complete";  // complete | interrupted
   std::string reason;
+  // This sitting's loading loop: the steps it made and their wall time with the recorders and
+  // rows, without the build before it, its checkpoints and the analysis after it (the time a
+  // peer such as LAMMPS reports as its loop time).
+  std::uint64_t loop_steps = 0;
+  double loop_seconds = 0.0;
 };
 
 // One history row: the recorders (tables flushed, so an interrupted run keeps them; a snapshot
@@ -231,16 +236,29 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
   Protocol& test = *ss.test;
   const std::uint64_t interval = history_step_interval(spec, test, sim);
   auto last_bar = std::chrono::steady_clock::now(), last_checkpoint = last_bar;
+  const auto loop_start = last_bar;
+  const std::uint64_t loop_step0 = sim.step_count();
+  double checkpoint_seconds = 0.0;
+  auto ended = [&](std::string status, std::string reason) {
+    LoopEnd e{std::move(status), std::move(reason)};
+    e.loop_steps = sim.step_count() - loop_step0;
+    e.loop_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count() -
+        checkpoint_seconds;
+    return e;
+  };
   for (;;) {
     const bool stop_step = opt.stop_at_step > 0 && sim.step_count() >= opt.stop_at_step;
     if ((opt.interrupt && opt.interrupt->load()) || stop_step) {
+      LoopEnd e =
+          ended("interrupted",
+                stop_step ? fmt::format("stopped at step {} (--stop-at-step)", sim.step_count())
+                          : "interrupted by a signal");
       // Between two steps: the checkpoint continues exactly from here.
       checkpoint();
       log(fmt::format("checkpoint at step {}: continue with `breccia resume {}`", sim.step_count(),
                       folder.string()));
-      return {"interrupted",
-              stop_step ? fmt::format("stopped at step {} (--stop-at-step)", sim.step_count())
-                        : "interrupted by a signal"};
+      return e;
     }
     if (sim.step_count() % interval == 0) sim.request_energy_sample();
     test.control(sim);
@@ -252,13 +270,14 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
     record_row(ss, a);
     if (test.finished(a, sim.cracks().size())) {
       if (opt.progress) opt.progress(progress_of(ss, a, wall()));  // the last word: where it ended
-      return {"complete", test.stop_reason()};
+      return ended("complete", test.stop_reason());
     }
     const auto now = std::chrono::steady_clock::now();
     if (spec.checkpoint_interval > 0.0 &&
         std::chrono::duration<double>(now - last_checkpoint).count() >= spec.checkpoint_interval) {
       checkpoint();
       last_checkpoint = std::chrono::steady_clock::now();
+      checkpoint_seconds += std::chrono::duration<double>(last_checkpoint - now).count();
     }
     if ((opt.show_progress || opt.progress) && now - last_bar > std::chrono::milliseconds(250)) {
       last_bar = now;
@@ -334,6 +353,8 @@ RunResult run_result(const fs::path& folder, const Session& ss, const LoopEnd& e
   r.confining_stress = confining_stress(*ss.test);
   r.wall_seconds = wall_seconds;
   r.steps = sim.step_count();
+  r.loop_steps = end.loop_steps;
+  r.loop_seconds = end.loop_seconds;
   r.peak_stress = an.peak_deviatoric;
   r.sigma1_at_peak = an.sigma1_at_peak;
   r.strain_at_peak = an.strain_at_peak;
@@ -422,7 +443,17 @@ json run_summary(const ExperimentSpec& spec, const Session& ss, const RunResult&
                {"density_scaling", spec.density_scaling},
                {"wall_seconds", r.wall_seconds},
                {"particle_steps_per_second",
-                static_cast<double>(r.particles) * static_cast<double>(r.steps) / r.wall_seconds}};
+                static_cast<double>(r.particles) * static_cast<double>(r.steps) / r.wall_seconds},
+               {"loading_loop",
+                {{"what",
+                  "this sitting's loading loop: its steps with the recorders and rows, without the "
+                  "build, checkpoints and analysis"},
+                 {"steps", r.loop_steps},
+                 {"seconds", r.loop_seconds},
+                 {"particle_steps_per_second",
+                  r.loop_seconds > 0.0 ? static_cast<double>(r.particles) *
+                                             static_cast<double>(r.loop_steps) / r.loop_seconds
+                                       : 0.0}}}};
   if (const StressStrainTest* curve = test.stress_strain()) {
     summary.update(json{{"confining_stress_pa", curve->confining_stress()},
                         {"lateral_boundary", curve->lateral_boundary()},

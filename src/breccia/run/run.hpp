@@ -57,6 +57,8 @@ struct RunResult {
   std::size_t particles = 0, bonds = 0, cracks = 0, tensile = 0, shear = 0;
   std::uint64_t steps = 0;
   double wall_seconds = 0.0;
+  std::uint64_t loop_steps = 0;  // this sitting's loading loop (summary.json "loading_loop")
+  double loop_seconds = 0.0;
   double energy_residual_relative = 0.0;
 };
 
