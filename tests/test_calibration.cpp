@@ -142,6 +142,36 @@ TEST(Calibration, TinyCalibrationRecoversTargetsOfAKnownParameterSet) {
   fs::remove_all(dir);
 }
 
+// With fit_seeds the search judges a trial on the mean over one packing per seed: the two
+// packings differ, and measure_fit() returns their mean, reading both tests back.
+TEST(Calibration, FitSeedsJudgeATrialOnTheMeanOverTheirPackings) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_calibration_fit_seeds";
+  fs::remove_all(dir);
+  std::string text = tiny_calibration(8e9, 60e6, 6e9, 25e6);
+  text.replace(text.find("verify_seeds = []"), 17, "verify_seeds = []\nfit_seeds = [1, 2]");
+  const CalibrationSpec spec = parse_calibration(text, "fit.toml");
+  ASSERT_EQ(spec.fit_sets(), (std::vector<std::string>{"fit-1", "fit-2"}));
+  Laboratory lab(spec, dir, [](const std::string&) {});
+  const std::vector<double> values{6e9, 25e6};
+  const Measurement one = lab.measure("fit-1", values, TestPlan{});
+  const Measurement two = lab.measure("fit-2", values, TestPlan{});
+  const Measurement mean = lab.measure_fit(values, TestPlan{});
+  EXPECT_EQ(mean.new_runs, 0) << "both tests are read back";
+  for (int seed : {1, 2})
+    EXPECT_NE(lab.sample_report(fmt::format("fit-{}", seed))
+                  .value("settings", std::string())
+                  .find(fmt::format("\nseed = {}\n", seed)),
+              std::string::npos)
+        << "packed with seed " << seed;
+  for (Property p : {Property::YoungsModulus, Property::UniaxialStrength}) {
+    ASSERT_TRUE(one.properties.count(p) && two.properties.count(p));
+    EXPECT_NE(one.properties.at(p), two.properties.at(p)) << "two packings, two results";
+    EXPECT_EQ(mean.properties.at(p), (one.properties.at(p) + two.properties.at(p)) / 2.0);
+  }
+  EXPECT_EQ(mean.run_folders.size(), one.run_folders.size() + two.run_folders.size());
+  fs::remove_all(dir);
+}
+
 namespace {
 
 struct BadCalibration {
@@ -211,6 +241,12 @@ std::vector<BadCalibration> bad_calibrations() {
       {"NegativeConfiningStress",
        with_experiment(e_target + free_e + "[calibration]\nconfining_stresses = [-5e6]\n"),
        {"bad.toml:6", "calibration.confining_stresses", "above 0"}},
+      {"FitSeedTwice",
+       with_experiment(e_target + free_e + "[calibration]\nfit_seeds = [4, 4]\n"),
+       {"bad.toml:6", "calibration.fit_seeds", "seed 4 twice"}},
+      {"NegativeFitSeed",
+       with_experiment(e_target + free_e + "[calibration]\nfit_seeds = [-1]\n"),
+       {"bad.toml:6", "calibration.fit_seeds", "allowed: 0 to"}},
       {"AimAboveTheTolerance",
        with_experiment(e_target + free_e + "[calibration]\naim = 1.5\n"),
        {"bad.toml:6", "calibration.aim", "1.5", "from 0.1 to 1"}},

@@ -180,7 +180,7 @@ class Calibrator {
 
 Evaluation Calibrator::evaluate(const std::vector<double>& v, std::optional<CalibrationStage> stage,
                                 int pass) {
-  const Measurement m = lab_.measure("calibration", v, tests_for(c_, stage));
+  const Measurement m = lab_.measure_fit(v, tests_for(c_, stage));
   Evaluation e;
   e.index = static_cast<int>(evals_.size()) + 1;
   e.stage = stage ? std::string(stage_name(*stage)) : "final";
@@ -584,7 +584,7 @@ void Calibrator::write_outputs(const CalibrationResult& r) const {
   for (std::size_t i = 0; i < c_.free.size(); ++i) params[c_.free[i].key] = r.values[i];
   for (const auto& t : c_.tied)
     params[t.key] = t.factor * r.values[static_cast<std::size_t>(free_index(t.follows))];
-  const json& sample = lab_.sample_report("calibration");
+  const json& sample = lab_.sample_report(c_.fit_sets().front());
   json record{{"name", c_.name},
               {"rock", c_.rock.empty() ? c_.name : c_.rock},
               {"version", kVersion},
@@ -596,6 +596,7 @@ void Calibrator::write_outputs(const CalibrationResult& r) const {
               {"dimension", c_.base.dimension},
               {"parameters", params},
               {"verdicts", verdicts},
+              {"fit_seeds", c_.fit_seeds},
               {"verify_seeds", c_.verify_seeds},
               {"verify_set", c_.verify_set},
               {"calibration_sample", sample},

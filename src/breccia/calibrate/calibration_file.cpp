@@ -60,6 +60,13 @@ const PropertyInfo& info(Property p) {
   throw InternalError("unknown property");
 }
 
+std::vector<std::string> CalibrationSpec::fit_sets() const {
+  if (fit_seeds.empty()) return {"calibration"};
+  std::vector<std::string> sets;
+  for (auto seed : fit_seeds) sets.push_back(fmt::format("fit-{}", seed));
+  return sets;
+}
+
 bool CalibrationSpec::has_target(Property p) const {
   return target(p) != nullptr;
 }
@@ -122,6 +129,21 @@ std::int64_t int_of(const toml::node& n, const std::string& where, const std::st
   if (v < lo || v > hi)
     throw InputError(where, key, show(n), fmt::format("allowed: {} to {}", lo, hi));
   return v;
+}
+
+// Packing seeds: integers from 0, each once.
+std::vector<std::int64_t> seeds_of(const toml::node& n, const std::string& where,
+                                   const std::string& key) {
+  const auto* a = n.as_array();
+  if (!a) throw InputError(where, key, show(n), "expected an array of seeds (integers)");
+  std::vector<std::int64_t> seeds;
+  for (const auto& s : *a) {
+    const std::int64_t seed = int_of(s, where, key, 0, std::numeric_limits<std::int64_t>::max());
+    if (std::find(seeds.begin(), seeds.end(), seed) != seeds.end())
+      throw InputError(where, key, show(n), fmt::format("seed {} twice: each seed once", seed));
+    seeds.push_back(seed);
+  }
+  return seeds;
 }
 
 std::string string_of(const toml::node& n, const std::string& where, const std::string& key) {
@@ -316,11 +338,9 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
       if (!(c.aim >= 0.1 && c.aim <= 1.0))
         throw InputError(w, key, show(v), "a fraction of each tolerance from 0.1 to 1");
     } else if (item == "verify_seeds") {
-      const auto* a = v.as_array();
-      if (!a) throw InputError(w, key, show(v), "expected an array of seeds (integers)");
-      c.verify_seeds.clear();
-      for (const auto& s : *a)
-        c.verify_seeds.push_back(int_of(s, w, key, 0, std::numeric_limits<std::int64_t>::max()));
+      c.verify_seeds = seeds_of(v, w, key);
+    } else if (item == "fit_seeds") {
+      c.fit_seeds = seeds_of(v, w, key);
     } else if (item == "verify_set") {
       const auto* a = v.as_array();
       if (!a) throw InputError(w, key, show(v), "expected an array of \"section.key=value\"");
@@ -338,7 +358,7 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
     } else {
       throw InputError(w, key, show(v),
                        "unknown key; allowed: name, rock, confining_stresses, trials_per_stage, "
-                       "passes, aim, verify_seeds, verify_set, brazilian_diameter, "
+                       "passes, aim, fit_seeds, verify_seeds, verify_set, brazilian_diameter, "
                        "brazilian_thickness, brazilian_platen_speed");
     }
   }
@@ -541,6 +561,10 @@ std::string calibration_docs() {
       "| `aim` | 1 | fraction of each tolerance a trial must reach to count as met during the "
       "search, 0.1 to 1; the verdicts keep the full tolerance. Below 1 it leaves room for the "
       "drift between the calibration sample and a larger verification sample |\n"
+      "| `fit_seeds` | [] | packing seeds of the search: each trial runs its tests on one "
+      "packing per seed (the [experiment]'s sample with `engine.seed` set) and is judged on the "
+      "mean of their properties, so that one packing's scatter does not steer the search; each "
+      "trial then costs that many times the tests. Empty: the [experiment]'s own packing |\n"
       "| `verify_seeds` | [1, 2, 3] | packing seeds of the verification (empty: no verification; "
       "the verdict is then the calibration sample's) |\n"
       "| `verify_set` | [] | experiment overrides (`\"section.key=value\"`) of the verification, "

@@ -79,10 +79,15 @@ struct CalibrationSpec {
   // Fraction of each tolerance a trial must reach to count as met during the search; below 1 it
   // leaves room for the drift from the calibration sample to the verification sample.
   double aim = 1.0;
+  // Packing seeds the search measures each trial on, its properties the mean over them (empty:
+  // the [experiment]'s one packing). Several packings average out the scatter of one.
+  std::vector<std::int64_t> fit_seeds;
   std::vector<std::int64_t> verify_seeds{1, 2, 3};
   std::vector<std::string> verify_set;  // experiment overrides for the verification (full size)
   ExperimentSpec base;                  // the experiment at the start values
 
+  // The sample sets the search measures on: "calibration", or "fit-<seed>" per fit seed.
+  std::vector<std::string> fit_sets() const;
   bool has_target(Property p) const;
   const Target* target(Property p) const;
   bool needs_brazilian() const { return has_target(Property::TensileStrength); }

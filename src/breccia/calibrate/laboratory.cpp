@@ -102,11 +102,38 @@ void Laboratory::read_trial_record() {
   }
 }
 
+// "calibration": the [experiment] as it is; "fit-<seed>": with that packing seed;
+// "verify-<seed>": the verification's overrides and that seed.
 std::vector<std::string> Laboratory::set_overrides(const std::string& set) const {
   if (set == "calibration") return {};
-  std::vector<std::string> o = c_.verify_set;
+  std::vector<std::string> o;
+  if (set.starts_with("verify-")) o = c_.verify_set;
   o.push_back("engine.seed=" + set.substr(set.find('-') + 1));
   return o;
+}
+
+Measurement Laboratory::measure_fit(const std::vector<double>& values, const TestPlan& plan) {
+  const std::vector<std::string> sets = c_.fit_sets();
+  if (sets.size() == 1) return measure(sets.front(), values, plan);
+  Measurement all;
+  std::map<Property, std::vector<double>> seen;
+  for (const std::string& set : sets) {
+    Measurement m = measure(set, values, plan);
+    for (const auto& [p, v] : m.properties) seen[p].push_back(v);
+    all.tests[set] = std::move(m.tests);
+    all.run_folders.insert(all.run_folders.end(), m.run_folders.begin(), m.run_folders.end());
+    for (const std::string& problem : m.problems) all.problems.push_back(set + ": " + problem);
+    all.new_runs += m.new_runs;
+    all.wall_seconds += m.wall_seconds;
+  }
+  // A property every packing measured; one that a packing missed is missing (and said so).
+  for (const auto& [p, xs] : seen) {
+    if (xs.size() != sets.size()) continue;
+    double sum = 0.0;
+    for (double x : xs) sum += x;
+    all.properties[p] = sum / static_cast<double>(xs.size());
+  }
+  return all;
 }
 
 const json& Laboratory::sample_report(const std::string& set) const {
@@ -168,7 +195,7 @@ ExperimentSpec Laboratory::trial_spec(const std::string& set, const std::vector<
 }
 
 void Laboratory::preflight(const std::vector<std::vector<double>>& points) {
-  std::vector<std::string> sets{"calibration"};
+  std::vector<std::string> sets = c_.fit_sets();
   for (auto seed : c_.verify_seeds) sets.push_back(fmt::format("verify-{}", seed));
   std::vector<std::pair<std::string, double>> tests{{"ucs", 0.0}};
   if (c_.needs_brazilian()) tests.emplace_back("brazilian", 0.0);
@@ -184,7 +211,7 @@ void Laboratory::preflight(const std::vector<std::vector<double>>& points) {
       Laboratory* lab;
       const std::string& set;
       ~Forget() {
-        if (set == "calibration" || !lab->samples_.count(set)) return;
+        if (!set.starts_with("verify-") || !lab->samples_.count(set)) return;
         std::error_code ec;
         for (const std::string& f : {lab->samples_.at(set).prism, lab->samples_.at(set).disc})
           for (const std::string& g : {f, f + ".json"}) fs::remove(g, ec);

@@ -43,10 +43,14 @@ class Laboratory {
              std::function<void(const std::string&)> log);
 
   // The samples of a sample set: "calibration" (the [experiment] sample at the start values,
-  // its seed) or "verify-<seed>" (verify_set overrides, that seed, packed with `values`).
+  // its seed), "fit-<seed>" (the same with that seed) or "verify-<seed>" (verify_set overrides,
+  // that seed, packed with `values`).
   void prepare_samples(const std::string& set, const std::vector<double>& values);
   Measurement measure(const std::string& set, const std::vector<double>& values,
                       const TestPlan& plan);
+  // What the search judges a trial by: measure() on each of the calibration's fit sets
+  // (CalibrationSpec::fit_sets), each property the mean over them; `tests` keyed by set.
+  Measurement measure_fit(const std::vector<double>& values, const TestPlan& plan);
 
   // Every check a trial can fail, before the first trial: the samples of every set (the
   // calibration's and each verification seed's) are packed, and each test the calibration will
