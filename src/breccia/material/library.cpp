@@ -336,7 +336,7 @@ std::string gauge_notes() {
          "3/4 of the height; the lateral faces of the middle half), as the ISRM method for "
          "deformability measures them; the platen approach, which the presets before the gauges "
          "were calibrated with, adds the compliance of the Hertz contacts between the platens and "
-         "the end grains. The default Berea run reads 8.07 GPa on the gauges and 7.76 GPa on the "
+         "the end grains. The default Berea run reads 8.03 GPa on the gauges and 7.69 GPa on the "
          "platens (4 %); the first Tumlin parameters read 35.9 GPa and 26.3 GPa on the 12 mm "
          "calibration prism (the platen contacts held 27 % of the compliance), and their "
          "Poisson's ratio 0.281 where the platen reading gave 0.208. The platen reading also grew "
