@@ -13,6 +13,7 @@
 #include "breccia/engine/simulation.hpp"
 #include "breccia/sample/geometry_file.hpp"
 #include "breccia/sample/packing.hpp"
+#include "breccia/sample/packing_methods.hpp"
 #include "breccia/sample/structure.hpp"
 #include "breccia/sample/tangent_fit.hpp"
 
@@ -207,6 +208,25 @@ TEST(Packing, ASlabIsProfiledAlongItsLongestSide) {
   EXPECT_DOUBLE_EQ(s.profile[4].bonds_per_grain, 4.5);
   EXPECT_DOUBLE_EQ(s.profile[7].bonds_per_grain, 3.5);
   EXPECT_NEAR(s.homogeneity.end_bonds_deficit, 1.0 / 4.5, 1e-12);
+}
+
+// The servo's "arrived" rule on readings around a goal of 100 (tolerance 2 %, spread 5 %): a
+// noisy series whose mean sits at the goal arrives although no five readings in a row are within
+// 2 %; a series biased 3 % low, one reading past the spread, or a last reading past the
+// tolerance does not; nothing arrives before five readings.
+TEST(Packing, StressWindowJudgesTheLastFiveReadings) {
+  auto arrives = [](std::vector<double> readings) {
+    packing::StressWindow w(100.0, 0.02, 0.05);
+    bool at = false;
+    for (double p : readings) at = w.push(p);
+    return at;
+  };
+  EXPECT_TRUE(arrives({104, 96.5, 103.5, 97, 100}));     // mean 100.2, last within 2 %
+  EXPECT_FALSE(arrives({100, 100, 100, 100}));           // four readings only
+  EXPECT_FALSE(arrives({97, 97, 97, 97, 97}));           // mean 3 % low
+  EXPECT_FALSE(arrives({106, 99, 99, 99, 99}));          // one reading past the 5 % spread
+  EXPECT_FALSE(arrives({100, 100, 100, 102.5, 97.4}));   // last reading 2.6 % off
+  EXPECT_TRUE(arrives({150, 100, 100, 100, 100, 100}));  // the old reading has left the window
 }
 
 TEST(Packing, ExpansionMeetsTheSampleBars) {

@@ -13,7 +13,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 
 #include "breccia/core/error.hpp"
@@ -26,40 +25,17 @@ namespace {
 constexpr std::uint64_t kCheck = 20;  // steps between measurements
 constexpr double kGrowthRate = 4e-3;  // radius growth per check in stage 1
 constexpr double kServoCap = 2e-4;    // largest radius change per check in stage 3
-// "At p0": the last check and the mean of the last kChecksHeld checks within kStressTolerance of
-// p0, none of them off by more than kStressSpread. A frictionless packing this close to jamming
-// rearranges in small avalanches that move p by 3-5 % from one check to the next (100k grains at
-// 0.1 MPa), so asking every check to fall within 2 % kept the servo hunting for 1,000 steps after
-// it had arrived.
+// "At p0" (StressWindow): the last check and the mean of the last five within 2 % of p0, none of
+// them off by more than 5 %. A frictionless packing this close to jamming rearranges in small
+// avalanches that move p by 3-5 % from one check to the next (100k grains at 0.1 MPa), so asking
+// five checks in a row to fall within 2 % kept the servo hunting for 1,000 steps after it had
+// arrived.
 constexpr double kStressTolerance = 0.02;
 constexpr double kStressSpread = 0.05;
-constexpr int kChecksHeld = 5;
 // Settling at constant radii before the servo. Longer settling shortens the servo by fewer steps
 // than it costs (100k grains, fixed servo gain: 5,735 settling steps left 2,520 for the servo,
 // 1,500 left 4,820).
 constexpr std::uint64_t kSettleSteps = 1500;
-
-// The last kChecksHeld pressures; push() says whether they are at p0 (above).
-class StressWindow {
- public:
-  explicit StressWindow(double p_goal) : goal_(p_goal) {}
-  bool push(double p) {
-    last_[count_++ % kChecksHeld] = p;
-    if (count_ < kChecksHeld) return false;
-    double sum = 0.0;
-    for (double q : last_) {
-      if (std::abs(q - goal_) > kStressSpread * goal_) return false;
-      sum += q;
-    }
-    return std::abs(sum / kChecksHeld - goal_) <= kStressTolerance * goal_ &&
-           std::abs(p - goal_) <= kStressTolerance * goal_;
-  }
-
- private:
-  double goal_;
-  std::array<double, kChecksHeld> last_{};
-  int count_ = 0;
-};
 
 class Expansion {
  public:
@@ -112,7 +88,7 @@ class Expansion {
   // (StressWindow).
   bool servo(double p_goal) {
     AdaptiveServo radius_servo(kServoCap);
-    StressWindow window(p_goal);
+    StressWindow window(p_goal, kStressTolerance, kStressSpread);
     while (!out_of_steps()) {
       sim_.run(kCheck);
       const PairStress ps = sim_.pair_stress();

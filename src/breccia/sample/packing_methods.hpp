@@ -86,6 +86,31 @@ class AdaptiveServo {
   double cap_, gain_ = kMinGain, last_error_ = 0.0;
 };
 
+// Whether a servoed stress has arrived at its goal, judged on the last kChecks readings: the
+// newest and their mean within `tolerance` of the goal (relative), none of them off by more than
+// `spread`. A single reading may then stray past the tolerance by the packing's own noise.
+class StressWindow {
+ public:
+  static constexpr int kChecks = 5;
+  StressWindow(double goal, double tolerance, double spread)
+      : goal_(goal), tolerance_(tolerance * goal), spread_(spread * goal) {}
+  bool push(double p) {
+    last_[static_cast<std::size_t>(count_++ % kChecks)] = p;
+    if (count_ < kChecks) return false;
+    double sum = 0.0;
+    for (double q : last_) {
+      if (std::abs(q - goal_) > spread_) return false;
+      sum += q;
+    }
+    return std::abs(sum / kChecks - goal_) <= tolerance_ && std::abs(p - goal_) <= tolerance_;
+  }
+
+ private:
+  double goal_, tolerance_, spread_;
+  std::array<double, kChecks> last_{};
+  int count_ = 0;
+};
+
 class StageClock {
  public:
   StageClock(const Simulation* sim = nullptr);

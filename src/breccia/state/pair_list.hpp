@@ -82,7 +82,6 @@ struct PairList {
   }
 };
 
-// Adds the cross slots of particle i (loads of pairs owned by earlier blocks) in a fixed order.
 // Asks the cache for particle i's cross slots: they were written in pair order and are read in
 // particle order, a gather that misses the cache as often as not.
 inline void prefetch_cross(const PairList& list, const std::vector<CrossSlot>& slots,
@@ -91,6 +90,7 @@ inline void prefetch_cross(const PairList& list, const std::vector<CrossSlot>& s
     __builtin_prefetch(slots.data() + list.cross_in[m]);
 }
 
+// Adds the cross slots of particle i (loads of pairs owned by earlier blocks) in a fixed order.
 inline void gather_cross(const PairList& list, const std::vector<CrossSlot>& slots, std::size_t i,
                          Vec3& force, Vec3& torque) noexcept {
   for (std::uint32_t m = list.cross_in_offsets[i]; m < list.cross_in_offsets[i + 1]; ++m) {
