@@ -1,25 +1,28 @@
 #include "breccia/analysis/fragments.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <numeric>
 
 namespace breccia::analysis {
 
 namespace {
 
+// Union-find over particle indices (32-bit: a sample's particle count fits, and the analysis of a
+// million-grain sample holds these arrays beside the engine's).
 struct DisjointSets {
-  std::vector<std::size_t> parent, size;
+  std::vector<std::uint32_t> parent, size;
   explicit DisjointSets(std::size_t n) : parent(n), size(n, 1) {
-    std::iota(parent.begin(), parent.end(), std::size_t{0});
+    std::iota(parent.begin(), parent.end(), std::uint32_t{0});
   }
-  std::size_t find(std::size_t a) {
+  std::uint32_t find(std::uint32_t a) {
     while (parent[a] != a) {
       parent[a] = parent[parent[a]];  // path halving
       a = parent[a];
     }
     return a;
   }
-  void unite(std::size_t a, std::size_t b) {
+  void unite(std::uint32_t a, std::uint32_t b) {
     a = find(a);
     b = find(b);
     if (a == b) return;
@@ -29,30 +32,33 @@ struct DisjointSets {
   }
 };
 
-}  // namespace
-
-FragmentResult find_fragments(const std::vector<double>& mass, const std::vector<double>& volume,
-                              const std::vector<Vec3>& position,
-                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds) {
-  const std::size_t n = mass.size();
+// The fragments of n particles whose mass, volume and position the accessors give.
+template <class Mass, class Volume, class Position>
+FragmentResult fragments_of(std::size_t n, Mass&& mass, Volume&& volume, Position&& position,
+                            const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds) {
   DisjointSets sets(n);
   for (const auto& [a, b] : bonds) sets.unite(a, b);
-  std::vector<std::size_t> root_index(n, static_cast<std::size_t>(-1));
+  constexpr std::uint32_t kNone = 0xffffffffu;
+  std::vector<std::uint32_t> root_index(n, kNone);
   std::vector<Fragment> frags;
-  std::vector<std::size_t> of(n);
+  std::vector<std::uint32_t> of(n);
   for (std::size_t p = 0; p < n; ++p) {
-    const std::size_t r = sets.find(p);
-    if (root_index[r] == static_cast<std::size_t>(-1)) {
-      root_index[r] = frags.size();
+    const std::uint32_t r = sets.find(static_cast<std::uint32_t>(p));
+    if (root_index[r] == kNone) {
+      root_index[r] = static_cast<std::uint32_t>(frags.size());
       frags.emplace_back();
     }
     Fragment& f = frags[root_index[r]];
+    const double m = mass(p);
     ++f.particles;
-    f.mass += mass[p];
-    f.volume += volume[p];
-    f.centroid += position[p] * mass[p];
+    f.mass += m;
+    f.volume += volume(p);
+    f.centroid += position(p) * m;
     of[p] = root_index[r];
   }
+  // Free before the result's arrays are built: a million grains' worth each.
+  std::vector<std::uint32_t>().swap(root_index);
+  sets = DisjointSets(0);
   for (Fragment& f : frags)
     if (f.mass > 0.0) f.centroid = f.centroid * (1.0 / f.mass);
   // Largest first; ties by size then first particle (stable).
@@ -90,22 +96,29 @@ FragmentResult find_fragments(const std::vector<double>& mass, const std::vector
   return r;
 }
 
+}  // namespace
+
+FragmentResult find_fragments(const std::vector<double>& mass, const std::vector<double>& volume,
+                              const std::vector<Vec3>& position,
+                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds) {
+  return fragments_of(
+      mass.size(), [&](std::size_t p) { return mass[p]; }, [&](std::size_t p) { return volume[p]; },
+      [&](std::size_t p) { return position[p]; }, bonds);
+}
+
 FragmentResult find_fragments(const ParticleStore& p,
                               const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
                               double density_scaling, std::size_t count) {
   const std::size_t n = std::min(count, p.size());
-  std::vector<double> mass(n), vol(n);
-  std::vector<Vec3> x(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    vol[i] = p.mass[i] / p.density[i];
-    mass[i] = p.mass[i] / density_scaling;
-    x[i] = p.pos_rad[i].x;
-  }
-  if (n == p.size()) return find_fragments(mass, vol, x, bonds);
+  // Read from the store as the analysis goes (no copies of its arrays).
+  auto mass = [&](std::size_t i) { return p.mass[i] / density_scaling; };
+  auto volume = [&](std::size_t i) { return p.mass[i] / p.density[i]; };
+  auto position = [&](std::size_t i) { return p.pos_rad[i].x; };
+  if (n == p.size()) return fragments_of(n, mass, volume, position, bonds);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> among;
   for (const auto& b : bonds)
     if (b.first < n && b.second < n) among.push_back(b);
-  return find_fragments(mass, vol, x, among);
+  return fragments_of(n, mass, volume, position, among);
 }
 
 }  // namespace breccia::analysis
