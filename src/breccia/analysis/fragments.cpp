@@ -32,12 +32,13 @@ struct DisjointSets {
   }
 };
 
-// The fragments of n particles whose mass, volume and position the accessors give.
-template <class Mass, class Volume, class Position>
+// The fragments of n particles whose mass, volume and position the accessors give; `bonds` calls
+// its argument with each intact bond's particle indexes.
+template <class Mass, class Volume, class Position, class Bonds>
 FragmentResult fragments_of(std::size_t n, Mass&& mass, Volume&& volume, Position&& position,
-                            const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds) {
+                            Bonds&& bonds) {
   DisjointSets sets(n);
-  for (const auto& [a, b] : bonds) sets.unite(a, b);
+  bonds([&](std::uint32_t a, std::uint32_t b) { sets.unite(a, b); });
   constexpr std::uint32_t kNone = 0xffffffffu;
   std::vector<std::uint32_t> root_index(n, kNone);
   std::vector<Fragment> frags;
@@ -103,22 +104,25 @@ FragmentResult find_fragments(const std::vector<double>& mass, const std::vector
                               const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds) {
   return fragments_of(
       mass.size(), [&](std::size_t p) { return mass[p]; }, [&](std::size_t p) { return volume[p]; },
-      [&](std::size_t p) { return position[p]; }, bonds);
+      [&](std::size_t p) { return position[p]; },
+      [&](auto&& unite) {
+        for (const auto& [a, b] : bonds) unite(a, b);
+      });
 }
 
-FragmentResult find_fragments(const ParticleStore& p,
-                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
-                              double density_scaling, std::size_t count) {
+FragmentResult find_fragments(const ParticleStore& p, const BondWalk& bonds, double density_scaling,
+                              std::size_t count) {
   const std::size_t n = std::min(count, p.size());
   // Read from the store as the analysis goes (no copies of its arrays).
   auto mass = [&](std::size_t i) { return p.mass[i] / density_scaling; };
   auto volume = [&](std::size_t i) { return p.mass[i] / p.density[i]; };
   auto position = [&](std::size_t i) { return p.pos_rad[i].x; };
-  if (n == p.size()) return fragments_of(n, mass, volume, position, bonds);
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> among;
-  for (const auto& b : bonds)
-    if (b.first < n && b.second < n) among.push_back(b);
-  return fragments_of(n, mass, volume, position, among);
+  // Bonds to particles beyond the first n are left out.
+  return fragments_of(n, mass, volume, position, [&](auto&& unite) {
+    bonds([&](std::uint32_t a, std::uint32_t b) {
+      if (a < n && b < n) unite(a, b);
+    });
+  });
 }
 
 }  // namespace breccia::analysis

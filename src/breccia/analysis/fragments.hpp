@@ -4,6 +4,7 @@
 // the largest fragment: smallest f < 0.1, biggest f > 0.9, intermediate otherwise.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -42,9 +43,11 @@ FragmentResult find_fragments(const std::vector<double>& mass, const std::vector
 // The fragments of the first `count` particles of a store (the rock; a test's apparatus grains
 // follow them): volumes from mass and density, masses divided by the run's density scaling (the
 // grains' own density). Bonds to particles beyond `count` are left out.
-FragmentResult find_fragments(const ParticleStore& p,
-                              const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
-                              double density_scaling,
+// `bonds` calls its argument with the particle indexes of each intact bond (a million-grain
+// sample's bonds are walked where they lie, not copied).
+using BondVisit = std::function<void(std::uint32_t, std::uint32_t)>;
+using BondWalk = std::function<void(const BondVisit&)>;
+FragmentResult find_fragments(const ParticleStore& p, const BondWalk& bonds, double density_scaling,
                               std::size_t count = std::numeric_limits<std::size_t>::max());
 
 }  // namespace breccia::analysis

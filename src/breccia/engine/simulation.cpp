@@ -243,14 +243,13 @@ std::size_t Simulation::intact_bond_sites() const noexcept {
   return n;
 }
 
-std::vector<std::pair<std::uint32_t, std::uint32_t>> Simulation::intact_bond_pairs() const {
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+void Simulation::for_each_intact_bond(
+    const std::function<void(std::uint32_t, std::uint32_t)>& f) const {
   auto one = [&](const auto& b) {
     for (std::size_t k = 0; k < b.size(); ++k)
-      if (b.intact[k]) out.emplace_back(b.pairs.first[k], b.pairs.second[k]);
+      if (b.intact[k]) f(b.pairs.first[k], b.pairs.second[k]);
   };
   std::apply([&](const auto&... set) { (one(set), ...); }, bonds_);
-  return out;
 }
 
 std::size_t Simulation::joint_count() const noexcept {
@@ -371,46 +370,59 @@ PairStress Simulation::pair_stress() const {
   return out;
 }
 
-std::vector<std::array<double, 9>> Simulation::particle_stress() const {
-  std::vector<std::array<double, 9>> out(p_.size());
+std::array<double, 9> Simulation::ParticleStressStream::at(std::size_t p) {
+  const Simulation& s = sim_;
+  std::array<double, 9> t{};
   // -(x_c - x_p) (x) F^{c->p}, with x_c - x_p the lever arm r of the pair geometry.
-  auto add = [&](std::uint32_t i, const Vec3& arm, const Vec3& force) {
+  auto add = [&](const Vec3& arm, const Vec3& force) {
     for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) out[i][static_cast<std::size_t>(3 * a + b)] -= arm[a] * force[b];
+      for (int b = 0; b < 3; ++b) t[static_cast<std::size_t>(3 * a + b)] -= arm[a] * force[b];
   };
+  auto zero = [](const Vec3& f) { return f.x == 0.0 && f.y == 0.0 && f.z == 0.0; };
   std::visit(
       [&]<class CL>(const ContactSet<CL>& c) {
-        for (std::size_t k = 0; k < c.pairs.size(); ++k) {
-          const Vec3& force = c.force[k];
-          if (force.x == 0.0 && force.y == 0.0 && force.z == 0.0) continue;
-          const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
-          const PairGeometry g = geometry(i, j);
-          add(i, g.r1, -force);
-          add(j, g.r2, force);
-        }
-        const auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
-        for (std::size_t wi = 0; wi < walls_.size(); ++wi)
-          for (std::size_t k = 0; k < wall_sets[wi].particle.size(); ++k) {
-            const Vec3& force = wall_sets[wi].force[k];
-            if (force.x == 0.0 && force.y == 0.0 && force.z == 0.0) continue;
-            const std::uint32_t i = wall_sets[wi].particle[k];
-            Vec3 n;
-            const double gap = walls_[wi].gap(p_.pos_rad[i].x, p_.pos_rad[i].r, n);
-            add(i, n * -(p_.pos_rad[i].r + 0.5 * gap), force);
+        const PairList& l = c.pairs;
+        if (l.offsets.size() > p + 1) {
+          // Pairs with p second (their first grain is lower: they come first in pair order),
+          // then those with p first.
+          for (std::uint32_t m = l.in_offsets[p]; m < l.in_offsets[p + 1]; ++m) {
+            const std::uint32_t k = l.in_slot[m];
+            if (zero(c.force[k])) continue;
+            add(s.geometry(l.first[k], static_cast<std::uint32_t>(p)).r2, c.force[k]);
           }
+          for (std::uint32_t k = l.offsets[p]; k < l.offsets[p + 1]; ++k) {
+            if (zero(c.force[k])) continue;
+            add(s.geometry(static_cast<std::uint32_t>(p), l.second[k]).r1, -c.force[k]);
+          }
+        }
+        const auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(s.wall_contacts_);
+        for (std::size_t wi = 0; wi < s.walls_.size(); ++wi) {
+          const WallContacts<CL>& wc = wall_sets[wi];
+          std::size_t& e = wall_at_[wi];
+          while (e < wc.particle.size() && wc.particle[e] < p) ++e;
+          if (e == wc.particle.size() || wc.particle[e] != p || zero(wc.force[e])) continue;
+          const PosRad& q = s.p_.pos_rad[p];
+          Vec3 n;
+          const double gap = s.walls_[wi].gap(q.x, q.r, n);
+          add(n * -(q.r + 0.5 * gap), wc.force[e]);
+        }
       },
-      contact_);
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    const double r = p_.pos_rad[i].r;
-    const double volume = p_.planar() ? std::numbers::pi * r * r * p_.thickness()
+      s.contact_);
+  const double r = s.p_.pos_rad[p].r;
+  const double volume = s.p_.planar() ? std::numbers::pi * r * r * s.p_.thickness()
                                       : 4.0 / 3.0 * std::numbers::pi * r * r * r;
-    auto& t = out[i];
-    for (int a = 0; a < 3; ++a)
-      for (int b = a; b < 3; ++b) {
-        const double v = 0.5 * (t[3 * a + b] + t[3 * b + a]) / volume;
-        t[3 * a + b] = t[3 * b + a] = v;
-      }
-  }
+  for (int a = 0; a < 3; ++a)
+    for (int b = a; b < 3; ++b) {
+      const double v = 0.5 * (t[3 * a + b] + t[3 * b + a]) / volume;
+      t[3 * a + b] = t[3 * b + a] = v;
+    }
+  return t;
+}
+
+std::vector<std::array<double, 9>> Simulation::particle_stress() const {
+  std::vector<std::array<double, 9>> out(p_.size());
+  ParticleStressStream stream(*this);
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = stream.at(i);
   return out;
 }
 

@@ -5,6 +5,7 @@
 // it through const views, the crack catalogue and the energy ledger.
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -233,8 +234,9 @@ class Simulation {
   // The places where bonds can still break, each a crack: an intact bond, or a bonded element of
   // a law that breaks element by element (the flat joint).
   std::size_t intact_bond_sites() const noexcept;
-  // The particle index pairs of the intact bonds of every law (fragments, wear).
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> intact_bond_pairs() const;
+  // Calls f(first, second) with the particle indexes of each intact bond of every law, in law
+  // and bond order (fragments, wear).
+  void for_each_intact_bond(const std::function<void(std::uint32_t, std::uint32_t)>& f) const;
   // The moduli of the bond law called `law` with this simulation's parameters (crack records
   // name their law); zero for a name that is not a bond law.
   BondModuli bond_moduli(std::string_view law) const noexcept;
@@ -250,6 +252,18 @@ class Simulation {
   // volume, or pi R^2 t in 2D. Loads applied at the centres (membranes) have no lever arm and
   // add nothing.
   std::vector<std::array<double, 9>> particle_stress() const;
+  // particle_stress() one particle at a time, in increasing index order, with the same sums in
+  // the same order, without holding a tensor for every particle (72 B a grain in a snapshot).
+  class ParticleStressStream {
+   public:
+    explicit ParticleStressStream(const Simulation& sim)
+        : sim_(sim), wall_at_(sim.walls().size(), 0) {}
+    std::array<double, 9> at(std::size_t p);  // p ascending from one call to the next
+
+   private:
+    const Simulation& sim_;
+    std::vector<std::size_t> wall_at_;  // per wall: the first contact entry not yet passed
+  };
   std::uint64_t neighbour_rebuilds() const noexcept { return rebuilds_; }
   // External per-particle load for the coming step (membranes, follower loads); its work is
   // booked as external work. Allocated on first use; cleared after each step.

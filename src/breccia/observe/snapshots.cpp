@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 #include <fmt/os.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iterator>
+#include <tuple>
 #include <utility>
 
 #include "breccia/core/archive.hpp"
@@ -169,6 +171,47 @@ void SnapshotWriter::write(const Simulation& sim) {
   write_collections();
 }
 
+namespace {
+
+// The intact bonds of every law, in law and bond order, one at a time: next(f) calls
+// f(law index, bond set, bond index) for the next one.
+class IntactBonds {
+ public:
+  explicit IntactBonds(const Simulation& sim) : sim_(sim) {}
+  template <class F>
+  void next(F&& f) {
+    bool found = false;
+    while (!found && law_ < std::tuple_size_v<BondSets>) {
+      std::uint32_t index = 0;
+      std::apply(
+          [&](const auto&... set) {
+            (
+                [&] {
+                  if (index++ != law_) return;
+                  while (bond_ < set.size() && !set.intact[bond_]) ++bond_;
+                  if (bond_ < set.size()) {
+                    f(law_, set, static_cast<std::uint32_t>(bond_++));
+                    found = true;
+                  }
+                }(),
+                ...);
+          },
+          sim_.bonds());
+      if (!found) {
+        ++law_;
+        bond_ = 0;
+      }
+    }
+  }
+
+ private:
+  const Simulation& sim_;
+  std::uint32_t law_ = 0;
+  std::size_t bond_ = 0;
+};
+
+}  // namespace
+
 // Grains as points: radius, tag, broken bonds so far, velocity, displacement since loading
 // began, angular velocity, rotation (axis times angle, rad) and stress (docs/physics.md §6.5).
 void SnapshotWriter::write_particles(const Simulation& sim, const fs::path& path) const {
@@ -192,8 +235,8 @@ void SnapshotWriter::write_particles(const Simulation& sim, const fs::path& path
   vector(s, "rotation", n, [&](std::size_t i) {
     return p.planar() ? Vec3{0.0, 0.0, p.angle[i]} : rotation_vector(p.orientation[i]);
   });
-  const std::vector<std::array<double, 9>> stress = sim.particle_stress();
-  tensor(s, "stress_pa", n, [&](std::size_t i) { return stress[i]; });
+  Simulation::ParticleStressStream stress(sim);
+  tensor(s, "stress_pa", n, [&](std::size_t i) { return stress.at(i); });
   s << "</PointData>\n" << kFooter;
   file.commit();
 }
@@ -202,58 +245,57 @@ void SnapshotWriter::write_particles(const Simulation& sim, const fs::path& path
 // to its strength as its law judges them (the law's assess(): docs/physics.md §4.5).
 void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) const {
   const ParticleStore& p = sim.particles();
-  // The intact bonds of every law in order, by their set and index: each column walks them
-  // afresh (assess() is cheap next to formatting) instead of holding a copy of every bond.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> intact;  // (law, bond)
-  std::uint32_t law_index = 0;
+  std::size_t m = 0;
   std::apply(
       [&](const auto&... set) {
-        (
-            [&] {
-              for (std::size_t k = 0; k < set.size(); ++k)
-                if (set.intact[k]) intact.emplace_back(law_index, static_cast<std::uint32_t>(k));
-              ++law_index;
-            }(),
-            ...);
+        ((m += static_cast<std::size_t>(std::count(set.intact.begin(), set.intact.end(), 1))), ...);
       },
       sim.bonds());
-  // f(set, k) for the m-th intact bond.
-  auto at = [&](std::size_t m, auto&& f) {
-    std::uint32_t li = 0;
-    std::apply(
-        [&](const auto&... set) {
-          ((li++ == intact[m].first ? f(set, intact[m].second) : void()), ...);
-        },
-        sim.bonds());
-  };
-  auto loads = [&](std::size_t m) {
-    BondFailure out;
-    at(m, [&]<class Law>(const BondSet<Law>& set, std::uint32_t k) {
-      out = Law::assess(set.params, set.state[k]);
-    });
-    return out;
-  };
-  const std::size_t m = intact.size();
   AtomicFileWriter file(path);
   std::ostream& s = file.stream();
   s << header(2 * m, m);
-  points_block(s, 2 * m, [&](std::size_t e) {
-    Vec3 x;
-    at(e / 2, [&](const auto& set, std::uint32_t k) {
-      x = p.pos_rad[e % 2 == 0 ? set.pairs.first[k] : set.pairs.second[k]].x;
+  // Each block walks the intact bonds afresh with its own cursor (assess() is cheap next to
+  // formatting) instead of holding a list of every bond.
+  {
+    IntactBonds c(sim);
+    Vec3 second;
+    points_block(s, 2 * m, [&](std::size_t e) {
+      if (e % 2 == 1) return second;
+      Vec3 first;
+      c.next([&](std::uint32_t, const auto& set, std::uint32_t k) {
+        first = p.pos_rad[set.pairs.first[k]].x;
+        second = p.pos_rad[set.pairs.second[k]].x;
+      });
+      return first;
     });
-    return x;
-  });
+  }
   cells_block(s, m, 2);
   s << "<CellData Scalars=\"breakage_index\">\n";
-  scalar(s, "law", "Int32", m, [&](std::size_t k) { return intact[k].first; });
-  scalar(s, "normal_force_n", "Float64", m, [&](std::size_t k) { return loads(k).Fn; });
-  scalar(s, "shear_force_n", "Float64", m, [&](std::size_t k) { return loads(k).Fs; });
-  scalar(s, "twisting_moment_nm", "Float64", m, [&](std::size_t k) { return loads(k).Mt; });
-  scalar(s, "bending_moment_nm", "Float64", m, [&](std::size_t k) { return loads(k).Mb; });
-  scalar(s, "sigma_pa", "Float64", m, [&](std::size_t k) { return loads(k).sigma; });
-  scalar(s, "tau_pa", "Float64", m, [&](std::size_t k) { return loads(k).tau; });
-  scalar(s, "breakage_index", "Float64", m, [&](std::size_t k) { return loads(k).index; });
+  {
+    IntactBonds c(sim);
+    scalar(s, "law", "Int32", m, [&](std::size_t) {
+      std::uint32_t law = 0;
+      c.next([&](std::uint32_t l, const auto&, std::uint32_t) { law = l; });
+      return law;
+    });
+  }
+  auto column = [&](const char* name, double BondFailure::*value) {
+    IntactBonds c(sim);
+    scalar(s, name, "Float64", m, [&](std::size_t) {
+      BondFailure loads;
+      c.next([&]<class Law>(std::uint32_t, const BondSet<Law>& set, std::uint32_t k) {
+        loads = Law::assess(set.params, set.state[k]);
+      });
+      return loads.*value;
+    });
+  };
+  column("normal_force_n", &BondFailure::Fn);
+  column("shear_force_n", &BondFailure::Fs);
+  column("twisting_moment_nm", &BondFailure::Mt);
+  column("bending_moment_nm", &BondFailure::Mb);
+  column("sigma_pa", &BondFailure::sigma);
+  column("tau_pa", &BondFailure::tau);
+  column("breakage_index", &BondFailure::index);
   s << "</CellData>\n" << kFooter;
   file.commit();
 }

@@ -32,8 +32,9 @@ constexpr double kGritSpacing = 2.002, kGritClearance = 1.01;
 // among the rock's grains.
 double worn_mass(const Simulation& sim, std::size_t rock, double density_scaling,
                  std::size_t& pieces) {
-  const analysis::FragmentResult f =
-      analysis::find_fragments(sim.particles(), sim.intact_bond_pairs(), density_scaling, rock);
+  const analysis::FragmentResult f = analysis::find_fragments(
+      sim.particles(), [&](const analysis::BondVisit& visit) { sim.for_each_intact_bond(visit); },
+      density_scaling, rock);
   pieces = f.fragments.empty() ? 0 : f.fragments.size() - 1;
   return f.total_mass - f.largest_mass;
 }

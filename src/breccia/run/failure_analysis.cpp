@@ -376,7 +376,9 @@ void write_indicators(const fs::path& folder, const FailureInputs& in, const Cra
 // their summary.
 json fragments_summary(const fs::path& folder, const FailureInputs& in) {
   const analysis::FragmentResult f = analysis::find_fragments(
-      in.sim.particles(), in.sim.intact_bond_pairs(), in.spec.density_scaling, in.rock_particles);
+      in.sim.particles(),
+      [&](const analysis::BondVisit& visit) { in.sim.for_each_intact_bond(visit); },
+      in.spec.density_scaling, in.rock_particles);
   std::string t = "fragment_id,particles,mass_kg,volume_m3,x_m,y_m,z_m,fraction_of_largest,class\n";
   for (std::size_t k = 0; k < f.fragments.size(); ++k) {
     const auto& fr = f.fragments[k];
