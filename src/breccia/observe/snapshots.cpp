@@ -248,7 +248,9 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) co
   std::size_t m = 0;
   std::apply(
       [&](const auto&... set) {
-        ((m += static_cast<std::size_t>(std::count(set.intact.begin(), set.intact.end(), 1))), ...);
+        ((m += static_cast<std::size_t>(
+              std::count_if(set.intact.begin(), set.intact.end(), [](auto v) { return v != 0; }))),
+         ...);
       },
       sim.bonds());
   AtomicFileWriter file(path);
