@@ -485,15 +485,16 @@ TEST(ParticleStress, AGrainSqueezedBetweenTwoPlatensCarriesTheirForceOverItsVolu
     EXPECT_NEAR(stress[0][static_cast<std::size_t>(c)], 0.0, 1e-12 * expected);
 }
 
-TEST(ParticleStress, GrainStressesAddUpToThePairStressSum) {
-  // Without walls, sum_p V_p sigma_p = sum over pairs of l (x) F (symmetrised): the grains split
-  // each pair's l (x) F between them by their lever arms, r1 - r2 = l. A bonded block set moving
-  // at random, checked after its bonds and contacts have loaded.
-  ParticleStore ps = fcc_block(3, 3, 3, 0.5e-3, 2650);
+namespace {
+
+// A bonded FCC block (no walls) set moving at random, run until its bonds and contacts have
+// loaded.
+Simulation randomly_moving_block(int nx, double a, double b, double c, std::uint64_t steps) {
+  ParticleStore ps = fcc_block(nx, 3, 3, 0.5e-3, 2650);
   for (std::size_t i = 0; i < ps.size(); ++i)
-    ps.vel[i] = {1e-2 * std::sin(1.3 * static_cast<double>(i)),
-                 1e-2 * std::cos(0.7 * static_cast<double>(i)),
-                 1e-2 * std::sin(2.9 * static_cast<double>(i))};
+    ps.vel[i] = {1e-2 * std::sin(a * static_cast<double>(i)),
+                 1e-2 * std::cos(b * static_cast<double>(i)),
+                 1e-2 * std::sin(c * static_cast<double>(i))};
   EngineConfig cfg;
   cfg.local_damping = 0.0;
   LinearContact::Params lp;
@@ -501,7 +502,17 @@ TEST(ParticleStress, GrainStressesAddUpToThePairStressSum) {
   sim.set_bond_params<ParallelBond>(ParallelBond::Params{});
   sim.bond_touching_pairs<ParallelBond>(1e-9);
   sim.initialise();
-  sim.run(200);
+  sim.run(steps);
+  return sim;
+}
+
+}  // namespace
+
+TEST(ParticleStress, GrainStressesAddUpToThePairStressSum) {
+  // Without walls, sum_p V_p sigma_p = sum over pairs of l (x) F (symmetrised): the grains split
+  // each pair's l (x) F between them by their lever arms, r1 - r2 = l. A bonded block set moving
+  // at random, checked after its bonds and contacts have loaded.
+  Simulation sim = randomly_moving_block(3, 1.3, 0.7, 2.9, 200);
   const PairStress pairs = sim.pair_stress();
   const auto stress = sim.particle_stress();
   std::array<double, 9> sum{};
@@ -523,19 +534,7 @@ TEST(ParticleStress, TheStreamGivesTheSumsOfAScatterOverThePairs) {
   // The grain stresses are written one grain at a time, each from its own pairs (as second, then
   // as first); the plain scatter over the pair list, pair by pair into both grains, adds the same
   // terms in the same order, so the two agree to the bit. A bonded block moving at random.
-  ParticleStore ps = fcc_block(4, 3, 3, 0.5e-3, 2650);
-  for (std::size_t i = 0; i < ps.size(); ++i)
-    ps.vel[i] = {1e-2 * std::sin(1.7 * static_cast<double>(i)),
-                 1e-2 * std::cos(0.3 * static_cast<double>(i)),
-                 1e-2 * std::sin(2.3 * static_cast<double>(i))};
-  EngineConfig cfg;
-  cfg.local_damping = 0.0;
-  LinearContact::Params lp;
-  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
-  sim.set_bond_params<ParallelBond>(ParallelBond::Params{});
-  sim.bond_touching_pairs<ParallelBond>(1e-9);
-  sim.initialise();
-  sim.run(150);
+  Simulation sim = randomly_moving_block(4, 1.7, 0.3, 2.3, 150);
   const ParticleStore& p = sim.particles();
   std::vector<std::array<double, 9>> scatter(p.size());
   std::size_t loaded = 0;
