@@ -103,9 +103,11 @@ struct PairStepper {
     a.q = integrate_orientation(a.q, a.w, dt);
     b.q = integrate_orientation(b.q, b.w, dt);
   }
+  // The radii of the two grains, from which a bond's section follows.
+  BondRadii radii() const { return {a.R, b.R}; }
   double energy() const {
     if constexpr (is_bond_law<Law> || is_joint_law<Law>)
-      return Law::energy(params, state).total();
+      return Law::energy(params, state, radii()).total();
     else
       return Law::stored_energy(params, state);
   }

@@ -56,7 +56,6 @@ Draw random_bond(std::mt19937_64& rng, double max_angle) {
   const BodyFrames installed{random_rotation(rng), random_rotation(rng)};
   d.state.q0 = conj(installed.q1) * installed.q2;
   d.state.d0 = R1 + R2;
-  d.state.radius = 0.5 * d.state.d0;
   d.frames.q1 = small_rotation(rng, 10.0) * installed.q1;  // any present orientation
   d.frames.q2 = d.frames.q1 * conj(installed.q1) * small_rotation(rng, max_angle) * installed.q2;
   d.state.r0 = rotate(conj(installed.q1), random_unit(rng));
@@ -67,7 +66,7 @@ Draw random_bond(std::mt19937_64& rng, double max_angle) {
   d.geometry.R2 = R2;
   d.geometry.delta = R1 + R2 - d.geometry.d;
   const beam::BeamModuli moduli{10e9, 4e9, 1.0, false};
-  d.section = beam::section(d.state, moduli, RunGeometry{});
+  d.section = beam::section(d.state, moduli, RunGeometry{}, radii_of(d.geometry));  // R_b = d0 / 2
   return d;
 }
 
@@ -117,7 +116,6 @@ TEST(BeamKernels, PureTwistMakesNoBend) {
   const Vec3 n{0.0, 0.0, 1.0};
   beam::BeamState s;
   s.d0 = 1e-3;
-  s.radius = 0.5e-3;
   s.r0 = n;
   const BodyFrames fr{Quat{}, from_axis_angle(n, 0.01)};
   PairGeometry g;
@@ -125,7 +123,7 @@ TEST(BeamKernels, PureTwistMakesNoBend) {
   g.d = s.d0;
   g.R1 = g.R2 = 0.5e-3;
   const beam::BeamSection c =
-      beam::section(s, beam::BeamModuli{10e9, 4e9, 1.0, false}, RunGeometry{});
+      beam::section(s, beam::BeamModuli{10e9, 4e9, 1.0, false}, RunGeometry{}, radii_of(g));
   const PairForce f = beam::loads(s, c, g, fr, g.d, g.d);
   EXPECT_EQ(s.bend_moment, 0.0);
   EXPECT_EQ(s.shear_force, 0.0);

@@ -49,17 +49,18 @@ constexpr double kTol = 1e-5;
 
 TEST(BrittleBeam, StiffnessesAreThoseOfTheBeam) {
   auto s = touching_beam();
-  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kr, kKr, 1e-12 * kKr);
-  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).ks, kKs, 1e-12 * kKs);
-  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kb, kKb, 1e-12 * kKb);
-  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kt, kKt, 1e-12 * kKt);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state, s.radii()).kr, kKr, 1e-12 * kKr);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state, s.radii()).ks, kKs, 1e-12 * kKs);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state, s.radii()).kb, kKb, 1e-12 * kKb);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state, s.radii()).kt, kKt, 1e-12 * kKt);
   EXPECT_NEAR(BrittleBeam::moduli(s.params).shear, kG, 1.0);
   // ESyS's bending factor 0.5 halves the bending stiffness, nothing else.
   auto h = touching_beam();
   h.params.bending_factor = 0.5;
   h.install();
-  EXPECT_NEAR(BrittleBeam::section(h.params, h.state).kb, 0.5 * kKb, 1e-12 * kKb);
-  EXPECT_EQ(BrittleBeam::section(h.params, h.state).kr, BrittleBeam::section(s.params, s.state).kr);
+  EXPECT_NEAR(BrittleBeam::section(h.params, h.state, h.radii()).kb, 0.5 * kKb, 1e-12 * kKb);
+  EXPECT_EQ(BrittleBeam::section(h.params, h.state, h.radii()).kr,
+            BrittleBeam::section(s.params, s.state, s.radii()).kr);
 }
 
 TEST(BrittleBeam, StretchPullsWithTheAxialStiffness) {
@@ -225,10 +226,11 @@ TEST(BrittleBeam, PlanarBeamIsASlab) {
   s.b.x = {kL, 0, 0};
   s.install();
   const double area = 2 * kR * 1e-3, inertia = 2.0 / 3.0 * kR * kR * kR * 1e-3;
-  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kr, kE * area / kL, 1e-12 * kE * area / kL);
-  EXPECT_NEAR(BrittleBeam::section(s.params, s.state).kb, kE * inertia / kL,
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state, s.radii()).kr, kE * area / kL,
+              1e-12 * kE * area / kL);
+  EXPECT_NEAR(BrittleBeam::section(s.params, s.state, s.radii()).kb, kE * inertia / kL,
               1e-12 * kE * inertia / kL);
-  EXPECT_EQ(BrittleBeam::section(s.params, s.state).kt, 0.0);
+  EXPECT_EQ(BrittleBeam::section(s.params, s.state, s.radii()).kt, 0.0);
   const double theta = 1e-6;
   s.b.q = from_axis_angle({0, 0, 1}, theta);
   const PairResult r = s.evaluate();
@@ -337,7 +339,7 @@ TEST(BeamSection, ReciprocalsAndStiffnessesAreThoseOfTheSection) {
   const double tol = 8 * std::numeric_limits<double>::epsilon();
   const double E = 12e9, G = 4.8e9, chi = 0.5;
   beam::BeamState s;
-  s.radius = 0.37e-3;
+  const BondRadii radii{0.5e-3, 0.37e-3};  // R_b = min(R1, R2) = 0.37 mm
   s.d0 = 0.81e-3;
   struct Case {
     RunGeometry run;
@@ -347,8 +349,10 @@ TEST(BeamSection, ReciprocalsAndStiffnessesAreThoseOfTheSection) {
   for (const Case& k :
        {Case{{false, false, 1.0}, false, false}, Case{{true, false, 1e-3}, false, true},
         Case{{true, true, 2e-3}, true, false}, Case{{true, true, 2e-3}, false, true}}) {
-    const beam::BeamSection c = beam::section(s, {E, G, chi, k.disc_for_planar_spheres}, k.run);
-    const double r = s.radius, t = k.run.thickness;
+    const beam::BeamSection c =
+        beam::section(s, {E, G, chi, k.disc_for_planar_spheres, true}, k.run, radii);
+    const double r = 0.37e-3, t = k.run.thickness;
+    EXPECT_EQ(c.radius, r);
     const double area = k.slab ? 2 * r * t : std::numbers::pi * r * r;
     const double inertia =
         k.slab ? 2.0 / 3.0 * r * r * r * t : 0.25 * std::numbers::pi * r * r * r * r;

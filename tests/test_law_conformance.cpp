@@ -210,8 +210,8 @@ void check_rigid_motion_invariance(bool rolling = false) {
   if constexpr (is_bond_law<Law>) {
     if constexpr (Law::needs_frames || requires { &Law::State::d0; }) {
       const double eps = std::numeric_limits<double>::epsilon();
-      f_ulp = eps * 1e-2 * Law::max_stiffness(s.params, s.state);
-      m_ulp = eps * Law::max_moment_stiffness(s.params, s.state) + f_ulp * s.a.R;
+      f_ulp = eps * 1e-2 * Law::max_stiffness(s.params, s.state, s.radii());
+      m_ulp = eps * Law::max_moment_stiffness(s.params, s.state, s.radii()) + f_ulp * s.a.R;
     }
   }
   for (int k = 0; k < 300; ++k) {
@@ -359,14 +359,14 @@ void check_assess_agrees_with_the_breaking_step() {
   PairStepper<Law> s;
   s.b.x = {1e-3, 0, 0};
   s.install();
-  EXPECT_EQ(Law::assess(s.params, s.state).index, 0.0);
+  EXPECT_EQ(Law::assess(s.params, s.state, s.radii()).index, 0.0);
   s.b.v = {1e-2, 0, 0};
   double last_index = 0.0;
   int k = 0;
   for (; k < 1000000 && !s.failure.broken; ++k) {
     s.evaluate();
     if (s.failure.broken) break;
-    const BondFailure now = Law::assess(s.params, s.state);
+    const BondFailure now = Law::assess(s.params, s.state, s.radii());
     ASSERT_FALSE(now.broken) << "step " << k;
     ASSERT_LT(now.index, 1.0) << "step " << k;
     EXPECT_GE(now.index, 0.0);
@@ -375,7 +375,7 @@ void check_assess_agrees_with_the_breaking_step() {
   }
   ASSERT_TRUE(s.failure.broken);
   EXPECT_GT(last_index, 0.9) << "a steady pull approaches the strength step by step";
-  const BondFailure a = Law::assess(s.params, s.state);
+  const BondFailure a = Law::assess(s.params, s.state, s.radii());
   EXPECT_TRUE(a.broken);
   EXPECT_GE(a.index, 1.0);
   EXPECT_EQ(a.mode, s.failure.mode);

@@ -155,8 +155,8 @@ def check_paraview_renders(snaps, summary, out):
         assert shutil.which(tool), f"{tool} is missing (scripts/bootstrap installs it)"
     png = os.path.join(out, "paraview.png")
     # A loaded machine has lost a fresh Xvfb's connection under pvbatch ("bad X server
-    # connection"): a second display is tried then, and any other failure fails at once.
-    for attempt in range(2):
+    # connection"): another display is tried then (twice), and any other failure fails at once.
+    for attempt in range(3):
         server, display = virtual_display()
         try:
             r = subprocess.run(["pvbatch", os.path.join(SOURCE, "tests", "paraview_render.py"),

@@ -57,8 +57,8 @@ TEST(QuaternionBond, ShearArmsAreThePresentLength) {
   // brittle beam's K_s d0 gamma (ESyS); their ratio is d / d0 exactly. Stiffnesses agree.
   auto q = touching_pair(1e12);  // elastic
   auto b = touching_pair<BrittleBeam>();
-  const beam::BeamSection qs = QuaternionBond::section(q.params, q.state);
-  const beam::BeamSection bs = BrittleBeam::section(b.params, b.state);
+  const beam::BeamSection qs = QuaternionBond::section(q.params, q.state, q.radii());
+  const beam::BeamSection bs = BrittleBeam::section(b.params, b.state, b.radii());
   EXPECT_EQ(qs.kr, bs.kr);
   EXPECT_EQ(qs.kb, bs.kb);
   EXPECT_NEAR(qs.ks, kKs, 1e-12 * kKs);
@@ -120,7 +120,8 @@ TEST(QuaternionBond, EachLoadAloneBreaksAtIndexOne) {
     ASSERT_TRUE(s.failure.broken) << c.what;
     EXPECT_EQ(s.failure.mode, c.mode) << c.what;
     EXPECT_NEAR(s.failure.ratio_t + s.failure.ratio_s, 1.01, 2e-4) << c.what;
-    EXPECT_NEAR(s.failure.energy.total(), QuaternionBond::energy(s.params, s.state).total(), 1e-30);
+    EXPECT_NEAR(s.failure.energy.total(),
+                QuaternionBond::energy(s.params, s.state, s.radii()).total(), 1e-30);
   }
   // The stored energy at the tensile break is K_r u^2 / 2.
   auto t = touching_pair();

@@ -43,7 +43,7 @@ TEST(RicebalBond, StiffnessesFollowTheSmallerGrainsCircle) {
   s.b.x.x += 1e-8;
   const PairResult r = s.evaluate();
   EXPECT_NEAR(r.f2.x, -10e9 * A / d0 * 1e-8, 1e-6 * 0.03927);
-  EXPECT_NEAR(RicebalBond::energy(s.params, s.state).tension, 0.5 * s.state.kn * 1e-16,
+  EXPECT_NEAR(RicebalBond::energy(s.params, s.state, s.radii()).tension, 0.5 * s.state.kn * 1e-16,
               1e-9 * 2e-10);
   // A given G_b replaces the one from nu_b.
   PairStepper<RicebalBond> g;

@@ -51,7 +51,7 @@ Vec3 force_on_2(const Simulation& s) {
 // thickness included).
 ParallelBond::Section section_of(const Simulation& s) {
   const auto& set = std::get<BondSet<ParallelBond>>(s.bonds());
-  return ParallelBond::section(set.params, set.state[0]);
+  return ParallelBond::section(set.params, s.bond_radii(set.pairs.first[0], set.pairs.second[0]));
 }
 
 }  // namespace
@@ -257,30 +257,31 @@ TEST(TwoDisk, MotionStaysInThePlane) {
   EXPECT_NE(sim.particles().angle[1], 0.0);
 }
 
-// The parallel bond derives its section at every step from R_bar and k_n with one division
-// (ParallelBond::section): 1 / A, R_bar / I and R_bar / J must be those of the disc (3D) or the
-// slab (2D, no twist), within 8 epsilon (at most six roundings of 0.5 ulp after the division).
+// The parallel bond derives its section at every step from its grains' radii (R_bar = lambda
+// min(R1, R2), k_n = E_bar / (R1 + R2)) with one more division (ParallelBond::section): 1 / A,
+// R_bar / I and R_bar / J must be those of the disc (3D) or the slab (2D, no twist), within 8
+// epsilon (at most six roundings of 0.5 ulp after the division; k_n's sum and division, and the
+// test's own 10 GPa / 1.1 mm, add three more to the stiffnesses).
 TEST(ParallelBondSection, StressCoefficientsAreThoseOfTheSection) {
   const double tol = 8 * std::numeric_limits<double>::epsilon();
   ParallelBond::Params p = ParallelBond::example_params();
   p.stiffness_ratio = 1.7;
   ParallelBond::prepare(p);
-  ParallelBond::State s;
-  s.bond_radius = 0.43e-3;
-  s.stiffness_per_area = 10e9 / 1.1e-3;
+  // R_bar = min(R1, R2) = 0.43 mm (lambda = 1) and k_n = E_bar / (R1 + R2) = 10 GPa / 1.1 mm.
+  const BondRadii radii{0.67e-3, 0.43e-3};
   for (const bool planar : {false, true}) {
     p.run = {planar, false, 2.5e-3};
-    const ParallelBond::Section c = ParallelBond::section(p, s);
-    const double r = s.bond_radius, t = p.run.thickness;
+    const ParallelBond::Section c = ParallelBond::section(p, radii);
+    const double r = 0.43e-3, t = p.run.thickness;
     const double area = planar ? 2 * r * t : std::numbers::pi * r * r;
     const double inertia =
         planar ? 2.0 / 3.0 * r * r * r * t : std::numbers::pi / 4 * r * r * r * r;
     const double polar = planar ? 0.0 : 2 * inertia;
-    const double kn = s.stiffness_per_area * area;
+    const double kn_area = 10e9 / 1.1e-3, kn = kn_area * area;
     EXPECT_NEAR(c.kn, kn, tol * kn);
     EXPECT_NEAR(c.ks, kn / 1.7, tol * kn / 1.7);
-    EXPECT_NEAR(c.kb, s.stiffness_per_area * inertia, tol * s.stiffness_per_area * inertia);
-    EXPECT_NEAR(c.kt, s.stiffness_per_area / 1.7 * polar, tol * s.stiffness_per_area * polar);
+    EXPECT_NEAR(c.kb, kn_area * inertia, tol * kn_area * inertia);
+    EXPECT_NEAR(c.kt, kn_area / 1.7 * polar, tol * kn_area * polar);
     EXPECT_NEAR(c.inv_area, 1 / area, tol / area);
     EXPECT_NEAR(c.bend_coeff, r / inertia, tol * r / inertia);
     if (planar)
@@ -318,6 +319,23 @@ Simulation damped_bonded_pair(double beta_n, double beta_s, Vec3 v2, bool driven
 
 }  // namespace
 
+// A bond's section follows from its grains' radii and its law's parameters at every step, so
+// the parameters cannot change under installed bonds: the engine refuses, naming the law.
+TEST(ParallelBondSection, ParametersCannotChangeOnceBondsAreInstalled) {
+  Simulation sim = damped_bonded_pair(0.0, 0.0, {}, false);
+  ParallelBond::Params stiffer;
+  stiffer.modulus = 2 * stiffer.modulus;
+  try {
+    sim.set_bond_params<ParallelBond>(stiffer);
+    FAIL() << "new parameters were accepted under an installed bond";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("parallel_bond"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("1 intact bonds"), std::string::npos) << e.what();
+  }
+  const auto& set = std::get<BondSet<ParallelBond>>(sim.bonds());
+  EXPECT_EQ(set.params.modulus, ParallelBond::Params{}.modulus);
+}
+
 TEST(BondDashpot, AddsMinusCTimesTheRelativeVelocity) {
   // Driven grains, so the two runs see the same motion: the forces differ by the dashpot alone,
   // -c_n v_n n - c_s v_t with c = 2 beta sqrt(m* k), m* = m / 2.
@@ -325,8 +343,9 @@ TEST(BondDashpot, AddsMinusCTimesTheRelativeVelocity) {
   Simulation plain = damped_bonded_pair(0.0, 0.0, v2, true);
   Simulation damped = damped_bonded_pair(0.2, 0.1, v2, true);
   const auto& set = std::get<BondSet<ParallelBond>>(damped.bonds());
-  const double kn = ParallelBond::normal_stiffness(set.params, set.state[0]);
-  const double ks = ParallelBond::shear_stiffness(set.params, set.state[0]);
+  const BondRadii radii = damped.bond_radii(set.pairs.first[0], set.pairs.second[0]);
+  const double kn = ParallelBond::normal_stiffness(set.params, set.state[0], radii);
+  const double ks = ParallelBond::shear_stiffness(set.params, set.state[0], radii);
   const double m = damped.particles().mass[1], ms = 0.5 * m;
   const double cn = 2 * 0.2 * std::sqrt(ms * kn), cs = 2 * 0.1 * std::sqrt(ms * ks);
   for (int k = 0; k < 3; ++k) {

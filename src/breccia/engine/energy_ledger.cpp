@@ -25,7 +25,9 @@ void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
           for_blocks(s.size(), [&](std::size_t b, std::size_t e, std::size_t blk) {
             BondEnergy acc;
             for (std::size_t k = b; k < e; ++k)
-              if (s.intact[k]) acc += Law::energy(s.params, s.state[k]);
+              if (s.intact[k])
+                acc += Law::energy(s.params, s.state[k],
+                                   bond_radii(s.pairs.first[k], s.pairs.second[k]));
             part[blk] = acc;
           });
           bond += ordered_sum(part);
@@ -50,7 +52,8 @@ void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
       [&](auto&... sets) {
         auto one = [&]<class JL>(BondSet<JL>& s) {
           for (std::size_t k = 0; k < s.size(); ++k) {
-            const BondEnergy e = JL::energy(s.params, s.state[k]);
+            const BondEnergy e =
+                JL::energy(s.params, s.state[k], bond_radii(s.pairs.first[k], s.pairs.second[k]));
             if (JL::is_bonded(s.state[k]))
               bond += e;
             else

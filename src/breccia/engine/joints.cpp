@@ -75,7 +75,7 @@ void Simulation::joints_replace_bonds() {
 
 void Simulation::install_pending_joints() {
   with_joint_set([&]<class JL>(BondSet<JL>& set) {
-    std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint64_t, typename JL::State>> add;
+    std::vector<std::tuple<std::uint32_t, std::uint32_t, BondTag, typename JL::State>> add;
     for (const PendingJoint& pj : pending_joints_)
       add.emplace_back(
           pj.i, pj.j, pj.tag,
@@ -93,7 +93,7 @@ void Simulation::assign_joints_for(ContactSet<CL>& c) {
   if (joint_planes_.empty()) return;
   with_joint_set([&]<class JL>(BondSet<JL>& set) {
     map_bonds_to_pairs(set, c.pairs);
-    std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint64_t, typename JL::State>> add;
+    std::vector<std::tuple<std::uint32_t, std::uint32_t, BondTag, typename JL::State>> add;
     for (std::size_t k = 0; k < c.pairs.size(); ++k) {
       if (set.bond_at_pair(k) != BondSet<JL>::kNoBond || c.has_history(k)) continue;
       bool bonded = false;
@@ -104,7 +104,7 @@ void Simulation::assign_joints_for(ContactSet<CL>& c) {
       const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
       const int plane = cutting_plane(i, j);
       if (plane < 0) continue;
-      add.emplace_back(i, j, next_bond_tag_++,
+      add.emplace_back(i, j, take_bond_tag(),
                        JL::install(set.params, geometry(i, j), joint_planes_[plane].normal, false));
     }
     if (add.empty()) return;

@@ -70,7 +70,8 @@ Grid make_grid(const std::vector<PosRad>& p, double skin, bool planar) {
 
 }  // namespace
 
-void build_neighbour_pairs(const std::vector<PosRad>& p, double skin, bool planar, PairList& out) {
+void build_neighbour_pairs(const std::vector<PosRad>& p, double skin, bool planar, PairList& out,
+                           PairIndex index) {
   const std::size_t n = p.size();
   out.first.clear();
   out.second.clear();
@@ -123,7 +124,10 @@ void build_neighbour_pairs(const std::vector<PosRad>& p, double skin, bool plana
     });
     std::sort(out.second.begin() + count[ii], out.second.begin() + count[ii + 1]);
   }
-  out.build_index(n);
+  if (index == PairIndex::Full)
+    out.build_index(n);
+  else
+    out.build_offsets(n);
 }
 
 }  // namespace breccia

@@ -9,8 +9,12 @@
 
 namespace breccia {
 
+// What build_neighbour_pairs indexes: both indexes, or only the pairs where a particle is first
+// (a rebuild builds the rest once the old list's contact history is merged and freed).
+enum class PairIndex { Full, OffsetsOnly };
+
 // Fills `out.first/second` (sorted) with all pairs within R_i + R_j + skin and builds its index.
 void build_neighbour_pairs(const std::vector<PosRad>& particles, double skin, bool planar,
-                           PairList& out);
+                           PairList& out, PairIndex index = PairIndex::Full);
 
 }  // namespace breccia

@@ -70,7 +70,9 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::apply([&](auto&... set) { (compact_bonds(set), ...); }, bonds_);
   // What the new list replaces goes before it is built, so that old and new coexist only in the
   // parts the history merge reads (the peak memory of a run is a rebuild's).
+  // The per-pair forces, the bonds' pair indexes and the cross slots are rewritten after it.
   release(contacts.force);
+  release(cross_slots_);
   std::apply([&](auto&... set) { (release(set.bond_of_pair), ...); }, bonds_);
   std::apply([&](auto&... set) { (release(set.bond_of_pair), ...); }, joints_);
   PairList old_pairs = std::move(contacts.pairs);
@@ -78,19 +80,21 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::vector<std::uint32_t> old_history = std::move(contacts.history);
   std::vector<std::vector<typename CL::State>> old_stores = std::move(contacts.stores);
   contacts.pairs = PairList{};
-  build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs);
+  build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs, PairIndex::OffsetsOnly);
   // Every intact bond must be an interacting pair even if it stretched beyond the search range.
   std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, bonds_);
   std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, joints_);
-  contacts.pairs.build_index(p_.size());
-  contacts.pairs.build_cross_index(p_.size());
-  std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
-  std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
+  contacts.pairs.build_offsets(p_.size());
   merge_history(old_pairs, old_history, old_stores, contacts.pairs, contacts.history,
                 contacts.stores, contacts.packed);
   old_pairs = PairList{};
   release(old_history);
   release(old_stores);
+  // The rest of the new list's indexes, once the old list is gone.
+  contacts.pairs.build_index(p_.size());
+  contacts.pairs.build_cross_index(p_.size());
+  std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
+  std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
   assign_joints();
   contacts.force.assign(contacts.pairs.size(), Vec3{});
   // Wall candidates: particles within the skin of each wall, history carried by particle index.

@@ -137,8 +137,7 @@ void map_bonds_to_pairs(BondSet<Law>& set, const PairList& pairs) {
 template <class Law>
 void insert_sorted(
     BondSet<Law>& set,
-    std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint64_t, typename Law::State>>&
-        added) {
+    std::vector<std::tuple<std::uint32_t, std::uint32_t, BondTag, typename Law::State>>& added) {
   if (added.empty()) return;
   for (std::size_t k = 0; k < set.size(); ++k)
     added.emplace_back(set.pairs.first[k], set.pairs.second[k], set.tag[k], set.state[k]);

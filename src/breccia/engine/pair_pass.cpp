@@ -191,10 +191,10 @@ class Simulation::PairWalk {
   [[gnu::always_inline]] Vec3 bond_dashpot(const typename Law::Params& p,
                                            const typename Law::State& s) {
     const double m = g_.m_star();
-    const double cn =
-        2.0 * sim_.cfg_.bond_normal_damping_ratio * std::sqrt(m * Law::normal_stiffness(p, s));
-    const double cs =
-        2.0 * sim_.cfg_.bond_shear_damping_ratio * std::sqrt(m * Law::shear_stiffness(p, s));
+    const double cn = 2.0 * sim_.cfg_.bond_normal_damping_ratio *
+                      std::sqrt(m * Law::normal_stiffness(p, s, radii_of(g_)));
+    const double cs = 2.0 * sim_.cfg_.bond_shear_damping_ratio *
+                      std::sqrt(m * Law::shear_stiffness(p, s, radii_of(g_)));
     const double vn = g_.vn();
     const Vec3 vt = g_.vc - g_.n * vn;
     dissipation_.viscous += (cn * vn * vn + cs * norm2(vt)) * dt_;

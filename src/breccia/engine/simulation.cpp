@@ -109,7 +109,7 @@ void Simulation::install_bonds(BondSet<Law>& set) {
            std::pair(set.pairs.first[b], set.pairs.second[b]);
   });
   PairList sorted;
-  std::vector<std::uint64_t> tags(n);
+  std::vector<BondTag> tags(n);
   sorted.first.resize(n);
   sorted.second.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
@@ -226,6 +226,14 @@ std::size_t Simulation::intact_bonds() const noexcept {
   std::size_t n = 0;
   std::apply([&](const auto&... set) { ((n += set.intact_count()), ...); }, bonds_);
   return n;
+}
+
+BondTag Simulation::take_bond_tag() {
+  if (next_bond_tag_ > std::numeric_limits<BondTag>::max())
+    throw InputError("bonds", "bond tag", std::to_string(next_bond_tag_),
+                     "a run makes at most " + std::to_string(std::numeric_limits<BondTag>::max()) +
+                         " bonds and joints (32-bit tags)");
+  return static_cast<BondTag>(next_bond_tag_++);
 }
 
 std::size_t Simulation::intact_bond_sites() const noexcept {

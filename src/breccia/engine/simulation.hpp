@@ -234,6 +234,10 @@ class Simulation {
   // The places where bonds can still break, each a crack: an intact bond, or a bonded element of
   // a law that breaks element by element (the flat joint).
   std::size_t intact_bond_sites() const noexcept;
+  // The radii of the grains of pair (i, j): what a bond's section follows from.
+  BondRadii bond_radii(std::uint32_t i, std::uint32_t j) const noexcept {
+    return {p_.pos_rad[i].r, p_.pos_rad[j].r};
+  }
   // Calls f(first, second) with the particle indexes of each intact bond of every law, in law
   // and bond order (fragments, wear).
   void for_each_intact_bond(const std::function<void(std::uint32_t, std::uint32_t)>& f) const;
@@ -412,8 +416,10 @@ class Simulation {
   // Bonded joints waiting for initialise(): particle indexes and the plane that cuts them.
   struct PendingJoint {
     std::uint32_t i, j, plane;
-    std::uint64_t tag;
+    BondTag tag;
   };
+  // The next bond's tag; throws once the 32-bit tags are used up.
+  BondTag take_bond_tag();
   std::uint32_t joint_law_ = 0;  // position in JointLaws of the law that new joints get
   std::vector<PendingJoint> pending_joints_;
   std::vector<Wall> walls_;

@@ -24,8 +24,9 @@ std::uint64_t Simulation::add_bond(std::uint64_t tag1, std::uint64_t tag2) {
   const auto b = static_cast<std::uint32_t>(p_.index_of(tag2, "bond list"));
   set.pairs.first.push_back(std::min(a, b));
   set.pairs.second.push_back(std::max(a, b));
-  set.tag.push_back(next_bond_tag_);
-  return next_bond_tag_++;
+  const BondTag tag = take_bond_tag();
+  set.tag.push_back(tag);
+  return tag;
 }
 
 template <class Law>
@@ -36,6 +37,10 @@ void Simulation::set_bond_params(const typename Law::Params& params) {
   if constexpr (requires { Law::check(params, where, std::int64_t{3}); })
     Law::check(params, where, p_.planar() ? 2 : 3);
   auto& set = std::get<BondSet<Law>>(bonds_);
+  // A bond's section follows from its grains' radii and these parameters at every step.
+  if (set.intact_count() > 0)
+    throw InputError(where, "parameters", std::to_string(set.intact_count()) + " intact bonds",
+                     "can only be set before bonds of the law are installed");
   set.params = params;
   prepare_params<Law>(set.params);
 }

@@ -23,8 +23,10 @@ void Simulation::add_bond_stiffness(std::vector<double>& k_tr, std::vector<doubl
       const auto i = s.pairs.first[k], j = s.pairs.second[k];
       const PairGeometry g = geometry(i, j);
       const auto& st = s.state[k];
-      const double kt = Law::max_stiffness(s.params, st), ks = Law::shear_stiffness(s.params, st);
-      const double km = Law::max_moment_stiffness(s.params, st);
+      const BondRadii r = radii_of(g);
+      const double kt = Law::max_stiffness(s.params, st, r);
+      const double ks = Law::shear_stiffness(s.params, st, r);
+      const double km = Law::max_moment_stiffness(s.params, st, r);
       k_tr[i] += kt;
       k_tr[j] += kt;
       k_rot[i] += km + ks * norm2(g.r1);

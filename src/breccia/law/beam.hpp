@@ -91,40 +91,48 @@ inline Deformation deform(const Vec3& n_body1, double d, const Vec3& r0, double 
   return f;
 }
 
-// The state of a beam bond (§4.2, §4.3): the reference of installation, the beam's radius, and
-// the last step's magnitudes for the stored energy and the failure test. The section and the
-// stiffnesses follow from the radius, the length and the law's moduli (section()), which keeps a
-// bond at 104 bytes.
+// The state of a beam bond (§4.2, §4.3): the reference of installation and the last step's
+// magnitudes for the stored energy and the failure test. The beam's radius, its section and its
+// stiffnesses follow from the length, the grains' radii and the law's moduli (section()), which
+// keeps a bond at 96 bytes.
 struct BeamState {
-  Vec3 r0;              // reference branch direction, body-1 frame
-  Quat q0;              // reference relative orientation q1* q2
-  double d0 = 0.0;      // reference centre distance (the beam length L)
-  double radius = 0.0;  // R_b
+  Vec3 r0;          // reference branch direction, body-1 frame
+  Quat q0;          // reference relative orientation q1* q2
+  double d0 = 0.0;  // reference centre distance (the beam length L)
   double normal_force = 0.0, shear_force = 0.0, bend_moment = 0.0, twist_moment = 0.0;
 };
 
 // What a beam law's section and stiffnesses are made of: its moduli, the bending factor chi_b,
-// and whether planar spheres keep the disc section (§4.3).
+// whether planar spheres keep the disc section (§4.3), and the beam's radius: min(R1, R2), or
+// half the length (ESyS's meanR_scaling, LAMMPS's bpm/rotational).
 struct BeamModuli {
   double young = 0.0, shear = 0.0, bending_factor = 1.0;
   bool disc_for_planar_spheres = false;
+  bool min_radius = false;
 };
+
+// The beam's radius R_b.
+inline double beam_radius(const BeamState& s, const BeamModuli& m, const BondRadii& r) noexcept {
+  return m.min_radius ? std::min(r.R1, r.R2) : 0.5 * s.d0;
+}
 
 // The beam's section (a disc in 3D, a slab of the disks' thickness in 2D), its stiffnesses, and
 // the reciprocals the failure rules use. Every bond derives it at every step, from one division.
 struct BeamSection {
+  double radius;                            // R_b
   double kr, ks, kb, kt;                    // K_r, K_s, chi_b K_b (effective), K_t
   double area, inertia, polar;              // A, I, J (J = 0 in 2D: no twist)
   double inv_area, inv_inertia, inv_polar;  // 1 / A, 1 / I, 1 / J (0 in 2D)
 };
-inline BeamSection section(const BeamState& s, const BeamModuli& m,
-                           const RunGeometry& run) noexcept {
-  const double r = s.radius;
+inline BeamSection section(const BeamState& s, const BeamModuli& m, const RunGeometry& run,
+                           const BondRadii& radii) noexcept {
+  const double r = beam_radius(s, m, radii);
   const bool slab = run.planar && !(m.disc_for_planar_spheres && run.planar_sphere);
   const double t = slab ? run.thickness : 1.0;
   const double x = 1.0 / (r * t * s.d0);  // 1 / R_b, 1 / t and 1 / L follow from it
   const double inv_r = t * s.d0 * x, inv_length = r * t * x;
   BeamSection c;
+  c.radius = r;
   if (slab) {
     c.area = 2.0 * r * t;
     c.inertia = 2.0 / 3.0 * r * r * r * t;
@@ -149,12 +157,11 @@ inline BeamSection section(const BeamState& s, const BeamModuli& m,
 }
 
 // A stress-free beam at the present geometry: radius R_b (d0 / 2, or min(R1, R2)).
-inline BeamState install(const PairGeometry& g, const BodyFrames& fr, bool min_radius) noexcept {
+inline BeamState install(const PairGeometry& g, const BodyFrames& fr) noexcept {
   BeamState s;
   s.d0 = g.d;
   s.r0 = rotate(conj(fr.q1), g.n);
   s.q0 = conj(fr.q1) * fr.q2;
-  s.radius = min_radius ? std::min(g.R1, g.R2) : 0.5 * g.d;
   return s;
 }
 
@@ -303,7 +310,7 @@ inline void record(const BeamState& s, const BeamSection& c, const PairGeometry&
   fail.Fs = s.shear_force;
   fail.Mt = s.twist_moment;
   fail.Mb = s.bend_moment;
-  fail.bond_radius = s.radius;
+  fail.bond_radius = c.radius;
   fail.point_shift = point_shift(g);
   fail.energy = energy(s, c);
 }
@@ -317,30 +324,30 @@ struct BeamLaw {
   static constexpr bool needs_frames = true;   // total formulation: reads the orientations
   static constexpr bool needs_motion = false;  // and the pair's shape, never its velocities
   template <class Params>
-  static BeamSection section(const Params& p, const State& s) noexcept {
-    return beam::section(s, Law::beam_moduli(p), p.run);
+  static BeamSection section(const Params& p, const State& s, const BondRadii& r) noexcept {
+    return beam::section(s, Law::beam_moduli(p), p.run, r);
   }
   template <class Params>
-  static double max_stiffness(const Params& p, const State& s) noexcept {
-    const BeamSection c = section(p, s);
+  static double max_stiffness(const Params& p, const State& s, const BondRadii& r) noexcept {
+    const BeamSection c = section(p, s, r);
     return std::max(c.kr, c.ks);
   }
   template <class Params>
-  static double max_moment_stiffness(const Params& p, const State& s) noexcept {
-    const BeamSection c = section(p, s);
+  static double max_moment_stiffness(const Params& p, const State& s, const BondRadii& r) noexcept {
+    const BeamSection c = section(p, s, r);
     return std::max(c.kb, c.kt);
   }
   template <class Params>
-  static double normal_stiffness(const Params& p, const State& s) noexcept {
-    return section(p, s).kr;
+  static double normal_stiffness(const Params& p, const State& s, const BondRadii& r) noexcept {
+    return section(p, s, r).kr;
   }
   template <class Params>
-  static double shear_stiffness(const Params& p, const State& s) noexcept {
-    return section(p, s).ks;
+  static double shear_stiffness(const Params& p, const State& s, const BondRadii& r) noexcept {
+    return section(p, s, r).ks;
   }
   template <class Params>
-  static BondEnergy energy(const Params& p, const State& s) noexcept {
-    return beam::energy(s, section(p, s));
+  static BondEnergy energy(const Params& p, const State& s, const BondRadii& r) noexcept {
+    return beam::energy(s, section(p, s, r));
   }
   static BondModuli isotropic_moduli(double young, double poisson_ratio) noexcept {
     return {young, young / (2.0 * (1.0 + poisson_ratio))};

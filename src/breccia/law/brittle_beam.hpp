@@ -70,16 +70,16 @@ struct BrittleBeam : beam::BeamLaw<BrittleBeam> {
   static bool contact_while_bonded(const Params& p) noexcept { return p.contact_while_bonded; }
 
   static beam::BeamModuli beam_moduli(const Params& p) noexcept {
-    return {p.modulus, moduli(p).shear, p.bending_factor, false};
+    return {p.modulus, moduli(p).shear, p.bending_factor, false, p.min_radius};
   }
-  static State install(const Params& p, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
+  static State install(const Params&, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
                        std::uint64_t) noexcept {
-    return beam::install(g, fr, p.min_radius);
+    return beam::install(g, fr);
   }
 
   // Mohr-Coulomb on the beam's peak stresses (tension-positive sigma) with the tensile cut-off.
-  static BondFailure assess(const Params& p, const State& s) noexcept {
-    return assess(p, s, section(p, s));
+  static BondFailure assess(const Params& p, const State& s, const BondRadii& r) noexcept {
+    return assess(p, s, section(p, s, r));
   }
   // The peak stresses (tension-positive sigma; J = 0 in 2D, where 1 / J reads 0) and which
   // branch of the envelope they reach.
@@ -90,9 +90,9 @@ struct BrittleBeam : beam::BeamLaw<BrittleBeam> {
   static Envelope envelope(const Params& p, const State& s, const beam::BeamSection& c) noexcept {
     Envelope e;
     e.sigma =
-        -s.normal_force * c.inv_area + p.moment_factor * s.bend_moment * s.radius * c.inv_inertia;
+        -s.normal_force * c.inv_area + p.moment_factor * s.bend_moment * c.radius * c.inv_inertia;
     e.tau = s.shear_force * c.inv_area +
-            p.twist_factor * std::abs(s.twist_moment) * s.radius * c.inv_polar;
+            p.twist_factor * std::abs(s.twist_moment) * c.radius * c.inv_polar;
     e.tensile_index = e.sigma * p.tan_friction / p.cohesion;
     e.shear_limit = p.cohesion - e.sigma * p.tan_friction;
     e.tensile = e.tensile_index > p.tensile_cutoff;
@@ -100,9 +100,10 @@ struct BrittleBeam : beam::BeamLaw<BrittleBeam> {
     return e;
   }
   static BondFailure assess(const Params& p, const State& s, const beam::BeamSection& c) noexcept {
-    return record(p, s, envelope(p, s, c));
+    return record(p, s, c, envelope(p, s, c));
   }
-  static BondFailure record(const Params& p, const State& s, const Envelope& e) noexcept {
+  static BondFailure record(const Params& p, const State& s, const beam::BeamSection& c,
+                            const Envelope& e) noexcept {
     BondFailure f;
     f.broken = e.tensile || e.shear;
     f.mode = e.tensile || !e.shear ? CrackMode::Tensile : CrackMode::Shear;
@@ -116,18 +117,18 @@ struct BrittleBeam : beam::BeamLaw<BrittleBeam> {
     f.ratio_s =
         e.shear_limit > 0.0 ? e.tau / e.shear_limit : std::numeric_limits<double>::quiet_NaN();
     f.index = larger_ratio(f.ratio_t, f.ratio_s);
-    f.bond_radius = s.radius;
+    f.bond_radius = c.radius;
     return f;
   }
 
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
                            double, BondFailure& fail) noexcept {
     // ESyS's arms: d0 for the shear of the branch rotation and for the rotation-induced shear.
-    const beam::BeamSection c = section(p, s);
+    const beam::BeamSection c = section(p, s, radii_of(g));
     const PairForce pf = beam::loads(s, c, g, fr, s.d0, s.d0);
     const Envelope e = envelope(p, s, c);
     if (!e.tensile && !e.shear) return pf;  // the record's ratios only for a break
-    fail = record(p, s, e);
+    fail = record(p, s, c, e);
     beam::record(s, c, g, fail);
     return {};
   }

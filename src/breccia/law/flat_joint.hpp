@@ -309,16 +309,16 @@ struct FlatJoint {
     const double i = 0.25 * std::numbers::pi * r * r * r * r;
     return {std::numbers::pi * r * r, i, 2.0 * i};
   }
-  static double max_stiffness(const Params& p, const State& s) noexcept {
+  static double max_stiffness(const Params& p, const State& s, const BondRadii&) noexcept {
     return s.kn * std::max(1.0, p.shear_fraction) * section(p, s).area;
   }
-  static double normal_stiffness(const Params& p, const State& s) noexcept {
+  static double normal_stiffness(const Params& p, const State& s, const BondRadii&) noexcept {
     return s.kn * section(p, s).area;
   }
-  static double shear_stiffness(const Params& p, const State& s) noexcept {
+  static double shear_stiffness(const Params& p, const State& s, const BondRadii&) noexcept {
     return s.kn * p.shear_fraction * section(p, s).area;
   }
-  static double max_moment_stiffness(const Params& p, const State& s) noexcept {
+  static double max_moment_stiffness(const Params& p, const State& s, const BondRadii&) noexcept {
     const Section c = section(p, s);
     return s.kn * std::max(c.inertia, p.shear_fraction * c.polar);
   }
@@ -514,7 +514,7 @@ struct FlatJoint {
 
   // The most loaded bonded element against its strength (what snapshots show); index 0 when no
   // element is bonded.
-  static BondFailure assess(const Params& p, const State& s) noexcept {
+  static BondFailure assess(const Params& p, const State& s, const BondRadii&) noexcept {
     const Vec3 n = s.n_old;
     BondFailure worst;
     if (n.x == 0.0 && n.y == 0.0 && n.z == 0.0) return worst;
@@ -539,7 +539,7 @@ struct FlatJoint {
   }
 
   // Stored elastic energy: k_n/2 int g^2 dA over the loaded area, |F_s|^2 / (2 k_s A) per element.
-  static BondEnergy energy(const Params& p, const State& s) noexcept {
+  static BondEnergy energy(const Params& p, const State& s, const BondRadii&) noexcept {
     BondEnergy out;
     const Vec3 n = s.n_old;
     if (n.x == 0.0 && n.y == 0.0 && n.z == 0.0) return out;

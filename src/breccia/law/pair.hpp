@@ -34,6 +34,17 @@ struct PairGeometry {
   double m_star() const noexcept { return wall ? m2 : m1 * m2 / (m1 + m2); }
 };
 
+// The radii of a bond's two grains. A bond's section follows from them (a grain's radius cannot
+// change while it holds a bond), so a bond law derives its radius and stiffness per unit area
+// from them instead of keeping them in every bond's state; where no pair is at hand (stored
+// energy, time step, snapshots) the engine passes them from the particle store.
+struct BondRadii {
+  double R1 = 0.0, R2 = 0.0;
+};
+inline BondRadii radii_of(const PairGeometry& g) noexcept {
+  return {g.R1, g.R2};
+}
+
 // The run's geometry, as a bond's section needs it where no pair is at hand (stored energy, time
 // step, snapshots): 2D or 3D, the disks' thickness, planar spheres. The engine sets it on a
 // law's parameters (`Params::run`) before any bond is installed; it is not input.

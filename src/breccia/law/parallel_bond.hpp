@@ -77,20 +77,27 @@ struct ParallelBond {
   // The linear contact acts in parallel with the bond (docs/physics.md §4.0).
   static bool contact_while_bonded(const Params&) noexcept { return true; }
 
-  // What a bond carries from step to step, and what was drawn or measured at installation; its
-  // section and stiffnesses follow from the radius and the parameters (section()), which keeps a
-  // bond at 120 bytes.
+  // What a bond carries from step to step, and the strengths drawn at installation; its section
+  // and stiffnesses follow from its grains' radii and the parameters (section()), which keeps a
+  // bond at 104 bytes.
   struct State {
     Vec3 shear_force;  // F_s
     Vec3 bend_moment;  // M_b
     Vec3 n_old;        // normal of the previous step; zero until the first step after install
-    double normal_force = 0.0;        // F_n, compression-positive
-    double twist_moment = 0.0;        // M_t
-    double stiffness_per_area = 0.0;  // k_n = E_bar / (R1 + R2) at installation
-    double bond_radius = 0.0;         // R_bar
+    double normal_force = 0.0;  // F_n, compression-positive
+    double twist_moment = 0.0;  // M_t
     double tensile_strength = 0.0;
     double cohesion = 0.0;
   };
+
+  // R_bar = lambda min(R1, R2) and k_n = E_bar / (R1 + R2), the beam's length being the sum of
+  // the radii.
+  static double bond_radius(const Params& p, const BondRadii& r) noexcept {
+    return p.radius_multiplier * std::min(r.R1, r.R2);
+  }
+  static double stiffness_per_area(const Params& p, const BondRadii& r) noexcept {
+    return p.modulus / (r.R1 + r.R2);
+  }
 
   // The bond's section and what follows from it: a disc of radius R_bar in 3D, a slab of the
   // disks' thickness t in 2D (no twist).
@@ -101,8 +108,8 @@ struct ParallelBond {
     double bend_coeff;   // R_bar / I: peak bending stress per unit moment
     double twist_coeff;  // R_bar / J (0 in 2D)
   };
-  static Section section(const Params& p, const State& s) noexcept {
-    const double rb = s.bond_radius, kn_area = s.stiffness_per_area;
+  static Section section(const Params& p, const BondRadii& r) noexcept {
+    const double rb = bond_radius(p, r), kn_area = stiffness_per_area(p, r);
     double area = 0.0, inertia = 0.0, polar = 0.0;
     if (p.run.planar) {
       area = 2.0 * rb * p.run.thickness;                     // slab of thickness t
@@ -128,11 +135,9 @@ struct ParallelBond {
 
   // Installs a stress-free bond at the current geometry. Strengths are drawn from the counter-based
   // generator keyed by the bond tag, so they do not depend on creation order.
-  static State install(const Params& p, const PairGeometry& g, const BodyFrames&,
-                       std::uint64_t seed, std::uint64_t bond_tag) noexcept {
+  static State install(const Params& p, const PairGeometry&, const BodyFrames&, std::uint64_t seed,
+                       std::uint64_t bond_tag) noexcept {
     State s;
-    s.bond_radius = p.radius_multiplier * std::min(g.R1, g.R2);
-    s.stiffness_per_area = p.modulus / (g.R1 + g.R2);  // k_n = E_bar / L
     constexpr std::uint64_t kTensileStream = 0x7e51, kCohesionStream = 0xc0e5;
     s.tensile_strength =
         positive_normal(p.tensile_strength, p.tensile_strength_sd, seed, kTensileStream, bond_tag);
@@ -141,19 +146,19 @@ struct ParallelBond {
   }
 
   // Largest translational and rotational stiffness for the time-step estimate (§1.5).
-  static double max_stiffness(const Params& p, const State& s) noexcept {
-    const Section c = section(p, s);
+  static double max_stiffness(const Params& p, const State&, const BondRadii& r) noexcept {
+    const Section c = section(p, r);
     return std::max(c.kn, c.ks);
   }
-  static double max_moment_stiffness(const Params& p, const State& s) noexcept {
-    const Section c = section(p, s);
+  static double max_moment_stiffness(const Params& p, const State&, const BondRadii& r) noexcept {
+    const Section c = section(p, r);
     return std::max(c.kb, c.kt);
   }
-  static double normal_stiffness(const Params& p, const State& s) noexcept {
-    return section(p, s).kn;
+  static double normal_stiffness(const Params& p, const State&, const BondRadii& r) noexcept {
+    return section(p, r).kn;
   }
-  static double shear_stiffness(const Params& p, const State& s) noexcept {
-    return section(p, s).ks;
+  static double shear_stiffness(const Params& p, const State&, const BondRadii& r) noexcept {
+    return section(p, r).ks;
   }
 
   // One step. On failure the bond's force is not applied (§4.0 decision) and `fail` carries the
@@ -177,7 +182,7 @@ struct ParallelBond {
     const Vec3 wr = g.w2 - g.w1;
     const double wtw = dot(wr, g.n);
     const Vec3 wb = wr - g.n * wtw;
-    const Section c = section(p, s);
+    const Section c = section(p, radii_of(g));
     const double fn = s.normal_force - c.kn * vn * dt;
     fs -= vt * (c.ks * dt);
     const double mt = s.twist_moment - c.kt * wtw * dt;
@@ -191,7 +196,7 @@ struct ParallelBond {
     // The decision needs only the peak stresses; the record's ratios are made when it breaks.
     const PeakStresses k = peak_stresses(p, s, c);
     if (k.tensile(s) || k.shear()) {
-      fail = record(p, s, k);
+      fail = record(p, s, radii_of(g), k);
       fail.energy = energy(s, c);
       return {};
     }
@@ -218,11 +223,12 @@ struct ParallelBond {
   }
 
   // The failure criterion on the bond's present loads, as the crack record and snapshots give it.
-  static BondFailure assess(const Params& p, const State& s) noexcept {
-    return record(p, s, peak_stresses(p, s, section(p, s)));
+  static BondFailure assess(const Params& p, const State& s, const BondRadii& r) noexcept {
+    return record(p, s, r, peak_stresses(p, s, section(p, r)));
   }
 
-  static BondFailure record(const Params&, const State& s, const PeakStresses& k) noexcept {
+  static BondFailure record(const Params& p, const State& s, const BondRadii& r,
+                            const PeakStresses& k) noexcept {
     BondFailure f;
     const bool tensile = k.tensile(s);
     f.broken = tensile || k.shear();
@@ -236,13 +242,13 @@ struct ParallelBond {
     f.ratio_t = k.sigma_max / s.tensile_strength;
     f.ratio_s = k.tau_c > 0.0 ? k.tau_max / k.tau_c : std::numeric_limits<double>::quiet_NaN();
     f.index = larger_ratio(f.ratio_t, f.ratio_s);
-    f.bond_radius = s.bond_radius;
+    f.bond_radius = bond_radius(p, r);
     return f;
   }
 
   // Stored elastic energy by component (§4.0).
-  static BondEnergy energy(const Params& p, const State& s) noexcept {
-    return energy(s, section(p, s));
+  static BondEnergy energy(const Params& p, const State& s, const BondRadii& r) noexcept {
+    return energy(s, section(p, r));
   }
   static BondEnergy energy(const State& s, const Section& c) noexcept {
     BondEnergy e;

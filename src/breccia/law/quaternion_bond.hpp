@@ -69,20 +69,20 @@ struct QuaternionBond : beam::BeamLaw<QuaternionBond> {
   }
   static State install(const Params&, const PairGeometry& g, const BodyFrames& fr, std::uint64_t,
                        std::uint64_t) noexcept {
-    return beam::install(g, fr, false);
+    return beam::install(g, fr);
   }
 
   // The breakage index B of the present loads; its larger part, tensile or shear, names the mode
   // (the index itself defines none).
-  static BondFailure assess(const Params& p, const State& s) noexcept {
-    return assess(p, s, section(p, s));
+  static BondFailure assess(const Params& p, const State& s, const BondRadii& r) noexcept {
+    return assess(p, s, section(p, s, r));
   }
   static BondFailure assess(const Params& p, const State& s, const beam::BeamSection& c) noexcept {
     BondFailure f;
     const double tension = p.signed_normal ? -s.normal_force : std::max(0.0, -s.normal_force);
     // Peak stresses of the moments and the shear force (J = 0 in 2D: 1 / J reads 0).
-    const double bend_stress = s.bend_moment * s.radius * c.inv_inertia;
-    const double twist_stress = std::abs(s.twist_moment) * s.radius * c.inv_polar;
+    const double bend_stress = s.bend_moment * c.radius * c.inv_inertia;
+    const double twist_stress = std::abs(s.twist_moment) * c.radius * c.inv_polar;
     const double shear_stress = s.shear_force * c.inv_area;
     const double tensile_index = (tension * c.inv_area + bend_stress) * p.inv_tensile_strength;
     const double shear_index = (shear_stress + twist_stress) * p.inv_shear_strength;
@@ -97,14 +97,14 @@ struct QuaternionBond : beam::BeamLaw<QuaternionBond> {
     f.tau = shear_stress + twist_stress;
     f.ratio_t = tensile_index;
     f.ratio_s = shear_index;
-    f.bond_radius = s.radius;
+    f.bond_radius = c.radius;
     return f;
   }
 
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
                            double, BondFailure& fail) noexcept {
     // LAMMPS's arms: the present length for both shear terms.
-    const beam::BeamSection c = section(p, s);
+    const beam::BeamSection c = section(p, s, radii_of(g));
     const PairForce pf = beam::loads(s, c, g, fr, g.d, g.d);
     const BondFailure judged = assess(p, s, c);
     if (judged.broken) {

@@ -102,12 +102,18 @@ struct RicebalBond {
     return s;
   }
 
-  static double max_stiffness(const Params&, const State& s) noexcept {
+  static double max_stiffness(const Params&, const State& s, const BondRadii&) noexcept {
     return std::max(s.kn, s.ks);
   }
-  static double max_moment_stiffness(const Params&, const State& s) noexcept { return s.km; }
-  static double normal_stiffness(const Params&, const State& s) noexcept { return s.kn; }
-  static double shear_stiffness(const Params&, const State& s) noexcept { return s.ks; }
+  static double max_moment_stiffness(const Params&, const State& s, const BondRadii&) noexcept {
+    return s.km;
+  }
+  static double normal_stiffness(const Params&, const State& s, const BondRadii&) noexcept {
+    return s.kn;
+  }
+  static double shear_stiffness(const Params&, const State& s, const BondRadii&) noexcept {
+    return s.ks;
+  }
 
   // The bond's own loads of this step (forces on particle 2), before the failure check.
   static PairForce loads(State& s, const PairGeometry& g, double dt) noexcept {
@@ -129,11 +135,11 @@ struct RicebalBond {
                                         s.shear_force + dot(contact_force, t));
     if (!judged.broken) return;
     fail = judged;
-    fail.energy = energy(p, s);
+    fail.energy = energy(p, s, radii_of(g));
   }
 
   // The envelope on the bond's own loads, as if the grains were apart (what snapshots show).
-  static BondFailure assess(const Params& p, const State& s) noexcept {
+  static BondFailure assess(const Params& p, const State& s, const BondRadii&) noexcept {
     return envelope(p, s, s.normal_force, s.shear_force);
   }
 
@@ -172,7 +178,7 @@ struct RicebalBond {
     return fail.broken ? PairForce{} : pf;
   }
 
-  static BondEnergy energy(const Params&, const State& s) noexcept {
+  static BondEnergy energy(const Params&, const State& s, const BondRadii&) noexcept {
     BondEnergy e;
     const double en = 0.5 * s.normal_force * s.normal_force / s.kn;
     (s.normal_force < 0.0 ? e.tension : e.compression) = en;

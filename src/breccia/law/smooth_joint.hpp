@@ -124,11 +124,15 @@ struct SmoothJoint {
   }
 
   static bool is_bonded(const State& s) noexcept { return s.bonded; }
-  static double max_stiffness(const Params&, const State& s) noexcept {
+  static double max_stiffness(const Params&, const State& s, const BondRadii&) noexcept {
     return std::max(s.kn, s.ks);
   }
-  static double shear_stiffness(const Params&, const State& s) noexcept { return s.ks; }
-  static double max_moment_stiffness(const Params&, const State&) noexcept { return 0.0; }
+  static double shear_stiffness(const Params&, const State& s, const BondRadii&) noexcept {
+    return s.ks;
+  }
+  static double max_moment_stiffness(const Params&, const State&, const BondRadii&) noexcept {
+    return 0.0;
+  }
 
   // One step. A bonded joint that fails reports the failure and goes on unbonded in the same step
   // (its force after the conversion is returned); `fail.energy` is the drop of stored energy.
@@ -140,7 +144,7 @@ struct SmoothJoint {
     } else if (!s.bonded && -g.delta > s.release_gap) {
       // The pair has left the contact range: the joint is deleted (its springs' energy leaves
       // without work) and re-created, stress-free, when the two touch again.
-      dis.deleted += energy(p, s).total();
+      dis.deleted += energy(p, s, radii_of(g)).total();
       s.attached = false;
       s.normal_force = 0.0;
       s.shear_force = {};
@@ -164,7 +168,7 @@ struct SmoothJoint {
       s.normal_force = fn;
       s.shear_force = fs;
       if (!tensile && !shear) return {s.normal * fn + fs, {}};
-      const BondEnergy before = energy(p, s);
+      const BondEnergy before = energy(p, s, radii_of(g));
       fail.broken = true;
       fail.mode = tensile ? CrackMode::Tensile : CrackMode::Shear;
       fail.Fn = fn;
@@ -177,7 +181,7 @@ struct SmoothJoint {
       s.bonded = false;
       // Unbonded now: the same state under the no-tension and Coulomb rules, no new motion.
       const PairForce out = slide(p, s, fn, s.shear_force, dis, /*books_losses=*/false);
-      const BondEnergy after = energy(p, s);
+      const BondEnergy after = energy(p, s, radii_of(g));
       fail.energy = {before.tension - after.tension, before.compression - after.compression,
                      before.shear - after.shear, 0.0, 0.0};
       return out;
@@ -186,7 +190,7 @@ struct SmoothJoint {
   }
 
   // Stored energy by component: F_n^2 / (2 K_n) (tension or compression) and |F_s|^2 / (2 K_s).
-  static BondEnergy energy(const Params&, const State& s) noexcept {
+  static BondEnergy energy(const Params&, const State& s, const BondRadii&) noexcept {
     BondEnergy e;
     if (!s.attached || s.kn <= 0.0) return e;
     (s.normal_force < 0.0 ? e.tension : e.compression) =

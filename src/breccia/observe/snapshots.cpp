@@ -286,7 +286,8 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) co
     scalar(s, name, "Float64", m, [&](std::size_t) {
       BondFailure loads;
       c.next([&]<class Law>(std::uint32_t, const BondSet<Law>& set, std::uint32_t k) {
-        loads = Law::assess(set.params, set.state[k]);
+        loads = Law::assess(set.params, set.state[k],
+                            sim.bond_radii(set.pairs.first[k], set.pairs.second[k]));
       });
       return loads.*value;
     });

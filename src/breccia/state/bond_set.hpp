@@ -11,11 +11,15 @@
 
 namespace breccia {
 
+// A bond's stable tag: numbered from 1 as bonds and joints are made, in 32 bits (4 bytes a bond
+// fewer than 64; the engine refuses a run that would make more than 2^32 - 1 of them).
+using BondTag = std::uint32_t;
+
 template <class Law>
 struct BondSet {
   typename Law::Params params;
-  PairList pairs;                  // particle indices, first < second (index order)
-  std::vector<std::uint64_t> tag;  // stable bond tags
+  PairList pairs;            // particle indices, first < second (index order)
+  std::vector<BondTag> tag;  // stable bond tags
   std::vector<typename Law::State> state;
   std::vector<std::uint8_t> intact;
   std::vector<std::uint32_t> bond_of_pair;  // per interacting pair: bond index or kNoBond
@@ -23,7 +27,7 @@ struct BondSet {
 
   static constexpr std::uint32_t kNoBond = 0xffffffffu;
   // What each bond holds (run/memory_budget.cpp): its pair, tag, state and flag.
-  static constexpr std::size_t kBytesPerBond = 2 * sizeof(std::uint32_t) + sizeof(std::uint64_t) +
+  static constexpr std::size_t kBytesPerBond = 2 * sizeof(std::uint32_t) + sizeof(BondTag) +
                                                sizeof(typename Law::State) + sizeof(std::uint8_t);
 
   std::size_t size() const noexcept { return tag.size(); }

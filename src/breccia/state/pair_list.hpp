@@ -35,18 +35,20 @@ struct PairList {
 
   std::size_t size() const noexcept { return first.size(); }
 
+  // Rebuilds the first index alone (the pairs where a particle is first) for n particles: all
+  // that merging contact history reads. `first` must already be sorted.
+  void build_offsets(std::size_t n) {
+    offsets.assign(n + 1, 0);
+    for (std::size_t k = 0; k < first.size(); ++k) ++offsets[first[k] + 1];
+    for (std::size_t i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
+  }
+
   // Rebuilds both indexes for n particles. `first` must already be sorted.
   void build_index(std::size_t n) {
-    offsets.assign(n + 1, 0);
+    build_offsets(n);
     in_offsets.assign(n + 1, 0);
-    for (std::size_t k = 0; k < first.size(); ++k) {
-      ++offsets[first[k] + 1];
-      ++in_offsets[second[k] + 1];
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      offsets[i + 1] += offsets[i];
-      in_offsets[i + 1] += in_offsets[i];
-    }
+    for (std::size_t k = 0; k < first.size(); ++k) ++in_offsets[second[k] + 1];
+    for (std::size_t i = 0; i < n; ++i) in_offsets[i + 1] += in_offsets[i];
     in_slot.resize(first.size());
     std::vector<std::uint32_t> fill(in_offsets.begin(), in_offsets.end() - 1);
     for (std::size_t k = 0; k < first.size(); ++k)
