@@ -46,6 +46,11 @@ struct PairList {
   // Rebuilds both indexes for n particles. `first` must already be sorted.
   void build_index(std::size_t n) {
     build_offsets(n);
+    build_transposed_index(n);
+  }
+
+  // Rebuilds the transposed index (the pairs where a particle is second) for n particles.
+  void build_transposed_index(std::size_t n) {
     in_offsets.assign(n + 1, 0);
     for (std::size_t k = 0; k < first.size(); ++k) ++in_offsets[second[k] + 1];
     for (std::size_t i = 0; i < n; ++i) in_offsets[i + 1] += in_offsets[i];
