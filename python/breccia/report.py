@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from breccia import slab_report
-from breccia.report_kit import (CAPTIONS, col, fmt, fmt_range, read_csv, save, wrapped,
+from breccia.report_kit import (CAPTIONS, Table, col, fmt, fmt_range, read_csv, save, wrapped,
                                 write_html)
 
 STAGE_COLOURS = {1: "#e8f4e8", 2: "#fff4d6", 3: "#fde2e2", 4: "#e4e4f4"}
@@ -78,7 +78,7 @@ def crack_maps(summary, cracks, outdir, figures):
     y = col(cracks, "y_m", 1e3)
     z = col(cracks, "z_m", 1e3)
     stage = col(cracks, "stage")
-    mode = [c["mode"] for c in cracks]
+    mode = np.asarray(cracks.column("mode"))
     if disc:
         # The disc's face (x-y), loaded along y; every crack through the thickness projected.
         keep = np.ones(len(x), bool)
@@ -98,7 +98,7 @@ def crack_maps(summary, cracks, outdir, figures):
     for k, ax in enumerate(axes, start=1):
         sel = keep & (stage == k)
         for m in ("tensile", "shear"):
-            idx = [i for i in range(len(mode)) if sel[i] and mode[i] == m]
+            idx = sel & (mode == m)
             ax.scatter(horiz[idx], vert[idx], s=4, c=MODE_COLOURS[m], label=m)
         ax.set_title(f"{STAGE_NAMES[k]} ({int(sel.sum())})", fontsize=8)
         if disc:  # the disc's outline, centred on the cracks' mid-range
@@ -123,7 +123,7 @@ def crack_field_3d(summary, cracks, outdir, figures):
             not any(col(cracks, "z_m")):
         return
     x, y, z = col(cracks, "x_m", 1e3), col(cracks, "y_m", 1e3), col(cracks, "z_m", 1e3)
-    tensile = np.array([c["mode"] == "tensile" for c in cracks])
+    tensile = np.asarray(cracks.column("mode")) == "tensile"
     fig = plt.figure(figsize=(11, 5.5))
     for k, azimuth in enumerate((-60, 30), start=1):
         ax = fig.add_subplot(1, 2, k, projection="3d")
@@ -151,7 +151,7 @@ def magnitudes(summary, events, hist, outdir, figures):
     fig, ax = plt.subplots(figsize=(7.5, 4))
     shade_stages(ax, summary)
     for m in ("tensile", "shear"):
-        idx = [i for i, r in enumerate(events) if r["dominant_mode"] == m]
+        idx = np.asarray(events.column("dominant_mode")) == m
         ax.scatter(e[idx], mw[idx], s=10, c=MODE_COLOURS[m], label=f"{m}-dominated events")
     mc = summary.get("acoustic_emission", {}).get("completeness_magnitude")
     if mc is not None:
@@ -386,7 +386,7 @@ def hudson(events, outdir, figures):
         ax.plot(a, b, "k+", ms=6)
         ax.annotate(name, (a, b), fontsize=7, xytext=(3, 3), textcoords="offset points")
     for m in ("tensile", "shear"):
-        idx = [i for i, r in enumerate(events) if r["dominant_mode"] == m]
+        idx = np.asarray(events.column("dominant_mode")) == m
         ax.scatter(u[idx], v[idx], s=9, c=MODE_COLOURS[m], alpha=0.7,
                    label=f"{m}-dominated events")
     ax.set_xlim(-1.45, 1.45)
@@ -492,20 +492,25 @@ SHARED_ROWS = ("rock", "sample", "calibration", "microcracks", "acoustic emissio
                "energy balance", "run")
 
 
+CRACK_COLUMNS = ("x_m", "y_m", "z_m", "mode", "stage")
+EVENT_COLUMNS = ("axial_strain_first", "mw", "dominant_mode", "hudson_u", "hudson_v")
+
+
 def run_report(folder):
     summary = json.load(open(os.path.join(folder, "summary.json")))
     hist = read_csv(os.path.join(folder, "history.csv"))
     if not hist:
         sys.exit(f"{folder}/history.csv has no rows")
-    cracks = read_csv(os.path.join(folder, "cracks.csv"))
-    events = read_csv(os.path.join(folder, "events.csv"))
+    # Only the columns the figures draw: a large run's catalogues have hundreds of thousands of rows.
+    cracks = read_csv(os.path.join(folder, "cracks.csv"), CRACK_COLUMNS)
+    events = read_csv(os.path.join(folder, "events.csv"), EVENT_COLUMNS)
     outdir = os.path.join(folder, "report")
     os.makedirs(outdir, exist_ok=True)
     if "headline" in summary.get(summary.get("test_kind"), {}):
         return slab_test_report(folder, summary, hist, cracks, outdir)
     figures = []
     stress_strain(folder, summary, hist, outdir, figures)
-    crack_maps(summary, cracks if cracks and "stage" in cracks[0] else [], outdir, figures)
+    crack_maps(summary, cracks if "stage" in cracks else Table({}, 0), outdir, figures)
     crack_field_3d(summary, cracks, outdir, figures)
     magnitudes(summary, events, hist, outdir, figures)
     b_and_d2(summary, read_csv(os.path.join(folder, "b_value_windows.csv")),

@@ -33,7 +33,9 @@ void poll(const FailureInputs& in, const char* stage) {
   if (in.stoppable) throw_if_interrupted(stage);
 }
 
-// Writes a file atomically (temporary name, then rename).
+// Writes a small file atomically (temporary name, then rename); the tables with a row per crack,
+// event or fragment stream through an AtomicFileWriter instead, since a million-grain run's
+// catalogue as one string (and its copies as the string grows) would cost hundreds of megabytes.
 void put(const fs::path& p, const std::string& text) {
   write_file_atomically(p, text);
 }
@@ -99,6 +101,10 @@ CrackPoints crack_points(const FailureInputs& in) {
   const auto& ctx = in.ae.crack_context();
   CrackPoints c;
   c.count = std::min(cracks.size(), ctx.size());
+  c.position.reserve(c.count);
+  c.strain.reserve(c.count);
+  c.energy.reserve(c.count);
+  c.shear.reserve(c.count);
   for (std::size_t k = 0; k < c.count; ++k) {
     c.position.push_back(cracks[k].position);
     c.strain.push_back(ctx[k].axial_strain);
@@ -164,13 +170,14 @@ EventCatalogue catalogue_events(const FailureInputs& in) {
 void write_events_csv(const fs::path& folder, const FailureInputs& in, const EventCatalogue& cat,
                       const analysis::Stages& stages) {
   const std::vector<AeEvent>& ev = in.ae.events();
-  std::string t =
-      "event_id,first_crack,t_first_s,t_last_s,axial_strain_first,axial_strain_last,"
-      "axial_strain_at_max_moment,x_m,y_m,z_m,cracks,tensile,shear,dominant_mode,stage,"
-      "energy_j,fracture_energy_j,ke_energy_j,ke_magnitude,m0_nm,mw,radiated_energy_j,"
-      "m_xx,m_yy,m_zz,m_xy,m_xz,m_yz,eigen_1,eigen_2,eigen_3,iso_percent,clvd_percent,"
-      "dc_percent,hudson_k,hudson_t,hudson_u,hudson_v,r_ratio,source_type,antisymmetry,"
-      "m0_first_nm,evaluations,source_particles,monitored_particles\n";
+  AtomicFileWriter file(folder / "events.csv");
+  std::ostream& out = file.stream();
+  out << "event_id,first_crack,t_first_s,t_last_s,axial_strain_first,axial_strain_last,"
+         "axial_strain_at_max_moment,x_m,y_m,z_m,cracks,tensile,shear,dominant_mode,stage,"
+         "energy_j,fracture_energy_j,ke_energy_j,ke_magnitude,m0_nm,mw,radiated_energy_j,"
+         "m_xx,m_yy,m_zz,m_xy,m_xz,m_yz,eigen_1,eigen_2,eigen_3,iso_percent,clvd_percent,"
+         "dc_percent,hudson_k,hudson_t,hudson_u,hudson_v,r_ratio,source_type,antisymmetry,"
+         "m0_first_nm,evaluations,source_particles,monitored_particles\n";
   for (std::size_t n = 0; n < cat.order.size(); ++n) {
     const std::size_t k = cat.order[n];
     const AeEvent& e = ev[k];
@@ -185,7 +192,7 @@ void write_events_csv(const fs::path& folder, const FailureInputs& in, const Eve
                        : q.r_ratio > 30.0  ? "tensile"
                        : q.r_ratio < -30.0 ? "implosive"
                                            : "shear";
-    t += fmt::format(
+    out << fmt::format(
         "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},"
         "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
         n, e.first_crack, g(e.t_first), g(e.t_last), g(e.strain_first), g(e.strain_last),
@@ -199,7 +206,7 @@ void write_events_csv(const fs::path& folder, const FailureInputs& in, const Eve
         e.m0_first >= 0.0 ? g(e.m0_first) : "nan", e.evaluations, e.source_particles,
         e.monitored_particles);
   }
-  put(folder / "events.csv", t);
+  file.commit();
 }
 
 // cracks.csv rewritten with the derived fields (§3.1): strain, stress, angle to the axis,
@@ -211,21 +218,22 @@ void write_crack_catalogue(const fs::path& folder, const FailureInputs& in,
   const auto& ctx = in.ae.crack_context();
   const std::vector<std::size_t> crack_event = in.ae.crack_events();
   const int axis = in.sim.particles().planar() ? 1 : 2;
-  std::string t;
-  for (const std::string& c : crack_columns()) t += c + ",";
-  t += "crack_id,axial_strain,deviatoric_stress_pa,theta_axial_deg,fracture_energy_j,stage,"
-       "event_id\n";
+  AtomicFileWriter file(folder / "cracks.csv");
+  std::ostream& out = file.stream();
+  for (const std::string& c : crack_columns()) out << c << ',';
+  out << "crack_id,axial_strain,deviatoric_stress_pa,theta_axial_deg,fracture_energy_j,stage,"
+         "event_id\n";
   for (std::size_t k = 0; k < nc; ++k) {
     const CrackRecord& c = cracks[k];
     const double theta =
         std::acos(std::min(1.0, std::abs(c.normal[axis]))) * 180.0 / std::numbers::pi;
     const std::size_t e = crack_event[k];
-    t += crack_row(c) +
-         fmt::format(",{},{},{},{},{},{},{}\n", k, g(ctx[k].axial_strain), g(ctx[k].deviatoric),
-                     g(theta), g(ctx[k].fracture_energy), stages.stage_of(ctx[k].axial_strain),
-                     e < cat.number.size() ? static_cast<long long>(cat.number[e]) : -1LL);
+    out << crack_row(c)
+        << fmt::format(",{},{},{},{},{},{},{}\n", k, g(ctx[k].axial_strain), g(ctx[k].deviatoric),
+                       g(theta), g(ctx[k].fracture_energy), stages.stage_of(ctx[k].axial_strain),
+                       e < cat.number.size() ? static_cast<long long>(cat.number[e]) : -1LL);
   }
-  put(folder / "cracks.csv", t);
+  file.commit();
 }
 
 // Frequency-magnitude statistics (§5): completeness, the whole run's b-value and its moving
@@ -379,17 +387,19 @@ json fragments_summary(const fs::path& folder, const FailureInputs& in) {
       in.sim.particles(),
       [&](const analysis::BondVisit& visit) { in.sim.for_each_intact_bond(visit); },
       in.spec.density_scaling, in.rock_particles);
-  std::string t = "fragment_id,particles,mass_kg,volume_m3,x_m,y_m,z_m,fraction_of_largest,class\n";
+  AtomicFileWriter file(folder / "fragments.csv");
+  std::ostream& out = file.stream();
+  out << "fragment_id,particles,mass_kg,volume_m3,x_m,y_m,z_m,fraction_of_largest,class\n";
   for (std::size_t k = 0; k < f.fragments.size(); ++k) {
     const auto& fr = f.fragments[k];
     const double frac = fr.mass / f.largest_mass;
-    t += fmt::format("{},{},{},{},{},{},{},{},{}\n", k, fr.particles, g(fr.mass), g(fr.volume),
-                     g(fr.centroid.x), g(fr.centroid.y), g(fr.centroid.z), g(frac),
-                     frac < 0.1   ? "smallest"
-                     : frac > 0.9 ? "biggest"
-                                  : "intermediate");
+    out << fmt::format("{},{},{},{},{},{},{},{},{}\n", k, fr.particles, g(fr.mass), g(fr.volume),
+                       g(fr.centroid.x), g(fr.centroid.y), g(fr.centroid.z), g(frac),
+                       frac < 0.1   ? "smallest"
+                       : frac > 0.9 ? "biggest"
+                                    : "intermediate");
   }
-  put(folder / "fragments.csv", t);
+  file.commit();
   const auto cls = [](const analysis::ClassCount& c) {
     return json{{"count", c.count}, {"mass_kg", c.mass}};
   };
