@@ -13,6 +13,7 @@
 #include "breccia/core/parallel.hpp"
 #include "breccia/engine/pair_lists.hpp"
 #include "breccia/engine/simulation.hpp"
+#include "breccia/law/beam_lanes.hpp"
 
 namespace breccia {
 
@@ -22,6 +23,17 @@ namespace {
 
 // No bond of the pair awaits judging.
 constexpr std::uint32_t kNoHeldBond = 0xffffffffu;
+
+// A bond law that evaluates four bonds at a time (law/beam_lanes.hpp).
+template <class Law>
+constexpr bool has_lane_kernel = requires(const typename Law::Params& p,
+                                          const beam::LaneBond (&b)[beam::kLanes],
+                                          beam::LaneResult (&out)[beam::kLanes]) {
+  Law::compute_lanes(p, b, out);
+};
+
+// The lane results of one block's walk, reused from step to step (no allocation per step).
+thread_local std::vector<beam::LaneResult> lane_results;
 
 }  // namespace
 
@@ -54,6 +66,8 @@ class Simulation::PairWalk {
                                    std::uint32_t next_cross,
                                    std::vector<typename CL::State>& store) {
     store_ = &store;
+    lanes_law_ = kNoHeldBond;
+    if (frames_ahead_ && !bond_damped()) evaluate_lanes(begin, end, kBondLaws);
     Vec3* const force = sim_.p_.force.data();
     Vec3* const torque = sim_.p_.torque.data();
     const std::uint32_t* const second = c_.pairs.second.data();
@@ -70,7 +84,7 @@ class Simulation::PairWalk {
       start(k);
       bond_parts(kBondLaws);
       joint_parts(kJointLaws);
-      if (!have_geometry_ && !touching_or_loaded()) {
+      if (!have_geometry_ && !lane_loaded_ && !touching_or_loaded()) {
         c_.force[k] = {};
         if (j_ >= owned_end) sim_.cross_slots_[next_cross++] = CrossSlot{};
         continue;
@@ -132,7 +146,7 @@ class Simulation::PairWalk {
     k_ = k;
     i_ = c_.pairs.first[k];
     j_ = c_.pairs.second[k];
-    have_geometry_ = have_motion_ = contact_off_ = false;
+    have_geometry_ = have_motion_ = contact_off_ = lane_loaded_ = false;
     force_ = couple_ = Vec3{};
     held_law_ = kNoHeldBond;
   }
@@ -153,6 +167,22 @@ class Simulation::PairWalk {
     // A run uses one bond law: the others' sets are empty, and keep no index.
     const std::uint32_t b = set.bond_at_pair(k_);
     if (b != BondSet<Law>::kNoBond && set.intact[b]) {
+      if constexpr (has_lane_kernel<Law>) {
+        if (lanes_law_ == LawIndex) {
+          const beam::LaneResult& r = lane_results[lane_next_++];
+          if (r.stands) {
+            // Evaluated with the block's other bonds before the walk (evaluate_lanes): the
+            // law's loads, and the lever arms of the pair's shape. The contact is off.
+            force_ += r.force;
+            couple_ += r.couple;
+            g_.r1 = r.r1;
+            g_.r2 = r.r2;
+            lane_loaded_ = true;
+            contact_off_ = true;
+            return;
+          }
+        }
+      }
       need(law_needs_motion<Law> || bond_damped());
       if constexpr (judged_on_interface<Law>) {
         // Judged on the interface totals (§4.4): it waits for the pair's contact force.
@@ -176,6 +206,55 @@ class Simulation::PairWalk {
           contact_off_ = contact_off_ || !Law::contact_while_bonded(set.params);
         }
       }
+    }
+  }
+
+  // Before the walk: the intact bonds of the block's pairs, in pair order, four at a time through
+  // the lane kernel of the first law that has one and holds bonds, where its contact is off
+  // between bonded grains (the walk then needs no shape for them). The walk takes the results in
+  // the same order; a bond whose result does not stand goes through the law's compute().
+  template <std::size_t... L>
+  void evaluate_lanes(std::size_t begin, std::size_t end, std::index_sequence<L...>) {
+    (void)((lanes_for<static_cast<std::uint32_t>(L)>(std::get<L>(sim_.bonds_), begin, end)) || ...);
+  }
+  template <std::uint32_t LawIndex, class Law>
+  bool lanes_for(BondSet<Law>& set, std::size_t begin, std::size_t end) {
+    if constexpr (!has_lane_kernel<Law>) {
+      return false;
+    } else {
+      if (set.size() == 0 || set.params.run.planar || Law::contact_while_bonded(set.params))
+        return false;
+      lanes_law_ = LawIndex;
+      lane_next_ = 0;
+      lane_results.clear();
+      const PosRad* const pos_rad = sim_.p_.pos_rad.data();
+      const Quat* const orientation = sim_.p_.orientation.data();
+      beam::LaneBond bonds[beam::kLanes];
+      beam::LaneResult out[beam::kLanes];
+      int filled = 0;
+      for (std::size_t k = begin; k < end; ++k) {
+        const std::uint32_t b = set.bond_at_pair(k);
+        if (b == BondSet<Law>::kNoBond || !set.intact[b]) continue;
+        const std::uint32_t i = c_.pairs.first[k], j = c_.pairs.second[k];
+        bonds[filled++] = {pos_rad[i].x,   pos_rad[j].x,   pos_rad[i].r, pos_rad[j].r,
+                           orientation[i], orientation[j], &set.state[b]};
+        if (filled == beam::kLanes) {
+          Law::compute_lanes(set.params, bonds, out);
+          lane_results.insert(lane_results.end(), out, out + beam::kLanes);
+          filled = 0;
+        }
+      }
+      if (filled > 0) {
+        // The empty lanes repeat the first bond on a copy of its state.
+        typename Law::State spare = *bonds[0].state;
+        for (int l = filled; l < beam::kLanes; ++l) {
+          bonds[l] = bonds[0];
+          bonds[l].state = &spare;
+        }
+        Law::compute_lanes(set.params, bonds, out);
+        lane_results.insert(lane_results.end(), out, out + filled);
+      }
+      return true;
     }
   }
 
@@ -289,6 +368,10 @@ class Simulation::PairWalk {
   std::uint32_t i_ = 0, j_ = 0;
   bool have_geometry_ = false, have_motion_ = false;
   bool contact_off_ = false;  // an intact bond whose law excludes the contact (§4.0)
+  bool lane_loaded_ = false;  // a bond's loads came from the lanes (no shape in g_)
+  // The law whose bonds went through the lanes before the walk, and the next result.
+  std::uint32_t lanes_law_ = kNoHeldBond;
+  std::size_t lane_next_ = 0;
   Vec3 force_, couple_;
   PairForce held_;
   std::uint32_t held_law_ = kNoHeldBond, held_bond_ = 0;

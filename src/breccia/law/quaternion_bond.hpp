@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "breccia/law/beam.hpp"
+#include "breccia/law/beam_lanes.hpp"
 #include "breccia/law/pair.hpp"
 #include "breccia/law/param_table.hpp"
 
@@ -99,6 +100,19 @@ struct QuaternionBond : beam::BeamLaw<QuaternionBond> {
     f.ratio_s = shear_index;
     f.bond_radius = c.radius;
     return f;
+  }
+
+  // Four 3D bonds at a time (beam_lanes.hpp): compute() of each to the bit where it stands, for a
+  // run in 3D (p.run not planar). A bond that breaks or leaves the series' range stands false and
+  // goes through compute().
+  static void compute_lanes(const Params& p, const beam::LaneBond (&b)[beam::kLanes],
+                            beam::LaneResult (&out)[beam::kLanes]) noexcept {
+    beam::LaneLoads L;
+    beam::lanes_half_length_beams(b, p.modulus, moduli(p).shear, L);
+    for (int l = 0; l < beam::kLanes; ++l) {
+      const bool stands = L.small[l] && !assess(p, *b[l].state, L.section[l]).broken;
+      out[l] = beam::lane_result(L, l, stands);
+    }
   }
 
   static PairForce compute(const Params& p, State& s, const PairGeometry& g, const BodyFrames& fr,
