@@ -2,10 +2,12 @@
 // Four beam bonds at a time: the shape of each bonded pair, its section and the small-angle loads
 // of beam::loads(), evaluated in four lanes of one vector value (GCC's and Clang's vector
 // extensions). Each lane performs the scalar kernel's operations in the scalar kernel's order, so
-// a lane's result is the scalar result to the bit (tests/test_beam_lanes.cpp checks it); what the
-// vector form buys is four independent dependency chains in one instruction window, where the
-// scalar bond waits on its own chain (a quaternion product, a division, the series, a root).
-// Lanes outside the series' range, and bonds that break, are left to the scalar path.
+// where no multiply-add is fused (the portable x86-64 build) a lane's result is the scalar result
+// to the bit; a build for a CPU with FMA lets the compiler fuse products in either form, and the
+// two then agree to a few eps (tests/test_beam_lanes.cpp). What the vector form buys is four
+// independent dependency chains in one instruction window, where the scalar bond waits on its own
+// chain (a quaternion product, a division, the series, a root). Lanes outside the series' range,
+// and bonds that break, are left to the scalar path.
 #include <cstdint>
 
 #include "breccia/law/beam.hpp"

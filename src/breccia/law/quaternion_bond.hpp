@@ -102,9 +102,9 @@ struct QuaternionBond : beam::BeamLaw<QuaternionBond> {
     return f;
   }
 
-  // Four 3D bonds at a time (beam_lanes.hpp): compute() of each to the bit where it stands, for a
-  // run in 3D (p.run not planar). A bond that breaks or leaves the series' range stands false and
-  // goes through compute().
+  // Four 3D bonds at a time (beam_lanes.hpp), for a run in 3D (p.run not planar): compute() of
+  // each bond where it stands (to the bit without fused multiply-adds). A bond that breaks or
+  // leaves the series' range stands false and goes through compute().
   static void compute_lanes(const Params& p, const beam::LaneBond (&b)[beam::kLanes],
                             beam::LaneResult (&out)[beam::kLanes]) noexcept {
     beam::LaneLoads L;
