@@ -172,13 +172,18 @@ class Simulation::PairWalk {
           const beam::LaneResult& r = lane_results[lane_next_++];
           if (r.stands) {
             // Evaluated with the block's other bonds before the walk (evaluate_lanes): the
-            // law's loads, and the lever arms of the pair's shape. The contact is off.
+            // law's loads, and the lever arms of the pair's shape. A contact in parallel reads
+            // the whole shape, so it is computed as compute() would have (the same numbers).
             force_ += r.force;
             couple_ += r.couple;
-            g_.r1 = r.r1;
-            g_.r2 = r.r2;
-            lane_loaded_ = true;
-            contact_off_ = true;
+            if (Law::contact_while_bonded(set.params)) {
+              need(law_needs_motion<Law>);
+            } else {
+              g_.r1 = r.r1;
+              g_.r2 = r.r2;
+              lane_loaded_ = true;
+              contact_off_ = true;
+            }
             return;
           }
         }
@@ -210,9 +215,9 @@ class Simulation::PairWalk {
   }
 
   // Before the walk: the intact bonds of the block's pairs, in pair order, four at a time through
-  // the lane kernel of the first law that has one and holds bonds, where its contact is off
-  // between bonded grains (the walk then needs no shape for them). The walk takes the results in
-  // the same order; a bond whose result does not stand goes through the law's compute().
+  // the lane kernel of the first law that has one and holds bonds. The walk takes the results in
+  // the same order (and needs no shape for them where the law's contact is off between bonded
+  // grains); a bond whose result does not stand goes through the law's compute().
   template <std::size_t... L>
   void evaluate_lanes(std::size_t begin, std::size_t end, std::index_sequence<L...>) {
     (void)((lanes_for<static_cast<std::uint32_t>(L)>(std::get<L>(sim_.bonds_), begin, end)) || ...);
@@ -222,8 +227,7 @@ class Simulation::PairWalk {
     if constexpr (!has_lane_kernel<Law>) {
       return false;
     } else {
-      if (set.size() == 0 || set.params.run.planar || Law::contact_while_bonded(set.params))
-        return false;
+      if (set.size() == 0 || set.params.run.planar) return false;
       lanes_law_ = LawIndex;
       lane_next_ = 0;
       lane_results.clear();

@@ -20,10 +20,11 @@ inline double unit_part_length(double a, double b) noexcept {
   return std::sqrt(a * a + b * b);
 }
 
-// atan(t) / t for z = t^2 <= 1/256: the series to t^12 (the next term is below 1e-18).
-inline double atan_over_t(double z) noexcept {
-  double p = 1.0 / 13.0;
-  p = p * z - 1.0 / 11.0;
+// atan(t) / t for z = t^2 <= 1/256: the series to t^12 (the next term is below 1e-18). A
+// template so that the four-lane kernel (beam_lanes.hpp) runs the same operations on its vectors.
+template <class T>
+inline T atan_over_t(T z) noexcept {
+  T p = z * (1.0 / 13.0) - 1.0 / 11.0;
   p = p * z + 1.0 / 9.0;
   p = p * z - 1.0 / 7.0;
   p = p * z + 1.0 / 5.0;

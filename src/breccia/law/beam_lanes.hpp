@@ -79,17 +79,6 @@ struct LaneQuat {
   const LaneVec3 t = cross(u, v) * Lanes{2.0, 2.0, 2.0, 2.0};
   return v + t * q.w + cross(u, t);
 }
-// beam::atan_over_t(), lane by lane.
-[[gnu::always_inline]] inline Lanes atan_over_t(Lanes z) noexcept {
-  Lanes p = {1.0 / 13.0, 1.0 / 13.0, 1.0 / 13.0, 1.0 / 13.0};
-  p = p * z - 1.0 / 11.0;
-  p = p * z + 1.0 / 9.0;
-  p = p * z - 1.0 / 7.0;
-  p = p * z + 1.0 / 5.0;
-  p = p * z - 1.0 / 3.0;
-  return 1.0 + z * p;
-}
-
 // One beam bond as the lanes read it: its grains' centres, radii and orientations, its state.
 struct LaneBond {
   Vec3 x1, x2;
@@ -98,63 +87,101 @@ struct LaneBond {
   BeamState* state;
 };
 
-// What a lane hands back: the loads on particle 2 (the couple moved to the centre as loads()
-// does), the lever arms of the torques, and whether the lane's result stands (within the
-// series' range; the law's failure test is the caller's).
+// The four bonds' inputs as lanes.
+struct LaneInputs {
+  LaneVec3 x1, x2, r0;
+  Lanes R1, R2, d0;
+  LaneQuat q1, q2, q0;
+};
+[[gnu::always_inline]] inline LaneInputs gather(const LaneBond (&b)[kLanes]) noexcept {
+  LaneInputs in;
+  for (int l = 0; l < kLanes; ++l) {
+    in.x1.x[l] = b[l].x1.x, in.x1.y[l] = b[l].x1.y, in.x1.z[l] = b[l].x1.z;
+    in.x2.x[l] = b[l].x2.x, in.x2.y[l] = b[l].x2.y, in.x2.z[l] = b[l].x2.z;
+    in.R1[l] = b[l].R1, in.R2[l] = b[l].R2;
+    in.q1.w[l] = b[l].q1.w, in.q1.x[l] = b[l].q1.x, in.q1.y[l] = b[l].q1.y;
+    in.q1.z[l] = b[l].q1.z;
+    in.q2.w[l] = b[l].q2.w, in.q2.x[l] = b[l].q2.x, in.q2.y[l] = b[l].q2.y;
+    in.q2.z[l] = b[l].q2.z;
+    const BeamState& s = *b[l].state;
+    in.r0.x[l] = s.r0.x, in.r0.y[l] = s.r0.y, in.r0.z[l] = s.r0.z;
+    in.q0.w[l] = s.q0.w, in.q0.x[l] = s.q0.x, in.q0.y[l] = s.q0.y, in.q0.z[l] = s.q0.z;
+    in.d0[l] = s.d0;
+  }
+  return in;
+}
+
+// pair_shape() in lanes.
+struct LaneShape {
+  LaneVec3 n, r1, r2;
+  Lanes d, delta;
+};
+[[gnu::always_inline]] inline LaneShape lane_shape(const LaneInputs& in) noexcept {
+  LaneShape g;
+  const LaneVec3 dvec = in.x2 - in.x1;
+  g.d = lane_sqrt(dot(dvec, dvec));
+  g.n = dvec * (1.0 / g.d);
+  g.delta = in.R1 + in.R2 - g.d;
+  const LaneVec3 xc_rel = g.n * (in.R1 - 0.5 * g.delta);
+  g.r1 = xc_rel;
+  g.r2 = xc_rel - dvec;
+  return g;
+}
+
+// section() in lanes for a 3D disc section of radius d0 / 2 (t = 1, chi_b = 1).
+struct LaneSection {
+  Lanes radius, kr, ks, kb, kt, area, inertia, polar, inv_area, inv_inertia, inv_polar;
+  BeamSection lane(int l) const noexcept {
+    BeamSection c;
+    c.radius = radius[l];
+    c.kr = kr[l], c.ks = ks[l], c.kb = kb[l], c.kt = kt[l];
+    c.area = area[l], c.inertia = inertia[l], c.polar = polar[l];
+    c.inv_area = inv_area[l], c.inv_inertia = inv_inertia[l], c.inv_polar = inv_polar[l];
+    return c;
+  }
+};
+[[gnu::always_inline]] inline LaneSection half_length_section(Lanes d0, double young,
+                                                              double shear) noexcept {
+  LaneSection c;
+  const Lanes r = 0.5 * d0;
+  const Lanes x = 1.0 / (r * d0);
+  const Lanes inv_r = d0 * x, inv_length = r * x;
+  c.radius = r;
+  c.area = std::numbers::pi * r * r;
+  c.inertia = 0.25 * std::numbers::pi * r * r * r * r;
+  c.polar = 2.0 * c.inertia;
+  c.inv_area = std::numbers::inv_pi * inv_r * inv_r;
+  c.inv_inertia = 4.0 * std::numbers::inv_pi * inv_r * inv_r * inv_r * inv_r;
+  c.inv_polar = 0.5 * c.inv_inertia;
+  c.kr = young * c.area * inv_length;
+  c.ks = shear * c.area * inv_length;
+  c.kb = 1.0 * young * c.inertia * inv_length;
+  c.kt = shear * c.polar * inv_length;
+  return c;
+}
+
+// What the lanes hand back: the loads on particle 2 (the couple moved to the centre as loads()
+// does), the lever arms of the torques, the sections, and which lanes lie within the series'
+// range (the law's failure test is the caller's).
 struct LaneLoads {
   LaneVec3 force, couple, r1, r2;
-  LaneVec3 n;
-  Lanes d, delta;
-  BeamSection section[kLanes];
+  LaneSection section;
   LaneMask small;
 };
 
 // Shape, section and small-angle loads of four 3D beam bonds whose radius is half their length
-// and whose shear arms are the present length (the quaternion bond of bpm/rotational). Writes
-// the magnitudes of step 9 into the states of the lanes within the series' range only.
+// and whose shear arms are the present length (the quaternion bond of bpm/rotational): loads()
+// in lanes. Writes the magnitudes of step 9 into the states of the lanes within the series'
+// range only.
 [[gnu::always_inline]] inline void lanes_half_length_beams(const LaneBond (&b)[kLanes],
                                                            double young, double shear,
                                                            LaneLoads& out) noexcept {
-  LaneVec3 x1, x2, r0s;
-  Lanes R1, R2, d0;
-  LaneQuat q1, q2, q0;
-  for (int l = 0; l < kLanes; ++l) {
-    x1.x[l] = b[l].x1.x, x1.y[l] = b[l].x1.y, x1.z[l] = b[l].x1.z;
-    x2.x[l] = b[l].x2.x, x2.y[l] = b[l].x2.y, x2.z[l] = b[l].x2.z;
-    R1[l] = b[l].R1, R2[l] = b[l].R2;
-    q1.w[l] = b[l].q1.w, q1.x[l] = b[l].q1.x, q1.y[l] = b[l].q1.y, q1.z[l] = b[l].q1.z;
-    q2.w[l] = b[l].q2.w, q2.x[l] = b[l].q2.x, q2.y[l] = b[l].q2.y, q2.z[l] = b[l].q2.z;
-    const BeamState& s = *b[l].state;
-    r0s.x[l] = s.r0.x, r0s.y[l] = s.r0.y, r0s.z[l] = s.r0.z;
-    q0.w[l] = s.q0.w, q0.x[l] = s.q0.x, q0.y[l] = s.q0.y, q0.z[l] = s.q0.z;
-    d0[l] = s.d0;
-  }
-  // pair_shape()
-  const LaneVec3 dvec = x2 - x1;
-  const Lanes d = lane_sqrt(dot(dvec, dvec));
-  const LaneVec3 n = dvec * (1.0 / d);
-  const Lanes delta = R1 + R2 - d;
-  const LaneVec3 xc_rel = n * (R1 - 0.5 * delta);
-  out.r1 = xc_rel;
-  out.r2 = xc_rel - dvec;
-  out.n = n;
-  out.d = d;
-  out.delta = delta;
-  // section() of a 3D disc section of radius d0 / 2 (t = 1)
-  const Lanes r = 0.5 * d0;
-  const Lanes x = 1.0 / (r * d0);
-  const Lanes inv_r = d0 * x, inv_length = r * x;
-  const Lanes area = std::numbers::pi * r * r;
-  const Lanes inertia = 0.25 * std::numbers::pi * r * r * r * r;
-  const Lanes polar = 2.0 * inertia;
-  const Lanes inv_area = std::numbers::inv_pi * inv_r * inv_r;
-  const Lanes inv_inertia = 4.0 * std::numbers::inv_pi * inv_r * inv_r * inv_r * inv_r;
-  const Lanes inv_polar = 0.5 * inv_inertia;
-  const Lanes kr = young * area * inv_length, ks = shear * area * inv_length;
-  const Lanes kb = 1.0 * young * inertia * inv_length, kt = shear * polar * inv_length;
-  // loads(), small angles, arm = arm_theta = d
-  const LaneVec3 r0 = rotate(q1, r0s);
-  LaneQuat q = q2 * conj(q0) * conj(q1);
+  const LaneInputs in = gather(b);
+  const LaneShape g = lane_shape(in);
+  const LaneSection c = half_length_section(in.d0, young, shear);
+  const LaneVec3& n = g.n;
+  const LaneVec3 r0 = rotate(in.q1, in.r0);
+  LaneQuat q = in.q2 * conj(in.q0) * conj(in.q1);
   const LaneMask flip = q.w < 0.0;
   q = {lane_select(flip, -q.w, q.w), lane_select(flip, -q.x, q.x), lane_select(flip, -q.y, q.y),
        lane_select(flip, -q.z, q.z)};
@@ -174,24 +201,23 @@ struct LaneLoads {
   const Lanes tb2 = xy2 * inv_wz2, bend_series = 2.0 * atan_over_t(tb2);
   const Lanes t_twist = along * inv_w, twist = 2.0 * t_twist * atan_over_t(t_twist * t_twist);
   const LaneVec3 n_x_v = cross(n, v_perp);
-  const LaneVec3 m_bend = (v_perp * q.w + n_x_v * along) * (kb * bend_series * inv_wz2);
-  const LaneVec3 shear_f = shear_gamma * (-ks * d) +
-                           (n_x_v * q.w - v_perp * along) * (0.5 * ks * d * bend_series * inv_wz2);
-  const LaneVec3 force = -(n * (kr * (d - d0)) + shear_f);
-  const LaneVec3 couple = -(m_bend + n * (kt * twist));
-  const Lanes normal_force = -kr * (d - d0), shear_force = lane_sqrt(norm2(shear_f));
-  const Lanes bend_moment = kb * bend_series * lane_sqrt(tb2), twist_moment = kt * twist;
+  const LaneVec3 m_bend = (v_perp * q.w + n_x_v * along) * (c.kb * bend_series * inv_wz2);
+  const Lanes d = g.d;
+  const LaneVec3 shear_f = shear_gamma * (-c.ks * d) + (n_x_v * q.w - v_perp * along) *
+                                                           (0.5 * c.ks * d * bend_series * inv_wz2);
+  const LaneVec3 force = -(n * (c.kr * (d - in.d0)) + shear_f);
+  const LaneVec3 couple = -(m_bend + n * (c.kt * twist));
+  const Lanes normal_force = -c.kr * (d - in.d0), shear_force = lane_sqrt(norm2(shear_f));
+  const Lanes bend_moment = c.kb * bend_series * lane_sqrt(tb2), twist_moment = c.kt * twist;
   // point_shift(): the beam meets the crack plane at x1 + arm1 d
-  const Lanes arm1 = R1 / (R1 + R2);
-  const Lanes shift = d * arm1 - R1 + 0.5 * delta;
+  const Lanes arm1 = in.R1 / (in.R1 + in.R2);
+  const Lanes shift = d * arm1 - in.R1 + 0.5 * g.delta;
   out.force = force;
   out.couple = couple + cross(n * shift, force);
+  out.r1 = g.r1;
+  out.r2 = g.r2;
+  out.section = c;
   for (int l = 0; l < kLanes; ++l) {
-    BeamSection& c = out.section[l];
-    c.radius = r[l];
-    c.kr = kr[l], c.ks = ks[l], c.kb = kb[l], c.kt = kt[l];
-    c.area = area[l], c.inertia = inertia[l], c.polar = polar[l];
-    c.inv_area = inv_area[l], c.inv_inertia = inv_inertia[l], c.inv_polar = inv_polar[l];
     if (!out.small[l]) continue;
     BeamState& s = *b[l].state;
     s.normal_force = normal_force[l];

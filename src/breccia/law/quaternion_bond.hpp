@@ -110,7 +110,7 @@ struct QuaternionBond : beam::BeamLaw<QuaternionBond> {
     beam::LaneLoads L;
     beam::lanes_half_length_beams(b, p.modulus, moduli(p).shear, L);
     for (int l = 0; l < beam::kLanes; ++l) {
-      const bool stands = L.small[l] && !assess(p, *b[l].state, L.section[l]).broken;
+      const bool stands = L.small[l] && !assess(p, *b[l].state, L.section.lane(l)).broken;
       out[l] = beam::lane_result(L, l, stands);
     }
   }
