@@ -426,7 +426,9 @@ TEST(App, ResumedRunGivesTheSameResultAsAnUninterruptedOne) {
 // Acoustic emission across a restart: stopped before the first crack, while the first event is
 // open, late in the test (--stop-at-step), and by SIGINT at an arbitrary moment, each resumed run
 // writes the crack catalogue (with its stages and events), the event catalogue and the indicator
-// series of the uninterrupted run byte for byte.
+// series of the uninterrupted run byte for byte. The stopped runs hold only 7 crack records in
+// memory and the rest in their folders' checkpoint-cracks.bin, the uninterrupted one all of them:
+// where the records lie changes nothing.
 TEST(App, ResumeIsExactForAcousticEmissionWhereverTheRunStops) {
   const fs::path out = fs::temp_directory_path() / "breccia_app_resume_ae";
   fs::remove_all(out);
@@ -453,15 +455,18 @@ TEST(App, ResumeIsExactForAcousticEmissionWhereverTheRunStops) {
         std::pair{first_crack + 1, "while the first event is open"},
         std::pair{first_crack + (steps - first_crack) * 3 / 4, "late in the test"}}) {
     const Result r = run("run --quiet --output " + (out / "split").string() + opts +
-                         " --stop-at-step " + std::to_string(stop));
+                         " --set output.resident_cracks=7 --stop-at-step " + std::to_string(stop));
     ASSERT_EQ(r.code, 130) << what << ": " << r.out;
-    const Result resumed = run("resume --quiet " + last_line(r.out));
+    const fs::path split = last_line(r.out);
+    EXPECT_TRUE(fs::exists(split / "checkpoint-cracks.bin")) << what;
+    const Result resumed = run("resume --quiet " + split.string());
     ASSERT_EQ(resumed.code, 0) << what << ": " << resumed.out;
-    expect_same(last_line(r.out), what);
+    expect_same(split, what);
+    EXPECT_FALSE(fs::exists(split / "checkpoint-cracks.bin")) << "goes with the checkpoint";
   }
-  const Result signalled =
-      run_with_prefix("timeout --preserve-status -s INT 1.5 ",
-                      "run --quiet --output " + (out / "signal").string() + opts);
+  const Result signalled = run_with_prefix("timeout --preserve-status -s INT 1.5 ",
+                                           "run --quiet --output " + (out / "signal").string() +
+                                               opts + " --set output.resident_cracks=7");
   ASSERT_EQ(signalled.code, 130) << "the run should outlast 1.5 s: " << signalled.out;
   const Result resumed = run("resume --quiet " + last_line(signalled.out));
   ASSERT_EQ(resumed.code, 0) << resumed.out;

@@ -104,19 +104,21 @@ py::dict energy(const Simulation& sim) {
 
 // The crack catalogue as columns (the Python side makes a DataFrame of them).
 py::dict cracks(const Simulation& sim) {
-  const std::vector<CrackRecord>& c = sim.cracks();
+  const CrackCatalogue& c = sim.cracks();
   const std::size_t n = c.size();
   py::array_t<std::uint64_t> steps(n), id1(n), id2(n);
   py::array_t<double> time(n), energy_j(n), xyz({n, std::size_t{3}});
   py::list mode;
-  for (std::size_t k = 0; k < n; ++k) {
-    steps.mutable_at(k) = c[k].step;
-    id1.mutable_at(k) = c[k].id1;
-    id2.mutable_at(k) = c[k].id2;
-    time.mutable_at(k) = c[k].time;
-    energy_j.mutable_at(k) = c[k].energy.total();
-    for (py::ssize_t d = 0; d < 3; ++d) xyz.mutable_at(k, d) = c[k].position[static_cast<int>(d)];
-    mode.append(std::string(to_string(c[k].mode)));
+  std::size_t k = 0;
+  for (const CrackRecord& r : c) {
+    steps.mutable_at(k) = r.step;
+    id1.mutable_at(k) = r.id1;
+    id2.mutable_at(k) = r.id2;
+    time.mutable_at(k) = r.time;
+    energy_j.mutable_at(k) = r.energy.total();
+    for (py::ssize_t d = 0; d < 3; ++d) xyz.mutable_at(k, d) = r.position[static_cast<int>(d)];
+    mode.append(std::string(to_string(r.mode)));
+    ++k;
   }
   return py::dict(py::arg("step") = steps, py::arg("time_s") = time, py::arg("id1") = id1,
                   py::arg("id2") = id2, py::arg("position_m") = xyz, py::arg("mode") = mode,

@@ -80,19 +80,6 @@ void transfer_wall(Archive& a, Wall& w) {
   a.value(w.moved);
 }
 
-// The static name of a bond law (crack records point at it).
-std::string_view bond_law_name(const std::string& name, const std::string& where) {
-  std::string_view out;
-  auto find = [&]<class... Laws>(TypeList<Laws...>) {
-    ((name == Laws::name ? (out = Laws::name, 0) : 0), ...);
-  };
-  find(BondLaws{});
-  find(JointLaws{});
-  if (out.empty())
-    throw InputError(where, "crack law", name, "not a bond law of this build of Breccia");
-  return out;
-}
-
 // The bond or joint sets of a registry, each under its law's name: the sets a checkpoint holds
 // are found by name when it is read, so a build with more laws reads it (the new laws' sets stay
 // empty), and adding a law changes nothing here.
@@ -192,22 +179,11 @@ void Simulation::transfer_contacts(Archive& a) {
       wall_contacts_);
 }
 
-// The crack catalogue (each record's law by name) and the run's warnings.
+// The crack catalogue (engine/crack_catalogue.cpp) and the run's warnings.
 template <class Archive>
 void Simulation::transfer_cracks(Archive& a) {
   a.label("cracks");
-  a.sized(cracks_, sizeof(CrackRecord));
-  for (CrackRecord& c : cracks_) {
-    std::string name(c.law);
-    a.string(name);
-    CrackRecord plain = c;
-    plain.law = {};  // a pointer into this process: restored from the name
-    a.value(plain);
-    if constexpr (Archive::reading) {
-      c = plain;
-      c.law = bond_law_name(name, a.where());
-    }
-  }
+  cracks_.transfer(a);
   a.sized(warnings_, 8);
   for (std::string& w : warnings_) a.string(w);
 }
@@ -220,7 +196,7 @@ void Simulation::transfer(Archive& a) {
   // are saved by law, so a new law needs nothing here.
   static_assert(sizeof(Simulation) - sizeof(ContactModel) - sizeof(wall_contacts_) -
                         sizeof(BondSets) - sizeof(JointSets) ==
-                    1544,
+                    1648,
                 "Simulation changed: update engine/checkpoint.cpp");
   a.label("simulation");
   if constexpr (Archive::reading)

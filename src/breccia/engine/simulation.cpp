@@ -176,11 +176,10 @@ void Simulation::initialise() {
 }
 
 // Every intact bond and bonded joint can break once, and nothing else makes a crack: the
-// catalogue's room for all of them is taken at once, so that it never reallocates (a growing
-// array briefly holds two copies, the largest part of a broken sample's peak memory). Pages
-// are resident only once written.
+// catalogue's room for all of them (or for its resident records, when it has a file) is taken at
+// once, so that it never reallocates.
 void Simulation::reserve_crack_catalogue() {
-  cracks_.reserve(cracks_.size() + intact_bonds() + bonded_joints());
+  cracks_.reserve_more(intact_bonds() + bonded_joints());
 }
 
 void Simulation::step() {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "breccia/boundary/wall.hpp"
+#include "breccia/engine/crack_catalogue.hpp"
 #include "breccia/engine/events.hpp"
 #include "breccia/law/registry.hpp"
 #include "breccia/state/bond_set.hpp"
@@ -220,7 +221,17 @@ class Simulation {
   std::uint64_t step_count() const noexcept { return step_; }
   std::vector<Wall>& walls() noexcept { return walls_; }
   const std::vector<Wall>& walls() const noexcept { return walls_; }
-  const std::vector<CrackRecord>& cracks() const noexcept { return cracks_; }
+  const CrackCatalogue& cracks() const noexcept { return cracks_; }
+  // From now on the crack catalogue keeps only its newest records in memory and appends the
+  // older ones to `file` (a run's folder); reattach_cracks() reopens that file after a restore.
+  void record_cracks_in(const std::filesystem::path& file,
+                        std::size_t resident = CrackCatalogue::kResidentRecords) {
+    cracks_.spill_to(file, resident);
+  }
+  void reattach_cracks(const std::filesystem::path& file,
+                       std::size_t resident = CrackCatalogue::kResidentRecords) {
+    cracks_.reattach(file, resident);
+  }
   const std::vector<std::string>& warnings() const noexcept { return warnings_; }
   const EnergyLedger& ledger() const noexcept { return ledger_; }
   const BondSets& bonds() const noexcept { return bonds_; }
@@ -436,7 +447,7 @@ class Simulation {
   double max_disp2_ = 0.0;
   double radius_growth_ = 0.0;  // largest radius increase since the last neighbour rebuild
 
-  std::vector<CrackRecord> cracks_;
+  CrackCatalogue cracks_;
   std::vector<std::string> warnings_;
   EnergyLedger ledger_;
   std::optional<EnergyLedger> baseline_;

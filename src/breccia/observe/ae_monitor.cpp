@@ -342,7 +342,7 @@ void AeMonitor::close(std::size_t root) {
 
 void AeMonitor::after_step(const Simulation& sim, double strain, double deviatoric) {
   ++steps_;
-  const auto& cracks = sim.cracks();
+  auto cracks = sim.cracks().reader();
   if (cracks.size() > seen_) {
     if (!clusterer_)
       throw InputError("acoustic emission", "shear_wave_speed", "unset",

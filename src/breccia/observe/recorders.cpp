@@ -124,7 +124,7 @@ void HistoryRecorder::save_state(ArchiveWriter& a) const {
 
 void HistoryRecorder::record(const Simulation& sim, const AxialState& a,
                              const std::vector<double>& extra) {
-  const auto& cracks = sim.cracks();
+  auto cracks = sim.cracks().reader();
   for (; cracks_seen_ < cracks.size(); ++cracks_seen_)
     tensile_ += cracks[cracks_seen_].mode == CrackMode::Tensile ? 1 : 0;
   const std::size_t tensile = tensile_;
@@ -210,7 +210,7 @@ void CrackRecorder::save_state(ArchiveWriter& a) const {
 }
 
 void CrackRecorder::record(const Simulation& sim) {
-  const auto& cracks = sim.cracks();
+  auto cracks = sim.cracks().reader();
   for (; written_ < cracks.size(); ++written_) {
     csv_.write_line(crack_row(cracks[written_]));
   }

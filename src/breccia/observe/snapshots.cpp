@@ -133,9 +133,10 @@ SnapshotWriter::SnapshotWriter(std::string folder, double interval, ArchiveReade
     throw InputError(a.where(), "snapshots", std::to_string(seen),
                      "counts more cracks than the simulation holds: the checkpoint is corrupt");
   // The broken-bond counts per particle follow from the crack catalogue.
+  auto cracks = sim.cracks().reader();
   for (; cracks_seen_ < seen; ++cracks_seen_) {
-    ++broken_per_tag_[sim.cracks()[cracks_seen_].id1];
-    ++broken_per_tag_[sim.cracks()[cracks_seen_].id2];
+    ++broken_per_tag_[cracks[cracks_seen_].id1];
+    ++broken_per_tag_[cracks[cracks_seen_].id2];
   }
   write_collections();
 }
@@ -157,7 +158,7 @@ void SnapshotWriter::at_row(const Simulation& sim, const Protocol&, const Record
 }
 
 void SnapshotWriter::write(const Simulation& sim) {
-  const auto& cracks = sim.cracks();
+  auto cracks = sim.cracks().reader();
   for (; cracks_seen_ < cracks.size(); ++cracks_seen_) {
     ++broken_per_tag_[cracks[cracks_seen_].id1];
     ++broken_per_tag_[cracks[cracks_seen_].id2];
@@ -306,7 +307,7 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) co
 // The cracks so far as points at their positions, with the crack plane's normal and radius (a
 // disc glyph oriented by `normal` and scaled by `radius_m` draws each crack).
 void SnapshotWriter::write_cracks(const Simulation& sim, const fs::path& path) const {
-  const auto& cracks = sim.cracks();
+  auto cracks = sim.cracks().reader();
   const std::size_t m = cracks.size();
   AtomicFileWriter file(path);
   std::ostream& s = file.stream();

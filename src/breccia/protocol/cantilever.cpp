@@ -149,7 +149,7 @@ void CantileverTest::history_values(const Simulation& sim, std::vector<double>& 
 namespace {
 
 // Crack midpoints' distances from the root (the vice's edge), along x over the free span.
-std::vector<double> crack_distances(const std::vector<CrackRecord>& cracks, double root) {
+std::vector<double> crack_distances(const CrackCatalogue& cracks, double root) {
   std::vector<double> d;
   for (const CrackRecord& c : cracks) d.push_back(c.position.x - root);
   return d;

@@ -23,8 +23,7 @@ double ball_section(double radius, bool planar, double thickness) {
 
 // The smallest radius around `centre` (in the plane normal to `axis`) that holds `fraction` of
 // the crack midpoints; 0 without cracks.
-double crack_reach(const std::vector<CrackRecord>& cracks, const Vec3& centre, int axis,
-                   double fraction) {
+double crack_reach(const CrackCatalogue& cracks, const Vec3& centre, int axis, double fraction) {
   std::vector<double> d;
   d.reserve(cracks.size());
   for (const CrackRecord& c : cracks) {

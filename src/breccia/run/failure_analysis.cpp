@@ -97,7 +97,7 @@ struct CrackPoints {
 };
 
 CrackPoints crack_points(const FailureInputs& in) {
-  const auto& cracks = in.sim.cracks();
+  auto cracks = in.sim.cracks().reader();
   const auto& ctx = in.ae.crack_context();
   CrackPoints c;
   c.count = std::min(cracks.size(), ctx.size());
@@ -214,7 +214,7 @@ void write_events_csv(const fs::path& folder, const FailureInputs& in, const Eve
 void write_crack_catalogue(const fs::path& folder, const FailureInputs& in,
                            const EventCatalogue& cat, const analysis::Stages& stages,
                            std::size_t nc) {
-  const auto& cracks = in.sim.cracks();
+  auto cracks = in.sim.cracks().reader();
   const auto& ctx = in.ae.crack_context();
   const std::vector<std::size_t> crack_event = in.ae.crack_events();
   const int axis = in.sim.particles().planar() ? 1 : 2;
@@ -422,7 +422,7 @@ json fragments_summary(const fs::path& folder, const FailureInputs& in) {
 // The deformation stages (§8) with their cracks, modes, energies, events and b-values.
 json stages_summary(const FailureInputs& in, const analysis::Stages& stages,
                     const EventCatalogue& cat, const MagnitudeStats& ms, std::size_t nc) {
-  const auto& cracks = in.sim.cracks();
+  auto cracks = in.sim.cracks().reader();
   const auto& ctx = in.ae.crack_context();
   const std::vector<AeEvent>& ev = in.ae.events();
   const auto min_events = static_cast<std::size_t>(in.spec.ae_min_events);

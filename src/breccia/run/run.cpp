@@ -496,9 +496,11 @@ void list_run_files(const ExperimentSpec& spec, const fs::path& folder, const Se
     manifest["files"].push_back(f);
   if (end.status == "complete") {
     fs::remove(folder / kCheckpointFile);
+    fs::remove(folder / kCrackCatalogueFile);
     manifest.erase("checkpoint");
   } else {
     manifest["files"].push_back(kCheckpointFile);
+    if (fs::exists(folder / kCrackCatalogueFile)) manifest["files"].push_back(kCrackCatalogueFile);
   }
   if (!spec.plot) return;
   make_plot(folder, log);
@@ -663,6 +665,8 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   write_json(folder / "manifest.json", manifest);
 
   Simulation& sim = b.sim;
+  sim.record_cracks_in(folder / kCrackCatalogueFile,
+                       static_cast<std::size_t>(spec.resident_cracks));
   Protocol& test = *b.protocol;
   LoopState loop;
   loop.warnings = sim.warnings();
@@ -748,6 +752,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   LoopState loop;
   loop.load(a);
   Simulation sim = Simulation::restore(a);
+  sim.reattach_cracks(folder / kCrackCatalogueFile, static_cast<std::size_t>(spec.resident_cracks));
   std::unique_ptr<Protocol> test;
   visit_lab_test(spec.test, [&]<class T>(const typename T::Params&) { test = T::restore(a); });
   test->check_restored(sim, cpath.string());

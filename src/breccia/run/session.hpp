@@ -19,6 +19,9 @@
 namespace breccia {
 
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
+// The crack records a run no longer holds in memory (engine/crack_catalogue.hpp), in the order
+// recorded: the checkpoint's companion, gone with it when the run completes.
+inline constexpr const char* kCrackCatalogueFile = "checkpoint-cracks.bin";
 
 // What the loading loop carries from one row to the next besides the engine, the protocol and
 // the recorders: the analysed series, the quality monitors and the run's bookkeeping.

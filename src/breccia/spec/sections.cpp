@@ -482,6 +482,11 @@ std::vector<SpecField> output_fields() {
        "RUN_FOLDER`); 0 = only when interrupted. A checkpoint is also written on Ctrl-C, SIGTERM "
        "and --stop-at-step",
        0, kInf},
+      {"output", "resident_cracks", "", at<&S::resident_cracks>,
+       "crack records a run holds in memory (240 B each); older ones go to the run folder's "
+       "checkpoint-cracks.bin, read back in order by the analysis, snapshots and checkpoints, "
+       "and removed when the run completes. Results do not depend on it",
+       1, 1e12},
   };
 }
 
