@@ -16,6 +16,7 @@
 #include <new>
 
 #include "breccia/calibrate/calibrate.hpp"
+#include "breccia/core/allocator.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
 #include "breccia/io/run_folder.hpp"
@@ -462,6 +463,7 @@ int guarded(const std::function<int()>& body) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  breccia::configure_allocator();
   CLI::App app{"Breccia: a virtual rock-mechanics laboratory (bonded-particle DEM)"};
   app.require_subcommand(1);
   std::string command_line;

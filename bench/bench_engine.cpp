@@ -26,6 +26,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "breccia/core/allocator.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/engine/simulation.hpp"
@@ -107,6 +108,7 @@ void bond_sample(Simulation& sim, bool broken, double gap_tolerance) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  breccia::configure_allocator();
   CLI::App app{"Breccia engine benchmark"};
   int dim = 3, threads = 1, steps = 200, repeats = 3, warmup = 200;
   long particles = 100000;

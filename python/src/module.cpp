@@ -3,6 +3,7 @@
 #include <pybind11/stl.h>
 
 #include "breccia/analysis/rate_dependence.hpp"
+#include "breccia/core/allocator.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
 #include "breccia/spec/experiment.hpp"
@@ -11,6 +12,7 @@
 namespace py = pybind11;
 
 PYBIND11_MODULE(_core, m) {
+  breccia::configure_allocator();
   m.doc() = "Breccia's engine and run layer (use the breccia package, not this module)";
   // Bad input raises InputError, a ValueError whose message is the command line's, word for
   // word: where the value came from, the key, the value and what is allowed.

@@ -23,10 +23,8 @@ void transfer_pairs(Archive& a, PairList& l) {
   a.vector(l.offsets);
   a.vector(l.in_offsets);
   a.vector(l.in_slot);
-  // Bond lists carry no gather index (empty offsets and slots).
-  if (l.second.size() != l.first.size() ||
-      (!l.in_slot.empty() && l.in_slot.size() != l.first.size()) ||
-      l.in_offsets.size() != l.offsets.size())
+  // Bond lists carry no gather index (empty offsets), and no list a transposed one.
+  if (l.second.size() != l.first.size() || !l.in_slot.empty() || !l.in_offsets.empty())
     throw InputError(a.where(), "pair list", std::to_string(l.first.size()),
                      "array lengths differ: the checkpoint is corrupt");
 }

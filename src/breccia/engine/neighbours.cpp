@@ -90,8 +90,7 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   old_pairs = PairList{};
   release(old_history);
   release(old_stores);
-  // The rest of the new list's indexes, once the old list is gone.
-  contacts.pairs.build_transposed_index(p_.size());
+  // The pair pass's cross index, once the old list is gone.
   contacts.pairs.build_cross_index(p_.size());
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);

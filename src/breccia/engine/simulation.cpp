@@ -377,6 +377,12 @@ PairStress Simulation::pair_stress() const {
   return out;
 }
 
+Simulation::ParticleStressStream::ParticleStressStream(const Simulation& sim)
+    : sim_(sim), wall_at_(sim.walls().size(), 0) {
+  std::visit([&](const auto& c) { c.pairs.transposed_index(sim.p_.size(), in_offsets_, in_slot_); },
+             sim.contact_);
+}
+
 std::array<double, 9> Simulation::ParticleStressStream::at(std::size_t p) {
   const Simulation& s = sim_;
   std::array<double, 9> t{};
@@ -392,8 +398,8 @@ std::array<double, 9> Simulation::ParticleStressStream::at(std::size_t p) {
         if (l.offsets.size() > p + 1) {
           // Pairs with p second (their first grain is lower: they come first in pair order),
           // then those with p first.
-          for (std::uint32_t m = l.in_offsets[p]; m < l.in_offsets[p + 1]; ++m) {
-            const std::uint32_t k = l.in_slot[m];
+          for (std::uint32_t m = in_offsets_[p]; m < in_offsets_[p + 1]; ++m) {
+            const std::uint32_t k = in_slot_[m];
             if (zero(c.force[k])) continue;
             add(s.geometry(l.first[k], static_cast<std::uint32_t>(p)).r2, c.force[k]);
           }

@@ -208,8 +208,8 @@ class Simulation {
   void set_local_damping(double alpha);
 
   // The engine's own arrays per particle besides the store (run/memory_budget.cpp): positions at
-  // the last rebuild and the pair list's three offsets (driver loads only with driven grains).
-  static constexpr std::size_t kScratchBytesPerParticle = sizeof(Vec3) + 3 * sizeof(std::uint32_t);
+  // the last rebuild and the pair list's two offsets (driver loads only with driven grains).
+  static constexpr std::size_t kScratchBytesPerParticle = sizeof(Vec3) + 2 * sizeof(std::uint32_t);
 
   // --- views ---
   const ParticleStore& particles() const noexcept { return p_; }
@@ -271,13 +271,14 @@ class Simulation {
   // the same order, without holding a tensor for every particle (72 B a grain in a snapshot).
   class ParticleStressStream {
    public:
-    explicit ParticleStressStream(const Simulation& sim)
-        : sim_(sim), wall_at_(sim.walls().size(), 0) {}
+    explicit ParticleStressStream(const Simulation& sim);
     std::array<double, 9> at(std::size_t p);  // p ascending from one call to the next
 
    private:
     const Simulation& sim_;
     std::vector<std::size_t> wall_at_;  // per wall: the first contact entry not yet passed
+    // The pairs where each particle is second (the neighbour list keeps no such index).
+    std::vector<std::uint32_t> in_offsets_, in_slot_;
   };
   std::uint64_t neighbour_rebuilds() const noexcept { return rebuilds_; }
   // External per-particle load for the coming step (membranes, follower loads); its work is

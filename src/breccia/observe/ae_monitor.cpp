@@ -47,18 +47,17 @@ std::uint64_t ref_key(std::uint32_t p, std::uint32_t q) {
 }
 
 // Calls f(q, force exerted by p on q) for every neighbour pair of p (the pair's force is the
-// force on the pair's second particle).
+// force on the pair's second particle): those where p is first, then `incoming`, the slots of
+// those where it is second, ascending.
 template <class F>
-void for_pairs(const Simulation& sim, std::uint32_t p, F&& f) {
+void for_pairs(const Simulation& sim, const std::vector<std::uint32_t>& incoming, std::uint32_t p,
+               F&& f) {
   std::visit(
       [&](const auto& c) {
         const PairList& l = c.pairs;
         if (l.offsets.size() <= p + 1) return;
         for (std::uint32_t k = l.offsets[p]; k < l.offsets[p + 1]; ++k) f(l.second[k], c.force[k]);
-        for (std::uint32_t m = l.in_offsets[p]; m < l.in_offsets[p + 1]; ++m) {
-          const std::uint32_t k = l.in_slot[m];
-          f(l.first[k], -c.force[k]);
-        }
+        for (const std::uint32_t k : incoming) f(l.first[k], -c.force[k]);
       },
       sim.contact_model());
 }
@@ -134,6 +133,7 @@ AeMonitor& AeMonitor::operator=(AeMonitor&& o) noexcept {
   stamp_ = o.stamp_;
   steps_ = o.steps_;
   grid_ = std::move(o.grid_);
+  incoming_ = std::move(o.incoming_);
   wave_speed_source_ = std::move(o.wave_speed_source_);
   bind_clusterer();  // the moved callbacks still point at `o`
   return *this;
@@ -204,6 +204,49 @@ void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
   }
 }
 
+const std::vector<std::uint32_t>& AeMonitor::incoming(std::uint32_t p) const {
+  const auto it = incoming_.slots.find(p);
+  if (it == incoming_.slots.end())
+    throw InternalError("AeMonitor: the pairs of particle " + std::to_string(p) + " were not read");
+  return it->second;
+}
+
+// The grains of the new cracks (from seen_ on) and the sources of the open events: those the
+// step reads the pairs of. Their pairs as second particle are found by one scan of the list;
+// a neighbour rebuild makes a new list, whose slots are read afresh.
+void AeMonitor::find_incoming(const Simulation& sim, CrackCatalogue::Reader& cracks) {
+  if (incoming_.rebuilds != sim.neighbour_rebuilds()) {
+    incoming_.slots.clear();
+    incoming_.rebuilds = sim.neighbour_rebuilds();
+  }
+  const ParticleStore& ps = sim.particles();
+  std::vector<char> wanted(ps.size(), 0);
+  std::size_t missing = 0;
+  auto want = [&](std::uint32_t p) {
+    if (wanted[p] || incoming_.slots.contains(p)) return;
+    wanted[p] = 1;
+    ++missing;
+  };
+  for (std::size_t k = seen_; k < cracks.size(); ++k) {
+    const CrackRecord& c = cracks[k];
+    want(static_cast<std::uint32_t>(ps.index_of(c.id1)));
+    want(static_cast<std::uint32_t>(ps.index_of(c.id2)));
+  }
+  for (const auto& [root, o] : open_)
+    for (std::uint32_t p : o.source) want(p);
+  if (missing == 0) return;
+  std::visit(
+      [&](const auto& c) {
+        const PairList& l = c.pairs;
+        for (std::uint32_t p = 0; p < ps.size(); ++p)
+          if (wanted[p]) incoming_.slots[p];  // an entry also for a grain without such pairs
+        for (std::size_t k = 0; k < l.size(); ++k)
+          if (wanted[l.second[k]])
+            incoming_.slots[l.second[k]].push_back(static_cast<std::uint32_t>(k));
+      },
+      sim.contact_model());
+}
+
 void AeMonitor::add_source(const Simulation& sim, Open& o, std::uint32_t p) {
   const auto pos = std::lower_bound(o.source.begin(), o.source.end(), p);
   if (pos != o.source.end() && *pos == p) return;
@@ -211,7 +254,7 @@ void AeMonitor::add_source(const Simulation& sim, Open& o, std::uint32_t p) {
   if (!s_.moment_tensors) return;
   // Reference forces of p on its outside neighbours, as they are now (before the crack acts).
   const ParticleStore& ps = sim.particles();
-  for_pairs(sim, p, [&](std::uint32_t q, const Vec3& f) {
+  for_pairs(sim, incoming(p), p, [&](std::uint32_t q, const Vec3& f) {
     if (is_zero(f) || contains(o.source, q)) return;
     const std::uint64_t key = ref_key(p, q);
     const auto at = std::lower_bound(o.refs.begin(), o.refs.end(), key,
@@ -237,7 +280,7 @@ void AeMonitor::evaluate(const Simulation& sim, Open& o, double strain) {
       for (int j = 0; j < 3; ++j) m[static_cast<std::size_t>(3 * i + j)] += df[i] * r[j];
   };
   for (std::uint32_t p : o.source)
-    for_pairs(sim, p, [&](std::uint32_t q, const Vec3& f) {
+    for_pairs(sim, incoming(p), p, [&](std::uint32_t q, const Vec3& f) {
       if (contains(o.source, q)) return;  // internal to the source
       const std::uint64_t key = ref_key(p, q);
       const auto at = std::lower_bound(o.refs.begin(), o.refs.end(), key,
@@ -349,6 +392,7 @@ void AeMonitor::after_step(const Simulation& sim, double strain, double deviator
                        "the monitor must be configured before the first crack");
     build_grid(sim);
     const ParticleStore& ps = sim.particles();
+    find_incoming(sim, cracks);
     for (; seen_ < cracks.size(); ++seen_) {
       const CrackRecord& c = cracks[seen_];
       const double ef = fracture_energy(c, sim.bond_moduli(c.law), ps.planar(), ps.thickness());
@@ -360,7 +404,7 @@ void AeMonitor::after_step(const Simulation& sim, double strain, double deviator
         // The crack's grains and those in contact with them; window 2 D_c / v_S.
         std::vector<std::uint32_t> touched{i1, i2};
         for (std::uint32_t p : {i1, i2})
-          for_pairs(sim, p, [&](std::uint32_t q, const Vec3& f) {
+          for_pairs(sim, incoming(p), p, [&](std::uint32_t q, const Vec3& f) {
             if (!is_zero(f)) touched.push_back(q);
           });
         const double tc = 2.0 * (2.0 * std::max(c.R1, c.R2)) / s_.shear_wave_speed;
@@ -388,8 +432,12 @@ void AeMonitor::after_step(const Simulation& sim, double strain, double deviator
     }
   } else if (!open_.empty()) {
     clusterer_->close_before(sim.time());
+    find_incoming(sim, cracks);
   }
-  if (open_.empty()) return;
+  if (open_.empty()) {
+    incoming_.slots.clear();  // read again for the next event's grains
+    return;
+  }
   if (s_.moment_interval > 1 && steps_ % s_.moment_interval != 0) return;
   // An event is first evaluated one step after it was created: its creation step is the
   // reference. Particles joining an open event have zero force change in their joining step.

@@ -16,6 +16,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include "breccia/analysis/ae_clustering.hpp"
@@ -130,6 +131,8 @@ class AeMonitor : public Recorder {
   void merge(std::size_t kept, std::size_t gone);
   void close(std::size_t root);
   void build_grid(const Simulation& sim);
+  void find_incoming(const Simulation& sim, CrackCatalogue::Reader& cracks);
+  const std::vector<std::uint32_t>& incoming(std::uint32_t p) const;
 
   AeSettings s_;
   std::function<double()> wave_speed_source_;
@@ -151,6 +154,14 @@ class AeMonitor : public Recorder {
     std::pair<const std::uint32_t*, const std::uint32_t*> at(long long a, long long b,
                                                              long long c) const noexcept;
   } grid_;
+  // The neighbour pairs where a grain the monitor reads is second, in ascending slot order (the
+  // engine's list keeps no transposed index): read for the grains of new cracks and open events,
+  // forgotten at a neighbour rebuild and once no event is open. Not saved: read again after a
+  // restore.
+  struct Incoming {
+    std::uint64_t rebuilds = ~std::uint64_t{0};  // the list they index
+    std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> slots;
+  } incoming_;
 };
 
 // The fracture-energy estimate of docs/analysis.md §2.3 for a bond crack: sigma^2 V / (2 E_b) in

@@ -27,11 +27,11 @@ MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, s
     const double state_bytes = static_cast<double>(
         rolling_limits(p).on() ? sizeof(typename Law::template with_rolling<true>::State)
                                : sizeof(typename Law::State));
-    // A pair's list entries (first, second, transposed slot), its history index and, while it
+    // A pair's list entries (first, second), its history index and, while it
     // touches, a contact state with a quarter to spare; the estimate gives a state to every pair
     // (an FCC block's pairs all touch). A rebuild frees the forces and bond indexes before it
     // builds the new list, so the two lists coexist within that room.
-    const double kept = 4.0 * sizeof(std::uint32_t) + 1.25 * state_bytes;
+    const double kept = 3.0 * sizeof(std::uint32_t) + 1.25 * state_bytes;
     // Every pair keeps its force and one bond index; a cross pair (pair_list.hpp) also a slot
     // and its entry in the gather index.
     const double cross = kCrossPairShare * (sizeof(CrossSlot) + sizeof(std::uint32_t));

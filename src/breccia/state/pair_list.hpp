@@ -27,7 +27,8 @@ struct CrossSlot {
 struct PairList {
   std::vector<std::uint32_t> first, second;  // sorted by (first, second)
   std::vector<std::uint32_t> offsets;        // pairs with first == i: [offsets[i], offsets[i+1])
-  std::vector<std::uint32_t> in_offsets, in_slot;  // pairs with second == i, ascending slot
+  // Pairs with second == i, ascending slot (build_transposed_index; empty in the engine's list).
+  std::vector<std::uint32_t> in_offsets, in_slot;
   // Cross pairs (above): block b's are cross slots [cross_begin[b], cross_begin[b + 1]) in pair
   // order; particle i's, as the second particle, are cross_in[cross_in_offsets[i] ...
   // cross_in_offsets[i + 1]), ascending.
@@ -49,15 +50,20 @@ struct PairList {
     build_transposed_index(n);
   }
 
-  // Rebuilds the transposed index (the pairs where a particle is second) for n particles.
-  void build_transposed_index(std::size_t n) {
-    in_offsets.assign(n + 1, 0);
-    for (std::size_t k = 0; k < first.size(); ++k) ++in_offsets[second[k] + 1];
-    for (std::size_t i = 0; i < n; ++i) in_offsets[i + 1] += in_offsets[i];
-    in_slot.resize(first.size());
-    std::vector<std::uint32_t> fill(in_offsets.begin(), in_offsets.end() - 1);
+  // Rebuilds the transposed index (the pairs where a particle is second) for n particles. The
+  // engine's neighbour list keeps none (4 bytes a pair and a grain): its readers build one.
+  void build_transposed_index(std::size_t n) { transposed_index(n, in_offsets, in_slot); }
+  // The pairs where each of n particles is second, in ascending slot order: particle i's are
+  // slots[offsets[i] ... offsets[i + 1]).
+  void transposed_index(std::size_t n, std::vector<std::uint32_t>& offsets_out,
+                        std::vector<std::uint32_t>& slots) const {
+    offsets_out.assign(n + 1, 0);
+    for (std::size_t k = 0; k < first.size(); ++k) ++offsets_out[second[k] + 1];
+    for (std::size_t i = 0; i < n; ++i) offsets_out[i + 1] += offsets_out[i];
+    slots.resize(first.size());
+    std::vector<std::uint32_t> fill(offsets_out.begin(), offsets_out.end() - 1);
     for (std::size_t k = 0; k < first.size(); ++k)
-      in_slot[fill[second[k]]++] = static_cast<std::uint32_t>(k);
+      slots[fill[second[k]]++] = static_cast<std::uint32_t>(k);
   }
 
   std::size_t cross_slots() const noexcept { return cross_in.size(); }
