@@ -556,15 +556,19 @@ TEST(ParticleStress, TheStreamGivesTheSumsOfAScatterOverThePairs) {
       },
       sim.contact_model());
   ASSERT_GT(loaded, p.size());
-  Simulation::ParticleStressStream stream(sim);
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const double r = p.pos_rad[i].r;
-    const double volume = 4.0 / 3.0 * std::numbers::pi * r * r * r;
-    const std::array<double, 9> t = stream.at(i);
-    for (std::size_t a = 0; a < 3; ++a)
-      for (std::size_t b = 0; b < 3; ++b)
-        EXPECT_EQ(t[3 * a + b], 0.5 * (scatter[i][3 * a + b] + scatter[i][3 * b + a]) / volume)
-            << i << " " << a << b;
+  // The stream indexes the grains' incoming pairs a chunk of grains at a time: one chunk for
+  // the whole block, and chunks of 7 grains (the pairs of a grain as second lie in earlier rows).
+  for (const std::size_t chunk : {Simulation::ParticleStressStream::kChunk, std::size_t{7}}) {
+    Simulation::ParticleStressStream stream(sim, chunk);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double r = p.pos_rad[i].r;
+      const double volume = 4.0 / 3.0 * std::numbers::pi * r * r * r;
+      const std::array<double, 9> t = stream.at(i);
+      for (std::size_t a = 0; a < 3; ++a)
+        for (std::size_t b = 0; b < 3; ++b)
+          EXPECT_EQ(t[3 * a + b], 0.5 * (scatter[i][3 * a + b] + scatter[i][3 * b + a]) / volume)
+              << i << " " << a << b << " chunk " << chunk;
+    }
   }
 }
 

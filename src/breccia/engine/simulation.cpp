@@ -377,10 +377,32 @@ PairStress Simulation::pair_stress() const {
   return out;
 }
 
-Simulation::ParticleStressStream::ParticleStressStream(const Simulation& sim)
-    : sim_(sim), wall_at_(sim.walls().size(), 0) {
-  std::visit([&](const auto& c) { c.pairs.transposed_index(sim.p_.size(), in_offsets_, in_slot_); },
-             sim.contact_);
+Simulation::ParticleStressStream::ParticleStressStream(const Simulation& sim, std::size_t chunk)
+    : sim_(sim), wall_at_(sim.walls().size(), 0), chunk_(std::max<std::size_t>(chunk, 1)) {}
+
+// A pair (q, p) has q < p, so the pairs of a chunk's particles as second lie before the chunk's
+// own rows: one scan of those rows per chunk.
+void Simulation::ParticleStressStream::read_chunk(std::size_t begin) {
+  std::visit(
+      [&](const auto& c) {
+        const PairList& l = c.pairs;
+        const std::size_t n = l.offsets.size() - 1;
+        chunk_begin_ = begin;
+        chunk_end_ = std::min(n, begin + chunk_);
+        const std::uint32_t scanned = l.offsets[chunk_end_];
+        in_offsets_.assign(chunk_end_ - chunk_begin_ + 1, 0);
+        for (std::uint32_t k = 0; k < scanned; ++k)
+          if (l.second[k] >= chunk_begin_ && l.second[k] < chunk_end_)
+            ++in_offsets_[l.second[k] - chunk_begin_ + 1];
+        for (std::size_t i = 0; i + 1 < in_offsets_.size(); ++i)
+          in_offsets_[i + 1] += in_offsets_[i];
+        in_slot_.resize(in_offsets_.back());
+        std::vector<std::uint32_t> fill(in_offsets_.begin(), in_offsets_.end() - 1);
+        for (std::uint32_t k = 0; k < scanned; ++k)
+          if (l.second[k] >= chunk_begin_ && l.second[k] < chunk_end_)
+            in_slot_[fill[l.second[k] - chunk_begin_]++] = k;
+      },
+      sim_.contact_);
 }
 
 std::array<double, 9> Simulation::ParticleStressStream::at(std::size_t p) {
@@ -398,7 +420,9 @@ std::array<double, 9> Simulation::ParticleStressStream::at(std::size_t p) {
         if (l.offsets.size() > p + 1) {
           // Pairs with p second (their first grain is lower: they come first in pair order),
           // then those with p first.
-          for (std::uint32_t m = in_offsets_[p]; m < in_offsets_[p + 1]; ++m) {
+          if (p < chunk_begin_ || p >= chunk_end_) read_chunk(p);
+          const std::size_t row = p - chunk_begin_;
+          for (std::uint32_t m = in_offsets_[row]; m < in_offsets_[row + 1]; ++m) {
             const std::uint32_t k = in_slot_[m];
             if (zero(c.force[k])) continue;
             add(s.geometry(l.first[k], static_cast<std::uint32_t>(p)).r2, c.force[k]);

@@ -271,13 +271,19 @@ class Simulation {
   // the same order, without holding a tensor for every particle (72 B a grain in a snapshot).
   class ParticleStressStream {
    public:
-    explicit ParticleStressStream(const Simulation& sim);
+    // Particles' incoming pairs are indexed `chunk` particles at a time.
+    static constexpr std::size_t kChunk = std::size_t{1} << 16;
+    explicit ParticleStressStream(const Simulation& sim, std::size_t chunk = kChunk);
     std::array<double, 9> at(std::size_t p);  // p ascending from one call to the next
 
    private:
     const Simulation& sim_;
     std::vector<std::size_t> wall_at_;  // per wall: the first contact entry not yet passed
-    // The pairs where each particle is second (the neighbour list keeps no such index).
+    // The pairs where each particle of [chunk_begin_, chunk_end_) is second, in ascending slot
+    // order (the neighbour list keeps no such index; one for every grain would cost 4 B a pair
+    // while a snapshot is written): particle p's are in_slot_[in_offsets_[p - chunk_begin_] ...).
+    void read_chunk(std::size_t begin);
+    std::size_t chunk_ = kChunk, chunk_begin_ = 0, chunk_end_ = 0;
     std::vector<std::uint32_t> in_offsets_, in_slot_;
   };
   std::uint64_t neighbour_rebuilds() const noexcept { return rebuilds_; }
