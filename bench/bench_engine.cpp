@@ -14,12 +14,14 @@
 // velocities (0.01 m/s) while the platens compress, then the measurement starts. Prints a readable
 // line and one JSON object per case on its own line.
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
@@ -165,6 +167,14 @@ int main(int argc, char** argv) {
   ls.ramp_time = 1e-12;
   PlatenCompression platens(sim, ls);
   sim.initialise();
+  // Crack records as a run keeps them: the newest in memory, the older ones in a file.
+  const std::filesystem::path crack_file = std::filesystem::temp_directory_path() /
+                                           fmt::format("bench-engine-cracks-{}.bin", ::getpid());
+  sim.record_cracks_in(crack_file);
+  struct RemoveAtExit {
+    std::filesystem::path path;
+    ~RemoveAtExit() { std::filesystem::remove(path); }
+  } remove_crack_file{crack_file};
   const double setup_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_setup).count();
   const std::size_t bonds0 = sim.intact_bonds();

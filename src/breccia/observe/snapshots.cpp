@@ -133,12 +133,19 @@ SnapshotWriter::SnapshotWriter(std::string folder, double interval, ArchiveReade
     throw InputError(a.where(), "snapshots", std::to_string(seen),
                      "counts more cracks than the simulation holds: the checkpoint is corrupt");
   // The broken-bond counts per particle follow from the crack catalogue.
-  auto cracks = sim.cracks().reader();
-  for (; cracks_seen_ < seen; ++cracks_seen_) {
-    ++broken_per_tag_[cracks[cracks_seen_].id1];
-    ++broken_per_tag_[cracks[cracks_seen_].id2];
-  }
+  count_broken(sim, seen);
   write_collections();
+}
+
+void SnapshotWriter::count_broken(const Simulation& sim, std::size_t up_to) {
+  const ParticleStore& p = sim.particles();
+  broken_per_grain_.resize(p.size(), 0);
+  auto cracks = sim.cracks().reader();
+  for (; cracks_seen_ < up_to; ++cracks_seen_) {
+    const CrackRecord& c = cracks[cracks_seen_];
+    ++broken_per_grain_[p.index_of(c.id1)];
+    ++broken_per_grain_[p.index_of(c.id2)];
+  }
 }
 
 void SnapshotWriter::save_state(ArchiveWriter& a) const {
@@ -158,11 +165,7 @@ void SnapshotWriter::at_row(const Simulation& sim, const Protocol&, const Record
 }
 
 void SnapshotWriter::write(const Simulation& sim) {
-  auto cracks = sim.cracks().reader();
-  for (; cracks_seen_ < cracks.size(); ++cracks_seen_) {
-    ++broken_per_tag_[cracks[cracks_seen_].id1];
-    ++broken_per_tag_[cracks[cracks_seen_].id2];
-  }
+  count_broken(sim, sim.cracks().size());
   const std::string name = fmt::format("{:05d}", times_.size());
   write_particles(sim, fs::path(folder_) / ("particles_" + name + ".vtu"));
   write_bonds(sim, fs::path(folder_) / ("bonds_" + name + ".vtu"));
@@ -226,10 +229,8 @@ void SnapshotWriter::write_particles(const Simulation& sim, const fs::path& path
   s << "<PointData Scalars=\"radius\" Vectors=\"velocity\" Tensors=\"stress_pa\">\n";
   scalar(s, "radius", "Float64", n, [&](std::size_t i) { return p.pos_rad[i].r; });
   scalar(s, "tag", "Int64", n, [&](std::size_t i) { return p.tag[i]; });
-  scalar(s, "broken_bonds", "Int32", n, [&](std::size_t i) {
-    const auto it = broken_per_tag_.find(p.tag[i]);
-    return it == broken_per_tag_.end() ? 0 : it->second;
-  });
+  scalar(s, "broken_bonds", "Int32", n,
+         [&](std::size_t i) { return i < broken_per_grain_.size() ? broken_per_grain_[i] : 0; });
   vector(s, "velocity", n, [&](std::size_t i) { return p.vel[i]; });
   vector(s, "displacement", n, [&](std::size_t i) { return p.displacement[i]; });
   vector(s, "angular_velocity", n, [&](std::size_t i) { return p.angvel[i]; });
