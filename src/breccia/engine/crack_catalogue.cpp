@@ -174,14 +174,17 @@ void CrackCatalogue::spill_to(const std::filesystem::path& file, std::size_t res
   header_ = h.size();
   hash_ = 0;
   resident_ = std::max<std::size_t>(resident, 1);
-  // The room taken for every possible crack is given back: only the resident records stay.
-  if (tail_.capacity() > resident_) {
-    std::vector<CrackRecord> kept;
-    kept.reserve(std::max(resident_, tail_.size()));
-    kept.assign(tail_.begin(), tail_.end());
-    tail_.swap(kept);
-  }
+  keep_room_for_resident();
   if (tail_.size() >= resident_) spill_tail();
+}
+
+// The room taken for every possible crack is given back: only the resident records stay.
+void CrackCatalogue::keep_room_for_resident() {
+  if (tail_.capacity() <= std::max(resident_, tail_.size())) return;
+  std::vector<CrackRecord> kept;
+  kept.reserve(std::max(resident_, tail_.size()));
+  kept.assign(tail_.begin(), tail_.end());
+  tail_.swap(kept);
 }
 
 void CrackCatalogue::spill_tail() {
@@ -331,6 +334,7 @@ void CrackCatalogue::reattach(const std::filesystem::path& file, std::size_t res
   }
   if (::ftruncate(fd_, static_cast<off_t>(header_ + spilled_ * sizeof(StoredCrack))) != 0)
     throw InputError(file.string(), "", "", failure(file, "truncate"));
+  keep_room_for_resident();
   tail_.reserve(resident_);
 }
 

@@ -129,6 +129,7 @@ class CrackCatalogue {
   static constexpr std::size_t kReadChunk = 4096;
   void read_spilled(std::size_t first, std::size_t count, std::vector<CrackRecord>& out) const;
   void spill_tail();
+  void keep_room_for_resident();
   void close() noexcept;
 
   std::vector<CrackRecord> tail_;  // records [spilled_, size())
