@@ -47,6 +47,13 @@ std::vector<std::string_view> registered_laws() {
   return out;
 }
 
+// This build's static name of the law called `name`; throws naming `where` when there is none.
+std::string_view registered_law(const std::string& name, const std::string& where) {
+  for (std::string_view s : registered_laws())
+    if (s == name) return s;
+  throw InputError(where, "crack law", name, "not a bond law of this build of Breccia");
+}
+
 std::string failure(const std::filesystem::path& file, const char* doing) {
   return std::string("cannot ") + doing + " the crack catalogue: " + write_failure(errno) + " (" +
          file.string() + ")";
@@ -270,22 +277,11 @@ void CrackCatalogue::sync() const {
     throw InputError(file_.string(), "", "", failure(file_, "flush"));
 }
 
-void CrackCatalogue::reattach(const std::filesystem::path& file, std::size_t resident) {
-  if (fd_ >= 0) throw InternalError("the crack catalogue already has a file: " + file_.string());
-  const int fd = ::open(file.c_str(), O_RDWR | O_CLOEXEC);
-  if (fd < 0) {
-    if (spilled_ == 0) return spill_to(file, resident);  // nothing to find in it
-    throw InputError(file.string(), "", "(missing)",
-                     "the checkpoint's older crack records are in this file: " +
-                         std::string(std::strerror(errno)));
-  }
-  fd_ = fd;
-  file_ = file;
-  resident_ = std::max<std::size_t>(resident, 1);
-  // The header, read as far as its law table.
+// Reads the header of the open file: checks its magic, format and record size, and takes its
+// table of law names (each a law of this build) as the codes' meanings.
+void CrackCatalogue::read_header() {
   const auto mismatch = [&](const std::string& what) {
-    close();
-    return InputError(file.string(), "header", what,
+    return InputError(file_.string(), "header", what,
                       "not a crack catalogue this build of Breccia wrote");
   };
   char magic[sizeof(kMagic)] = {};
@@ -299,7 +295,6 @@ void CrackCatalogue::reattach(const std::filesystem::path& file, std::size_t res
   if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw mismatch("(wrong magic)");
   if (fixed[0] != kFileFormat || fixed[1] != sizeof(StoredCrack) || fixed[2] > 64)
     throw mismatch("format " + std::to_string(fixed[0]));
-  const std::vector<std::string_view> known = registered_laws();
   std::uint64_t at = sizeof magic + sizeof fixed;
   laws_.clear();
   for (std::uint32_t k = 0; k < fixed[2]; ++k) {
@@ -309,31 +304,48 @@ void CrackCatalogue::reattach(const std::filesystem::path& file, std::size_t res
     std::string name(length, '\0');
     read_all(fd_, name.data(), length, at + sizeof length, file_);
     at += sizeof length + length;
-    std::string_view found;
-    for (std::string_view s : known)
-      if (s == name) found = s;
-    if (found.empty())
-      throw InputError(file.string(), "law", name, "not a bond law of this build of Breccia");
-    laws_.push_back(found);
+    laws_.push_back(registered_law(name, file_.string()));
   }
   header_ = at;
-  // The records the checkpoint counted, by their hash; any later ones are dropped.
+}
+
+// FNV-1a of the first `count` records in the file.
+std::uint64_t CrackCatalogue::hash_of_records(std::size_t count) const {
   std::uint64_t h = kHashSeed;
   std::vector<StoredCrack> chunk;
-  for (std::size_t k = 0; k < spilled_; k += chunk.size()) {
-    chunk.resize(std::min(spilled_ - k, kReadChunk));
-    read_all(fd_, chunk.data(), chunk.size() * sizeof(StoredCrack),
-             header_ + k * sizeof(StoredCrack), file_);
-    h = fnv1a64({reinterpret_cast<const char*>(chunk.data()), chunk.size() * sizeof(StoredCrack)},
-                h);
+  for (std::size_t k = 0; k < count; k += chunk.size()) {
+    chunk.resize(std::min(count - k, kReadChunk));
+    const std::size_t bytes = chunk.size() * sizeof(StoredCrack);
+    read_all(fd_, chunk.data(), bytes, header_ + k * sizeof(StoredCrack), file_);
+    h = fnv1a64({reinterpret_cast<const char*>(chunk.data()), bytes}, h);
   }
-  if (spilled_ > 0 && h != hash_) {
+  return h;
+}
+
+void CrackCatalogue::reattach(const std::filesystem::path& file, std::size_t resident) {
+  if (fd_ >= 0) throw InternalError("the crack catalogue already has a file: " + file_.string());
+  const int fd = ::open(file.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd < 0) {
+    if (spilled_ == 0) return spill_to(file, resident);  // nothing to find in it
+    throw InputError(file.string(), "", "(missing)",
+                     "the checkpoint's older crack records are in this file: " +
+                         std::string(std::strerror(errno)));
+  }
+  fd_ = fd;
+  file_ = file;
+  resident_ = std::max<std::size_t>(resident, 1);
+  try {
+    read_header();
+    // The records the checkpoint counted, by their hash; any later ones are dropped.
+    if (spilled_ > 0 && hash_of_records(spilled_) != hash_)
+      throw InputError(file.string(), "", "(records differ)",
+                       "the crack catalogue does not hold the records the checkpoint counted");
+    if (::ftruncate(fd_, static_cast<off_t>(header_ + spilled_ * sizeof(StoredCrack))) != 0)
+      throw InputError(file.string(), "", "", failure(file, "truncate"));
+  } catch (...) {
     close();
-    throw InputError(file.string(), "", "(records differ)",
-                     "the crack catalogue does not hold the records the checkpoint counted");
+    throw;
   }
-  if (::ftruncate(fd_, static_cast<off_t>(header_ + spilled_ * sizeof(StoredCrack))) != 0)
-    throw InputError(file.string(), "", "", failure(file, "truncate"));
   keep_room_for_resident();
   tail_.reserve(resident_);
 }
@@ -352,10 +364,7 @@ void CrackCatalogue::transfer(Archive& a) {
     a.value(plain);
     if constexpr (Archive::reading) {
       c = plain;
-      for (std::string_view s : registered_laws())
-        if (s == name) c.law = s;
-      if (c.law.empty())
-        throw InputError(a.where(), "crack law", name, "not a bond law of this build of Breccia");
+      c.law = registered_law(name, a.where());
     }
   }
   if constexpr (Archive::reading) {

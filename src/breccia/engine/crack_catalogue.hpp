@@ -129,6 +129,8 @@ class CrackCatalogue {
   static constexpr std::size_t kReadChunk = 4096;
   void read_spilled(std::size_t first, std::size_t count, std::vector<CrackRecord>& out) const;
   void spill_tail();
+  void read_header();
+  std::uint64_t hash_of_records(std::size_t count) const;
   void keep_room_for_resident();
   void close() noexcept;
 

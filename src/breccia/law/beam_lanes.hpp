@@ -147,12 +147,7 @@ struct LaneSection {
   const Lanes x = 1.0 / (r * d0);
   const Lanes inv_r = d0 * x, inv_length = r * x;
   c.radius = r;
-  c.area = std::numbers::pi * r * r;
-  c.inertia = 0.25 * std::numbers::pi * r * r * r * r;
-  c.polar = 2.0 * c.inertia;
-  c.inv_area = std::numbers::inv_pi * inv_r * inv_r;
-  c.inv_inertia = 4.0 * std::numbers::inv_pi * inv_r * inv_r * inv_r * inv_r;
-  c.inv_polar = 0.5 * c.inv_inertia;
+  disc_section(c, r, inv_r);
   c.kr = young * c.area * inv_length;
   c.ks = shear * c.area * inv_length;
   c.kb = 1.0 * young * c.inertia * inv_length;

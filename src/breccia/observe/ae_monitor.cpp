@@ -223,7 +223,7 @@ void AeMonitor::find_incoming(const Simulation& sim, CrackCatalogue::Reader& cra
   std::vector<char> wanted(ps.size(), 0);
   std::size_t missing = 0;
   auto want = [&](std::uint32_t p) {
-    if (wanted[p] || incoming_.slots.contains(p)) return;
+    if (!incoming_.slots.try_emplace(p).second) return;  // read already (or wanted twice)
     wanted[p] = 1;
     ++missing;
   };
@@ -238,8 +238,6 @@ void AeMonitor::find_incoming(const Simulation& sim, CrackCatalogue::Reader& cra
   std::visit(
       [&](const auto& c) {
         const PairList& l = c.pairs;
-        for (std::uint32_t p = 0; p < ps.size(); ++p)
-          if (wanted[p]) incoming_.slots[p];  // an entry also for a grain without such pairs
         for (std::size_t k = 0; k < l.size(); ++k)
           if (wanted[l.second[k]])
             incoming_.slots[l.second[k]].push_back(static_cast<std::uint32_t>(k));
