@@ -4,8 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <sstream>
+#include <stdexcept>
 
 #include "block_fixture.hpp"
+#include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
@@ -232,4 +235,36 @@ TEST(Neighbours, ADisplacedGrainIsSeenAtTheNextStep) {
   EXPECT_EQ(moved.particles().force[1].x, built.particles().force[1].x);
   EXPECT_THROW(moved.displace_particle(0, {std::nan(""), 0, 0}), InputError);
   EXPECT_THROW(moved.displace_particle(2, {1e-6, 0, 0}), InputError);
+}
+
+// A finished run frees its interactions before the analysis: the grains, bonds and cracks stay
+// as they were, the pair data is gone, and the simulation refuses to go on or to be saved.
+TEST(Neighbours, RetiredInteractionsKeepGrainsBondsAndCracks) {
+  Simulation sim = test::compressed_block(4, 4, 4, 0.5, 2e6);
+  for (int s = 0; s < 3000 && sim.cracks().size() == 0; ++s) sim.step();
+  ASSERT_GT(sim.cracks().size(), 0u);
+  ASSERT_GT(sim.active_contacts(), 0u);
+  const std::size_t bonds = sim.intact_bonds(), cracks = sim.cracks().size();
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> before, after;
+  sim.for_each_intact_bond([&](std::uint32_t i, std::uint32_t j) { before.emplace_back(i, j); });
+  const std::vector<PosRad> grains = sim.particles().pos_rad;
+
+  sim.retire_interactions();
+  EXPECT_TRUE(sim.retired());
+  EXPECT_EQ(sim.neighbour_pairs(), 0u);
+  EXPECT_EQ(sim.active_contacts(), 0u);
+  EXPECT_EQ(sim.intact_bonds(), bonds);
+  EXPECT_EQ(sim.cracks().size(), cracks);
+  sim.for_each_intact_bond([&](std::uint32_t i, std::uint32_t j) { after.emplace_back(i, j); });
+  EXPECT_EQ(after, before);
+  ASSERT_EQ(sim.particles().size(), grains.size());
+  for (std::size_t i = 0; i < grains.size(); ++i) {
+    EXPECT_EQ(sim.particles().pos_rad[i].x, grains[i].x);
+    EXPECT_EQ(sim.particles().pos_rad[i].r, grains[i].r);
+  }
+  EXPECT_THROW(sim.step(), std::logic_error);
+  std::ostringstream out;
+  ArchiveWriter a(out);
+  EXPECT_THROW(sim.save_state(a), std::logic_error);
+  EXPECT_TRUE(out.str().empty());
 }

@@ -23,13 +23,18 @@ EventClusterer::EventClusterer(ClusterSettings s) : s_(s) {
     throw InputError("AE clustering", "duration", num(s.duration), "must be > 0 s");
 }
 
+namespace {
+constexpr std::uint32_t kNoEvent = 0xffffffffu;
+}
+
 std::size_t EventClusterer::find(std::size_t e) const {
   while (parent_[e] != e) e = parent_[e];
   return e;
 }
 
 std::size_t EventClusterer::event_of(std::size_t crack) const {
-  return find(crack_event_.at(crack));
+  const std::uint32_t e = crack_event_.at(crack);
+  return e == kNoEvent ? static_cast<std::size_t>(-1) : find(e);
 }
 
 void EventClusterer::index(std::size_t root, const Vec3& x) {
@@ -41,41 +46,42 @@ void EventClusterer::index(std::size_t root, const Vec3& x) {
 }
 
 std::size_t EventClusterer::join(std::size_t id, double deadline, std::vector<std::size_t>& hits) {
+  if (id >= kNoEvent)
+    throw InputError("AE clustering", "crack", std::to_string(id),
+                     "a run clusters at most " + std::to_string(kNoEvent) + " cracks (32-bit ids)");
   std::size_t event;
   if (hits.empty()) {
-    event = parent_.size();
-    parent_.push_back(event);
-    deadline_.push_back(deadline);
-    members_.emplace_back();
-    touched_.emplace_back();
+    event = parent_.size();  // at most one event per crack: below kNoEvent
+    parent_.push_back(static_cast<std::uint32_t>(event));
+    live_[event].deadline = deadline;
     open_.push_back(event);
   } else {
     std::sort(hits.begin(), hits.end());
     event = hits.front();
+    Live& kept = live_.at(event);  // references to a map's elements outlive its rehashes
     for (std::size_t k = 1; k < hits.size(); ++k) {
       const std::size_t gone = hits[k];
-      parent_[gone] = event;
-      deadline_[event] = std::max(deadline_[event], deadline_[gone]);
-      for (const Member& m : members_[gone]) {
-        members_[event].push_back(m);
+      Live& g = live_.at(gone);
+      parent_[gone] = static_cast<std::uint32_t>(event);
+      kept.deadline = std::max(kept.deadline, g.deadline);
+      for (const Member& m : g.members) {
+        kept.members.push_back(m);
         index(event, m.x);
       }
-      members_[gone].clear();
-      members_[gone].shrink_to_fit();
       std::vector<std::uint32_t> u;
-      std::set_union(touched_[event].begin(), touched_[event].end(), touched_[gone].begin(),
-                     touched_[gone].end(), std::back_inserter(u));
-      touched_[event] = std::move(u);
-      for (std::uint32_t p : touched_[gone]) touch_index_[p].push_back(event);
-      touched_[gone].clear();
-      touched_[gone].shrink_to_fit();
+      std::set_union(kept.touched.begin(), kept.touched.end(), g.touched.begin(), g.touched.end(),
+                     std::back_inserter(u));
+      kept.touched = std::move(u);
+      for (std::uint32_t p : g.touched) touch_index_[p].push_back(event);
+      live_.erase(gone);
       open_.erase(std::find(open_.begin(), open_.end(), gone));
       if (merged) merged(event, gone);
     }
   }
-  if (crack_event_.size() <= id) crack_event_.resize(id + 1, static_cast<std::size_t>(-1));
-  crack_event_[id] = event;
-  deadline_[event] = std::max(deadline_[event], deadline);
+  if (crack_event_.size() <= id) crack_event_.resize(id + 1, kNoEvent);
+  crack_event_[id] = static_cast<std::uint32_t>(event);
+  Live& l = live_.at(event);
+  l.deadline = std::max(l.deadline, deadline);
   return event;
 }
 
@@ -95,8 +101,9 @@ std::size_t EventClusterer::add(std::size_t id, double time, const Vec3& x) {
         for (std::size_t e : it->second) {
           const std::size_t root = find(e);
           if (std::find(hits.begin(), hits.end(), root) != hits.end()) continue;
-          if (std::find(open_.begin(), open_.end(), root) == open_.end()) continue;
-          for (const Member& m : members_[root])
+          const auto open = live_.find(root);
+          if (open == live_.end()) continue;  // closed
+          for (const Member& m : open->second.members)
             if (norm2(m.x - x) <= r2) {
               hits.push_back(root);
               break;
@@ -104,7 +111,7 @@ std::size_t EventClusterer::add(std::size_t id, double time, const Vec3& x) {
         }
       }
   const std::size_t event = join(id, time + s_.duration, hits);
-  members_[event].push_back({id, x});
+  live_.at(event).members.push_back({id, x});
   index(event, x);
   return event;
 }
@@ -120,8 +127,10 @@ std::size_t EventClusterer::add_grain(std::size_t id, double time, double durati
     for (std::size_t e : it->second) {
       const std::size_t root = find(e);
       if (std::find(hits.begin(), hits.end(), root) != hits.end()) continue;
-      if (std::find(open_.begin(), open_.end(), root) == open_.end()) continue;
-      if (std::binary_search(touched_[root].begin(), touched_[root].end(), p)) hits.push_back(root);
+      const auto open = live_.find(root);
+      if (open == live_.end()) continue;  // closed
+      const std::vector<std::uint32_t>& t = open->second.touched;
+      if (std::binary_search(t.begin(), t.end(), p)) hits.push_back(root);
     }
   }
   const std::size_t event = join(id, time + duration, hits);
@@ -129,9 +138,9 @@ std::size_t EventClusterer::add_grain(std::size_t id, double time, double durati
   std::sort(t.begin(), t.end());
   t.erase(std::unique(t.begin(), t.end()), t.end());
   std::vector<std::uint32_t> u;
-  std::set_union(touched_[event].begin(), touched_[event].end(), t.begin(), t.end(),
-                 std::back_inserter(u));
-  touched_[event] = std::move(u);
+  Live& l = live_.at(event);
+  std::set_union(l.touched.begin(), l.touched.end(), t.begin(), t.end(), std::back_inserter(u));
+  l.touched = std::move(u);
   for (std::uint32_t p : t) {
     auto& list = touch_index_[p];
     if (std::find(list.begin(), list.end(), event) == list.end()) list.push_back(event);
@@ -143,17 +152,15 @@ void EventClusterer::close_before(double time, const std::function<void(std::siz
   const auto& closed_cb = on_close ? on_close : closed;
   for (std::size_t k = 0; k < open_.size();) {
     const std::size_t e = open_[k];
-    if (time > deadline_[e]) {
+    const auto it = live_.find(e);
+    if (time > it->second.deadline) {
       open_.erase(open_.begin() + static_cast<std::ptrdiff_t>(k));
-      members_[e].clear();
-      members_[e].shrink_to_fit();
-      for (std::uint32_t p : touched_[e]) {
+      for (std::uint32_t p : it->second.touched) {
         auto& list = touch_index_[p];
         list.erase(std::remove(list.begin(), list.end(), e), list.end());
         if (list.empty()) touch_index_.erase(p);
       }
-      touched_[e].clear();
-      touched_[e].shrink_to_fit();
+      live_.erase(it);
       if (closed_cb) closed_cb(e);
     } else {
       ++k;
@@ -167,11 +174,9 @@ void EventClusterer::close_all(const std::function<void(std::size_t)>& on_close)
   const auto& closed_cb = on_close ? on_close : closed;
   const std::vector<std::size_t> open = open_;
   open_.clear();
-  for (std::size_t e : open) {
-    members_[e].clear();
-    touched_[e].clear();
+  live_.clear();
+  for (std::size_t e : open)
     if (closed_cb) closed_cb(e);
-  }
   cells_.clear();
   touch_index_.clear();
 }
@@ -182,35 +187,36 @@ void EventClusterer::transfer(Archive& a) {
   a.value(s_);
   a.vector(parent_);
   a.vector(crack_event_);
-  a.vector(deadline_);
   a.vector(open_);
   if constexpr (Archive::reading) {
     const std::size_t n = parent_.size();
-    bool ok = deadline_.size() == n;
-    for (std::size_t e : parent_) ok = ok && e < n;
+    bool ok = true;
+    for (std::uint32_t e : parent_) ok = ok && e < n;
     for (std::size_t e : open_) ok = ok && e < n;
-    for (std::size_t e : crack_event_) ok = ok && (e < n || e == static_cast<std::size_t>(-1));
+    for (std::uint32_t e : crack_event_) ok = ok && (e < n || e == kNoEvent);
     if (!ok) throw InputError(a.where(), "event clusterer", "indices", "the checkpoint is corrupt");
-    members_.assign(n, {});
-    touched_.assign(n, {});
+    live_.clear();
   }
   for (std::size_t e : open_) {
-    a.sized(members_[e], sizeof(std::uint64_t) + sizeof(Vec3));
-    for (Member& m : members_[e]) {
+    Live& l = live_[e];
+    a.value(l.deadline);
+    a.sized(l.members, sizeof(std::uint64_t) + sizeof(Vec3));
+    for (Member& m : l.members) {
       std::uint64_t crack = m.crack;
       a.value(crack);
       m.crack = crack;
       a.value(m.x);
     }
-    a.vector(touched_[e]);
+    a.vector(l.touched);
   }
   if constexpr (Archive::reading) {
     // The cell and grain indexes follow from the open events.
     cells_.clear();
     touch_index_.clear();
     for (std::size_t e : open_) {
-      for (const Member& m : members_[e]) index(e, m.x);
-      for (std::uint32_t p : touched_[e]) touch_index_[p].push_back(e);
+      const Live& l = live_.at(e);
+      for (const Member& m : l.members) index(e, m.x);
+      for (std::uint32_t p : l.touched) touch_index_[p].push_back(e);
     }
   }
 }

@@ -79,14 +79,19 @@ class EventClusterer {
     std::size_t crack;
     Vec3 x;
   };
+  // What an open event holds; a closed one keeps only its place in the union-find.
+  struct Live {
+    double deadline = 0.0;               // closes when time exceeds it
+    std::vector<Member> members;         // source-radius linkage
+    std::vector<std::uint32_t> touched;  // grain linkage: sorted
+  };
   ClusterSettings s_;
-  std::vector<std::size_t> parent_;                  // event merges (union-find over event ids)
-  std::vector<std::size_t> crack_event_;             // event id at the time each crack was added
-  std::vector<double> deadline_;                     // per event: closes when time exceeds it
-  std::vector<std::vector<std::uint32_t>> touched_;  // grain linkage: per open root, sorted
+  // Event and crack ids fit 32 bits: every crack is a bond's, and bonds have 32-bit tags.
+  std::vector<std::uint32_t> parent_;           // event merges (union-find over event ids)
+  std::vector<std::uint32_t> crack_event_;      // event id at the time each crack was added
+  std::unordered_map<std::size_t, Live> live_;  // per open root
   std::unordered_map<std::uint32_t, std::vector<std::size_t>> touch_index_;  // particle -> events
   std::size_t join(std::size_t id, double deadline, std::vector<std::size_t>& hits);
-  std::vector<std::vector<Member>> members_;                       // per open root
   std::vector<std::size_t> open_;                                  // open roots
   std::unordered_map<long long, std::vector<std::size_t>> cells_;  // cell -> open roots
   long long cell_key(long long a, long long b, long long c) const noexcept {

@@ -3,6 +3,7 @@
 // reading, so the two cannot drift apart. Restoring needs no set-up call: the neighbour lists,
 // bond index maps and per-block scratch come back as they were, so the next step is the one the
 // uninterrupted run would have taken.
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <tuple>
@@ -256,6 +257,8 @@ void Simulation::transfer(Archive& a) {
 }
 
 void Simulation::save_state(ArchiveWriter& a) const {
+  if (retired_)
+    throw std::logic_error("Simulation::save_state: the simulation's interactions are retired");
   const_cast<Simulation*>(this)->transfer(a);  // the writer only reads the fields
 }
 

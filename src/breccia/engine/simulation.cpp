@@ -5,6 +5,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <stdexcept>
 
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
@@ -183,6 +184,8 @@ void Simulation::reserve_crack_catalogue() {
 }
 
 void Simulation::step() {
+  if (retired_)
+    throw std::logic_error("Simulation::step: the simulation's interactions are retired");
   if (!initialised_) initialise();
   if (needs_rebuild()) rebuild();
   const bool sample =
@@ -197,6 +200,28 @@ void Simulation::step() {
   advance_walls();
   time_ += dt_;
   ++step_;
+}
+
+void Simulation::retire_interactions() {
+  std::visit(
+      [](auto& c) {
+        c.pairs = {};
+        c.history = {};
+        c.stores = {};
+        c.packed = {};
+        c.force = {};
+      },
+      contact_);
+  const auto free_index = [](auto&... set) { ((set.bond_of_pair = {}), ...); };
+  std::apply(free_index, bonds_);
+  std::apply(free_index, joints_);
+  x_at_build_ = {};
+  cross_slots_ = {};
+  block_dis_ = {};
+  block_joint_dis_ = {};
+  block_int_ = {};
+  block_failures_ = {};
+  retired_ = true;
 }
 
 // Walls move after the grains: prescribed motion of the next half step, a free body's kick.

@@ -196,6 +196,13 @@ class Simulation {
   // compaction imposed on every grain at once). Same rules as scale_radii; the neighbour lists
   // see the move through their skin test.
   void displace_particle(std::size_t index, const Vec3& dx);
+  // Ends the stepping of a finished run: frees the neighbour list with its contact histories and
+  // pair forces, the pair-to-bond indexes and the pair pass's scratch (about 400 B a grain of a
+  // bonded 3D sample), so that the analysis that follows has that room. What it reads stays: the
+  // grains, bonds, joints, walls, ledger and cracks. A retired simulation refuses to step or to
+  // write a checkpoint, and reports no contacts or pair forces.
+  void retire_interactions();
+  bool retired() const noexcept { return retired_; }
   // Estimates the time step again for the current geometry (packing stages, whose radii and
   // contacts change a lot between the start and the end); refused once bonds exist.
   void refresh_time_step();
@@ -445,7 +452,7 @@ class Simulation {
 
   double dt_ = 0.0, dt_crit_ = 0.0, time_ = 0.0, skin_ = 0.0;
   std::uint64_t step_ = 0, rebuilds_ = 0, next_bond_tag_ = 1;
-  bool initialised_ = false, sample_requested_ = false;
+  bool initialised_ = false, sample_requested_ = false, retired_ = false;
   std::vector<Vec3> x_at_build_;
   std::vector<CrossSlot> cross_slots_;  // the pair pass's cross pairs (pair_list.hpp)
   std::vector<Vec3> user_force_;        // external loads (empty when unused)

@@ -50,14 +50,18 @@ std::uint64_t ref_key(std::uint32_t p, std::uint32_t q) {
 // force on the pair's second particle): those where p is first, then `incoming`, the slots of
 // those where it is second, ascending.
 template <class F>
-void for_pairs(const Simulation& sim, const std::vector<std::uint32_t>& incoming, std::uint32_t p,
+void for_pairs(const Simulation& sim,
+               std::pair<const std::uint64_t*, const std::uint64_t*> incoming, std::uint32_t p,
                F&& f) {
   std::visit(
       [&](const auto& c) {
         const PairList& l = c.pairs;
         if (l.offsets.size() <= p + 1) return;
         for (std::uint32_t k = l.offsets[p]; k < l.offsets[p + 1]; ++k) f(l.second[k], c.force[k]);
-        for (const std::uint32_t k : incoming) f(l.first[k], -c.force[k]);
+        for (const std::uint64_t* e = incoming.first; e != incoming.second; ++e) {
+          const auto k = static_cast<std::uint32_t>(*e & 0xffffffffu);
+          f(l.first[k], -c.force[k]);
+        }
       },
       sim.contact_model());
 }
@@ -130,7 +134,6 @@ AeMonitor& AeMonitor::operator=(AeMonitor&& o) noexcept {
   done_root_ = std::move(o.done_root_);
   context_ = std::move(o.context_);
   seen_ = o.seen_;
-  stamp_ = o.stamp_;
   steps_ = o.steps_;
   grid_ = std::move(o.grid_);
   incoming_ = std::move(o.incoming_);
@@ -204,28 +207,40 @@ void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
   }
 }
 
-const std::vector<std::uint32_t>& AeMonitor::incoming(std::uint32_t p) const {
-  const auto it = incoming_.slots.find(p);
-  if (it == incoming_.slots.end())
+AeMonitor::IncomingSlots AeMonitor::incoming(std::uint32_t p) const {
+  if (p >= incoming_.read.size() || !incoming_.read[p])
     throw InternalError("AeMonitor: the pairs of particle " + std::to_string(p) + " were not read");
-  return it->second;
+  const std::uint64_t* first = incoming_.entries.data();
+  const std::uint64_t* last = first + incoming_.entries.size();
+  const std::uint64_t key = std::uint64_t{p} << 32;
+  const std::uint64_t* lo = std::lower_bound(first, last, key);
+  return {lo, std::lower_bound(lo, last, key + (std::uint64_t{1} << 32))};
+}
+
+void AeMonitor::forget_incoming(std::size_t particles) {
+  incoming_.entries = {};
+  if (incoming_.grains > 0 || incoming_.read.size() != particles) {
+    incoming_.read.assign(particles, false);
+    incoming_.fresh.assign(particles, false);
+  }
+  incoming_.grains = 0;
 }
 
 // The grains of the new cracks (from seen_ on) and the sources of the open events: those the
 // step reads the pairs of. Their pairs as second particle are found by one scan of the list;
 // a neighbour rebuild makes a new list, whose slots are read afresh.
 void AeMonitor::find_incoming(const Simulation& sim, CrackCatalogue::Reader& cracks) {
-  if (incoming_.rebuilds != sim.neighbour_rebuilds()) {
-    incoming_.slots.clear();
+  const ParticleStore& ps = sim.particles();
+  if (incoming_.rebuilds != sim.neighbour_rebuilds() || incoming_.read.size() != ps.size()) {
+    forget_incoming(ps.size());
     incoming_.rebuilds = sim.neighbour_rebuilds();
   }
-  const ParticleStore& ps = sim.particles();
-  std::vector<char> wanted(ps.size(), 0);
-  std::size_t missing = 0;
+  std::vector<std::uint32_t> wanted;
   auto want = [&](std::uint32_t p) {
-    if (!incoming_.slots.try_emplace(p).second) return;  // read already (or wanted twice)
-    wanted[p] = 1;
-    ++missing;
+    if (incoming_.read[p]) return;  // read already (or wanted twice)
+    incoming_.read[p] = true;
+    incoming_.fresh[p] = true;
+    wanted.push_back(p);
   };
   for (std::size_t k = seen_; k < cracks.size(); ++k) {
     const CrackRecord& c = cracks[k];
@@ -234,15 +249,22 @@ void AeMonitor::find_incoming(const Simulation& sim, CrackCatalogue::Reader& cra
   }
   for (const auto& [root, o] : open_)
     for (std::uint32_t p : o.source) want(p);
-  if (missing == 0) return;
+  if (wanted.empty()) return;
+  incoming_.grains += wanted.size();
+  std::vector<std::uint64_t> found;
   std::visit(
       [&](const auto& c) {
         const PairList& l = c.pairs;
         for (std::size_t k = 0; k < l.size(); ++k)
-          if (wanted[l.second[k]])
-            incoming_.slots[l.second[k]].push_back(static_cast<std::uint32_t>(k));
+          if (incoming_.fresh[l.second[k]]) found.push_back((std::uint64_t{l.second[k]} << 32) | k);
       },
       sim.contact_model());
+  for (std::uint32_t p : wanted) incoming_.fresh[p] = false;
+  std::sort(found.begin(), found.end());
+  const auto middle = static_cast<std::ptrdiff_t>(incoming_.entries.size());
+  incoming_.entries.insert(incoming_.entries.end(), found.begin(), found.end());
+  std::inplace_merge(incoming_.entries.begin(), incoming_.entries.begin() + middle,
+                     incoming_.entries.end());
 }
 
 void AeMonitor::add_source(const Simulation& sim, Open& o, std::uint32_t p) {
@@ -258,7 +280,7 @@ void AeMonitor::add_source(const Simulation& sim, Open& o, std::uint32_t p) {
     const auto at = std::lower_bound(o.refs.begin(), o.refs.end(), key,
                                      [](const Ref& r, std::uint64_t k) { return r.key < k; });
     if (at != o.refs.end() && at->key == key) return;
-    o.refs.insert(at, Ref{key, f, contact_point(ps, std::min(p, q), std::max(p, q)), 0});
+    o.refs.insert(at, Ref{key, f, contact_point(ps, std::min(p, q), std::max(p, q))});
   });
 }
 
@@ -269,7 +291,7 @@ void AeMonitor::evaluate(const Simulation& sim, Open& o, double strain) {
   for (const Watched& w : o.watched) k += kinetic(ps, w.particle);
   o.ev.ke_gain = std::max(o.ev.ke_gain, k - o.ke_baseline);
   if (!s_.moment_tensors) return;
-  ++stamp_;
+  visited_.assign(o.refs.size(), 0);
   const Vec3 xe = o.ev.centroid();
   std::array<double, 9> m{};
   auto add = [&](const Vec3& df, const Vec3& xc) {
@@ -287,7 +309,7 @@ void AeMonitor::evaluate(const Simulation& sim, Open& o, double strain) {
       if (is_zero(f) && !has_ref) return;
       const Vec3 xc = contact_point(ps, std::min(p, q), std::max(p, q));
       if (has_ref) {
-        at->seen = stamp_;
+        visited_[static_cast<std::size_t>(at - o.refs.begin())] = 1;
         at->contact_point = xc;
         if (!is_zero(f))
           add(f - at->force, xc);
@@ -297,13 +319,17 @@ void AeMonitor::evaluate(const Simulation& sim, Open& o, double strain) {
         add(f, xc);  // a contact created since: zero reference force
       }
     });
-  for (const Ref& r : o.refs) {
-    if (r.seen == stamp_) continue;
-    const auto p = static_cast<std::uint32_t>(r.key >> 32);
-    const auto q = static_cast<std::uint32_t>(r.key & 0xffffffffu);
-    if (!contains(o.source, p) || contains(o.source, q)) continue;
-    add(-r.force, r.contact_point);  // the contact is gone from the neighbour list
+  // Refs to a grain that has joined the source are internal for good (the source only grows):
+  // they are dropped here, the others kept in order.
+  std::size_t kept = 0;
+  for (std::size_t n = 0; n < o.refs.size(); ++n) {
+    const Ref& r = o.refs[n];
+    if (contains(o.source, static_cast<std::uint32_t>(r.key & 0xffffffffu))) continue;
+    if (!visited_[n]) add(-r.force, r.contact_point);  // the contact is gone from the list
+    o.refs[kept++] = r;
   }
+  o.refs.resize(kept);
+  if (o.refs.capacity() > 2 * kept + 64) o.refs.shrink_to_fit();
   // Scalar moment of the symmetrised tensor: sqrt(sum M_ij^2 / 2).
   double s2 = 0.0;
   for (int i = 0; i < 3; ++i)
@@ -433,7 +459,7 @@ void AeMonitor::after_step(const Simulation& sim, double strain, double deviator
     find_incoming(sim, cracks);
   }
   if (open_.empty()) {
-    incoming_.slots.clear();  // read again for the next event's grains
+    forget_incoming(sim.particles().size());  // read again for the next event's grains
     return;
   }
   if (s_.moment_interval > 1 && steps_ % s_.moment_interval != 0) return;
@@ -445,6 +471,8 @@ void AeMonitor::after_step(const Simulation& sim, double strain, double deviator
 
 void AeMonitor::finish() {
   if (clusterer_) clusterer_->close_all();
+  incoming_ = {};  // the caches of open events
+  grid_ = {};
 }
 
 std::vector<std::size_t> AeMonitor::crack_events() const {
@@ -495,7 +523,6 @@ void AeMonitor::transfer(Archive& a) {
   a.vector(done_root_);
   a.vector(context_);
   a.value(seen_);
-  a.value(stamp_);
   a.value(steps_);
 }
 

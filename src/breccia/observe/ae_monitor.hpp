@@ -106,9 +106,8 @@ class AeMonitor : public Recorder {
 
  private:
   struct Ref {
-    std::uint64_t key = 0;  // (p << 32) | q: force exerted by source particle p on q
-    Vec3 force, contact_point;
-    std::uint64_t seen = 0;
+    std::uint64_t key = 0;      // (p << 32) | q: force exerted by source particle p on q
+    Vec3 force, contact_point;  // the contact point as last seen
   };
   struct Watched {
     std::uint32_t particle = 0;
@@ -132,7 +131,6 @@ class AeMonitor : public Recorder {
   void close(std::size_t root);
   void build_grid(const Simulation& sim);
   void find_incoming(const Simulation& sim, CrackCatalogue::Reader& cracks);
-  const std::vector<std::uint32_t>& incoming(std::uint32_t p) const;
 
   AeSettings s_;
   std::function<double()> wave_speed_source_;
@@ -142,7 +140,8 @@ class AeMonitor : public Recorder {
   std::vector<AeEvent> done_;
   std::vector<std::size_t> done_root_;  // clusterer root of each finished event
   std::vector<CrackContext> context_;
-  std::uint64_t seen_ = 0, stamp_ = 0, steps_ = 0;
+  std::uint64_t seen_ = 0, steps_ = 0;
+  std::vector<char> visited_;  // evaluate(): the refs met in the current evaluation (scratch)
   // Particle grid (cell size r_s) for the monitored set, rebuilt in steps with new cracks: cells
   // (a, b, c) = floor(x / r_s) from `lo` on, with their particles in index order (CSR). A
   // million-grain sample cracks at nearly every step near its peak, so the grid is built by one
@@ -157,11 +156,18 @@ class AeMonitor : public Recorder {
   // The neighbour pairs where a grain the monitor reads is second, in ascending slot order (the
   // engine's list keeps no transposed index): read for the grains of new cracks and open events,
   // forgotten at a neighbour rebuild and once no event is open. Not saved: read again after a
-  // restore.
+  // restore. One sorted array of (grain << 32 | slot), 8 B a pair, and a bit a grain for the
+  // grains read: a large event reads tens of thousands of grains.
   struct Incoming {
     std::uint64_t rebuilds = ~std::uint64_t{0};  // the list they index
-    std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> slots;
+    std::vector<std::uint64_t> entries;          // (grain << 32) | slot, ascending
+    std::vector<bool> read;                      // per grain: its entries are in
+    std::vector<bool> fresh;                     // per grain: wanted by this step (scratch)
+    std::size_t grains = 0;                      // grains read
   } incoming_;
+  using IncomingSlots = std::pair<const std::uint64_t*, const std::uint64_t*>;
+  IncomingSlots incoming(std::uint32_t p) const;
+  void forget_incoming(std::size_t particles);
 };
 
 // The fracture-energy estimate of docs/analysis.md §2.3 for a bond crack: sigma^2 V / (2 E_b) in

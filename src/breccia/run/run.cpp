@@ -541,6 +541,9 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
     warnings.push_back(w);
   }
   json summary = run_summary(spec, ss, result, an, q, warnings, manifest);
+  // The loading is over and its checkpoint (if any) written: the contacts and pair forces make
+  // room for the analysis, which reads only grains, bonds and cracks.
+  sim.retire_interactions();
   // Failure analysis: events, indicators, stages, fragments, energy budget (docs/analysis.md
   // §2-§9). A signal stops it between its stages: the loading's tables are whole, the summary is
   // not written, and the run is marked interrupted.

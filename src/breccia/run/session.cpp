@@ -30,7 +30,7 @@ constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // stiffness per unit area (derived from the grains' radii), bond tags in 32 bits. A new law, lab
 // test or recorder needs no new number: laws and tests are found by name, and each recorder
 // checks its own label.
-constexpr std::uint32_t kCheckpointFormat = 21;
+constexpr std::uint32_t kCheckpointFormat = 22;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
