@@ -63,13 +63,14 @@ TEST(AeMonitor, TensileChainBreakIsAnOpeningDipole) {
     const CrackRecord c = sim.cracks().front();
     const double T = -c.Fn;  // tension at failure (Fn is compression-positive)
     ASSERT_GT(T, 0.0);
-    for (int k = 0; k < 200000 && (ae.has_open_events() || ae.events().empty()); ++k) {
+    for (int k = 0; k < 200000 && (ae.has_open_events() || ae.event_count() == 0); ++k) {
       sim.step();
       ae.after_step(sim, 0.0, 0.0);
     }
     ae.finish();
-    ASSERT_GE(ae.events().size(), 1u);
-    const AeEvent& e = ae.events().front();
+    const std::vector<AeEvent> events = ae.events();
+    ASSERT_GE(events.size(), 1u);
+    const AeEvent& e = events.front();
     // Lever arms of the outside contacts of the two source grains (the chain's neighbours that
     // exist and are not themselves source grains).
     const auto& p = sim.particles();

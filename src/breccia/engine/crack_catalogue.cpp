@@ -11,7 +11,7 @@
 #include "breccia/core/archive.hpp"
 #include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
-#include "breccia/core/text_file.hpp"
+#include "breccia/core/record_file.hpp"
 #include "breccia/core/type_list.hpp"
 #include "breccia/law/registry.hpp"
 
@@ -54,39 +54,7 @@ std::string_view registered_law(const std::string& name, const std::string& wher
   throw InputError(where, "crack law", name, "not a bond law of this build of Breccia");
 }
 
-std::string failure(const std::filesystem::path& file, const char* doing) {
-  return std::string("cannot ") + doing + " the crack catalogue: " + write_failure(errno) + " (" +
-         file.string() + ")";
-}
-
-void write_all(int fd, const void* data, std::size_t bytes, std::uint64_t offset,
-               const std::filesystem::path& file) {
-  const char* p = static_cast<const char*>(data);
-  while (bytes > 0) {
-    const ssize_t n = ::pwrite(fd, p, bytes, static_cast<off_t>(offset));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw InputError(file.string(), "", "", failure(file, "write"));
-    p += n;
-    bytes -= static_cast<std::size_t>(n);
-    offset += static_cast<std::uint64_t>(n);
-  }
-}
-
-void read_all(int fd, void* data, std::size_t bytes, std::uint64_t offset,
-              const std::filesystem::path& file) {
-  char* p = static_cast<char*>(data);
-  while (bytes > 0) {
-    const ssize_t n = ::pread(fd, p, bytes, static_cast<off_t>(offset));
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw InputError(file.string(), "", "", failure(file, "read"));
-    if (n == 0)
-      throw InputError(file.string(), "", "(shorter than its records)",
-                       "the crack catalogue was cut short: it no longer matches the run");
-    p += n;
-    bytes -= static_cast<std::size_t>(n);
-    offset += static_cast<std::uint64_t>(n);
-  }
-}
+constexpr std::string_view kWhat = "crack catalogue";
 
 // The file's header: magic, format, record size and the law names the codes stand for.
 std::string header_bytes(const std::vector<std::string_view>& laws) {
@@ -172,12 +140,12 @@ void CrackCatalogue::spill_to(const std::filesystem::path& file, std::size_t res
   if (spilled_ > 0 || fd_ >= 0)
     throw InternalError("the crack catalogue already has a file: " + file_.string());
   const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw InputError(file.string(), "", "", failure(file, "create"));
+  if (fd < 0) throw InputError(file.string(), "", "", io_failure(file, "create", kWhat));
   fd_ = fd;
   file_ = file;
   laws_ = registered_laws();
   const std::string h = header_bytes(laws_);
-  write_all(fd_, h.data(), h.size(), 0, file_);
+  write_all(fd_, h.data(), h.size(), 0, file_, kWhat);
   header_ = h.size();
   hash_ = 0;
   resident_ = std::max<std::size_t>(resident, 1);
@@ -227,7 +195,7 @@ void CrackCatalogue::spill_tail() {
          c.energy};
   }
   const std::size_t bytes = out.size() * sizeof(StoredCrack);
-  write_all(fd_, out.data(), bytes, header_ + spilled_ * sizeof(StoredCrack), file_);
+  write_all(fd_, out.data(), bytes, header_ + spilled_ * sizeof(StoredCrack), file_, kWhat);
   hash_ = fnv1a64({reinterpret_cast<const char*>(out.data()), bytes},
                   spilled_ == 0 ? kHashSeed : hash_);
   spilled_ += tail_.size();
@@ -240,7 +208,7 @@ void CrackCatalogue::read_spilled(std::size_t first, std::size_t count,
     throw InternalError("the crack catalogue's file is not attached (reattach after restore)");
   std::vector<StoredCrack> in(count);
   read_all(fd_, in.data(), count * sizeof(StoredCrack), header_ + first * sizeof(StoredCrack),
-           file_);
+           file_, kWhat);
   out.resize(count);
   for (std::size_t k = 0; k < count; ++k) {
     const StoredCrack& s = in[k];
@@ -274,7 +242,7 @@ void CrackCatalogue::read_spilled(std::size_t first, std::size_t count,
 
 void CrackCatalogue::sync() const {
   if (fd_ >= 0 && ::fdatasync(fd_) != 0)
-    throw InputError(file_.string(), "", "", failure(file_, "flush"));
+    throw InputError(file_.string(), "", "", io_failure(file_, "flush", kWhat));
 }
 
 // Reads the header of the open file: checks its magic, format and record size, and takes its
@@ -287,8 +255,8 @@ void CrackCatalogue::read_header() {
   char magic[sizeof(kMagic)] = {};
   std::uint32_t fixed[3] = {};
   try {
-    read_all(fd_, magic, sizeof magic, 0, file_);
-    read_all(fd_, fixed, sizeof fixed, sizeof magic, file_);
+    read_all(fd_, magic, sizeof magic, 0, file_, kWhat);
+    read_all(fd_, fixed, sizeof fixed, sizeof magic, file_, kWhat);
   } catch (const InputError&) {
     throw mismatch("(too short)");
   }
@@ -299,10 +267,10 @@ void CrackCatalogue::read_header() {
   laws_.clear();
   for (std::uint32_t k = 0; k < fixed[2]; ++k) {
     std::uint32_t length = 0;
-    read_all(fd_, &length, sizeof length, at, file_);
+    read_all(fd_, &length, sizeof length, at, file_, kWhat);
     if (length > 64) throw mismatch("law name of " + std::to_string(length) + " bytes");
     std::string name(length, '\0');
-    read_all(fd_, name.data(), length, at + sizeof length, file_);
+    read_all(fd_, name.data(), length, at + sizeof length, file_, kWhat);
     at += sizeof length + length;
     laws_.push_back(registered_law(name, file_.string()));
   }
@@ -316,7 +284,7 @@ std::uint64_t CrackCatalogue::hash_of_records(std::size_t count) const {
   for (std::size_t k = 0; k < count; k += chunk.size()) {
     chunk.resize(std::min(count - k, kReadChunk));
     const std::size_t bytes = chunk.size() * sizeof(StoredCrack);
-    read_all(fd_, chunk.data(), bytes, header_ + k * sizeof(StoredCrack), file_);
+    read_all(fd_, chunk.data(), bytes, header_ + k * sizeof(StoredCrack), file_, kWhat);
     h = fnv1a64({reinterpret_cast<const char*>(chunk.data()), bytes}, h);
   }
   return h;
@@ -341,7 +309,7 @@ void CrackCatalogue::reattach(const std::filesystem::path& file, std::size_t res
       throw InputError(file.string(), "", "(records differ)",
                        "the crack catalogue does not hold the records the checkpoint counted");
     if (::ftruncate(fd_, static_cast<off_t>(header_ + spilled_ * sizeof(StoredCrack))) != 0)
-      throw InputError(file.string(), "", "", failure(file, "truncate"));
+      throw InputError(file.string(), "", "", io_failure(file, "truncate", kWhat));
   } catch (...) {
     close();
     throw;

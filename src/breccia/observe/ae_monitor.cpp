@@ -66,6 +66,12 @@ void for_pairs(const Simulation& sim,
       sim.contact_model());
 }
 
+// Records of each log kept in memory: the run's resident crack records, at most
+// kAeResidentRecords.
+std::size_t resident_records(const ExperimentSpec& spec) {
+  return std::min(static_cast<std::size_t>(spec.resident_cracks), kAeResidentRecords);
+}
+
 bool is_zero(const Vec3& v) {
   return v.x == 0.0 && v.y == 0.0 && v.z == 0.0;
 }
@@ -104,13 +110,25 @@ std::unique_ptr<Recorder> AeMonitor::create(const RecorderSetup& setup) {
       spec.ae_clustering == "grain" ? analysis::Linkage::Grain : analysis::Linkage::SourceRadius;
   auto ae = std::make_unique<AeMonitor>(s);
   if (spec.ae_shear_wave_speed > 0.0) ae->configure(spec.ae_shear_wave_speed);
+  if (!setup.folder.empty()) ae->keep_logs_in(setup.folder, resident_records(spec));
   return ae;
 }
 
-std::unique_ptr<Recorder> AeMonitor::restore(const RecorderSetup&, ArchiveReader& a) {
+std::unique_ptr<Recorder> AeMonitor::restore(const RecorderSetup& setup, ArchiveReader& a) {
   auto ae = std::make_unique<AeMonitor>();
   ae->load(a);
+  if (!setup.folder.empty()) ae->reattach_logs(setup.folder, resident_records(setup.spec));
   return ae;
+}
+
+void AeMonitor::keep_logs_in(const std::filesystem::path& folder, std::size_t resident) {
+  done_.spill_to(folder / kAeEventFile, resident);
+  context_.spill_to(folder / kAeContextFile, resident);
+}
+
+void AeMonitor::reattach_logs(const std::filesystem::path& folder, std::size_t resident) {
+  done_.reattach(folder / kAeEventFile, resident);
+  context_.reattach(folder / kAeContextFile, resident);
 }
 
 void AeMonitor::after_step(const Simulation& sim, const Protocol& test) {
@@ -519,9 +537,9 @@ void AeMonitor::transfer(Archive& a) {
     a.value(o.ke_baseline);
     a.value(o.created);
   }
-  a.vector(done_);
+  done_.transfer(a);
   a.vector(done_root_);
-  a.vector(context_);
+  context_.transfer(a);
   a.value(seen_);
   a.value(steps_);
 }

@@ -13,6 +13,7 @@
 // source. Likewise the kinetic-energy baseline of a monitored particle is read after that step.
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <optional>
@@ -20,10 +21,17 @@
 #include <vector>
 
 #include "breccia/analysis/ae_clustering.hpp"
+#include "breccia/core/record_file.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/observe/recorder.hpp"
 
 namespace breccia {
+
+// The monitor's logs in a run folder (keep_logs_in), beside the checkpoint.
+inline constexpr const char* kAeEventFile = "checkpoint-ae-events.bin";
+inline constexpr const char* kAeContextFile = "checkpoint-ae-context.bin";
+// Records of each log held in memory at most (1 MB of events) before they go to the file.
+inline constexpr std::size_t kAeResidentRecords = 4096;
 
 struct AeSettings {
   double source_radius = 0.0;         // r_s, m (0: 3 x the largest particle diameter)
@@ -80,8 +88,17 @@ class AeMonitor : public Recorder {
   // Closes the open events (end of the test).
   void finish();
 
-  const std::vector<AeEvent>& events() const noexcept { return done_; }  // in closing order
-  const std::vector<CrackContext>& crack_context() const noexcept { return context_; }
+  // The finished events in closing order and the context of each crack, read back whole (from
+  // the run folder's files where the monitor keeps them there).
+  std::vector<AeEvent> events() const { return done_.all(); }
+  std::size_t event_count() const noexcept { return done_.size(); }
+  std::vector<CrackContext> crack_context() const { return context_.all(); }
+  // From now on the finished events and the crack contexts beyond the newest `resident` go to
+  // files in `folder` (a run's), as the crack catalogue's older records do: a million-grain
+  // test closes about 0.1 event and makes 0.4 crack a grain. reattach_logs() reopens them after
+  // a restore.
+  void keep_logs_in(const std::filesystem::path& folder, std::size_t resident);
+  void reattach_logs(const std::filesystem::path& folder, std::size_t resident);
   // Event (index into events()) of each crack, after finish().
   std::vector<std::size_t> crack_events() const;
   const AeSettings& settings() const noexcept { return s_; }
@@ -137,9 +154,9 @@ class AeMonitor : public Recorder {
   double duration_ = 0.0;
   std::optional<analysis::EventClusterer> clusterer_;
   std::map<std::size_t, Open> open_;  // by clusterer root
-  std::vector<AeEvent> done_;
+  RecordLog<AeEvent> done_{"AE event log"};
   std::vector<std::size_t> done_root_;  // clusterer root of each finished event
-  std::vector<CrackContext> context_;
+  RecordLog<CrackContext> context_{"AE crack context log"};
   std::uint64_t seen_ = 0, steps_ = 0;
   std::vector<char> visited_;  // evaluate(): the refs met in the current evaluation (scratch)
   // Particle grid (cell size r_s) for the monitored set, rebuilt in steps with new cracks: cells

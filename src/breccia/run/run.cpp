@@ -494,13 +494,16 @@ void list_run_files(const ExperimentSpec& spec, const fs::path& folder, const Se
   for (const char* f : {"events.csv", "indicators.csv", "b_value_windows.csv", "d2_windows.csv",
                         "fragments.csv", "summary.json"})
     manifest["files"].push_back(f);
+  // The records that outgrew memory stay beside the checkpoint they belong to.
+  const char* const record_files[] = {kCrackCatalogueFile, kAeEventFile, kAeContextFile};
   if (end.status == "complete") {
     fs::remove(folder / kCheckpointFile);
-    fs::remove(folder / kCrackCatalogueFile);
+    for (const char* f : record_files) fs::remove(folder / f);
     manifest.erase("checkpoint");
   } else {
     manifest["files"].push_back(kCheckpointFile);
-    if (fs::exists(folder / kCrackCatalogueFile)) manifest["files"].push_back(kCrackCatalogueFile);
+    for (const char* f : record_files)
+      if (fs::exists(folder / f)) manifest["files"].push_back(f);
   }
   if (!spec.plot) return;
   make_plot(folder, log);

@@ -485,7 +485,9 @@ std::vector<SpecField> output_fields() {
       {"output", "resident_cracks", "", at<&S::resident_cracks>,
        "crack records a run holds in memory (240 B each); older ones go to the run folder's "
        "checkpoint-cracks.bin, read back in order by the analysis, snapshots and checkpoints, "
-       "and removed when the run completes. Results do not depend on it",
+       "and removed when the run completes. The AE monitor's event catalogue and crack "
+       "contexts keep as many, at most 4096, before theirs go to checkpoint-ae-events.bin and "
+       "checkpoint-ae-context.bin. Results do not depend on it",
        1, 1e12},
   };
 }
