@@ -22,8 +22,9 @@ namespace breccia {
 
 class CrackCatalogue {
  public:
-  // Records kept in memory before they go to the file: 16 MB of records.
-  static constexpr std::size_t kResidentRecords = std::size_t{1} << 16;
+  // Records kept in memory before they go to the file: 4 MB of records, read and written a
+  // chunk at a time (a run reads its catalogue in order).
+  static constexpr std::size_t kResidentRecords = std::size_t{1} << 14;
 
   CrackCatalogue() = default;
   ~CrackCatalogue();

@@ -86,7 +86,7 @@ struct ExperimentSpec {
   bool plot = true;                         // stress-strain PNG at the end (needs matplotlib)
   bool progress = true;
   double checkpoint_interval = 600.0;    // wall-clock s between checkpoints; 0 = on interrupt only
-  std::int64_t resident_cracks = 65536;  // crack records held in memory; older ones on disk
+  std::int64_t resident_cracks = 16384;  // crack records held in memory; older ones on disk
   // [ae] acoustic emission and indicator series (docs/analysis.md §3-§6)
   std::string ae_clustering = "grain";  // grain | source_radius (docs/analysis.md §4.1)
   double ae_source_radius = 0.0;        // m; 0 = 3 x the largest particle diameter
