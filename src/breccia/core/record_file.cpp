@@ -19,6 +19,7 @@ constexpr char kMagic[] = "breccia record log";
 constexpr std::uint32_t kFileFormat = 1;
 constexpr std::uint64_t kHashSeed = 1469598103934665603ull;  // FNV-1a of no bytes
 constexpr std::size_t kHashChunk = std::size_t{1} << 20;     // bytes read at a time
+constexpr std::uint64_t kMaxExtra = std::uint64_t{1} << 20;  // an owner's header part, at most
 
 }  // namespace
 
@@ -78,6 +79,7 @@ RecordFile& RecordFile::operator=(RecordFile&& o) noexcept {
   count_ = std::exchange(o.count_, 0);
   hash_ = std::exchange(o.hash_, kHashSeed);
   header_ = std::exchange(o.header_, 0);
+  extra_ = std::move(o.extra_);
   return *this;
 }
 
@@ -86,8 +88,8 @@ void RecordFile::detach() noexcept {
   fd_ = -1;
 }
 
-// Magic, format, record size and the log's name.
-std::string RecordFile::header() const {
+// Magic, format, record size and the log's name; then the size of the owner's part and that part.
+std::string RecordFile::fixed_header() const {
   std::string h(kMagic, sizeof(kMagic));
   auto put = [&](std::uint64_t v) { h.append(reinterpret_cast<const char*>(&v), sizeof v); };
   put(kFileFormat);
@@ -97,14 +99,18 @@ std::string RecordFile::header() const {
   return h;
 }
 
-void RecordFile::create(const std::filesystem::path& file) {
+void RecordFile::create(const std::filesystem::path& file, std::string_view extra) {
   if (fd_ >= 0 || count_ > 0)
     throw InternalError("the " + what_ + " already has a file: " + file_.string());
   const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw InputError(file.string(), "", "", io_failure(file, "create", what_));
   fd_ = fd;
   file_ = file;
-  const std::string h = header();
+  extra_ = extra;
+  std::string h = fixed_header();
+  const std::uint64_t extra_bytes = extra_.size();
+  h.append(reinterpret_cast<const char*>(&extra_bytes), sizeof extra_bytes);
+  h.append(extra_);
   write_all(fd_, h.data(), h.size(), 0, file_, what_);
   header_ = h.size();
   hash_ = kHashSeed;
@@ -128,18 +134,23 @@ void RecordFile::sync() const {
     throw InputError(file_.string(), "", "", io_failure(file_, "flush", what_));
 }
 
-void RecordFile::check_header() {
-  const std::string want = header();
+// Checks the fixed part of the open file's header and reads the owner's part.
+void RecordFile::read_header() {
+  const std::string want = fixed_header();
   std::string got(want.size(), '\0');
+  std::uint64_t extra_bytes = 0;
   try {
     read_all(fd_, got.data(), got.size(), 0, file_, what_);
+    read_all(fd_, &extra_bytes, sizeof extra_bytes, want.size(), file_, what_);
   } catch (const InputError&) {
     got.clear();
   }
-  if (got != want)
+  if (got != want || extra_bytes > kMaxExtra)
     throw InputError(file_.string(), "header", got.empty() ? "(too short)" : "(differs)",
                      "not a " + what_ + " this build of Breccia wrote");
-  header_ = want.size();
+  extra_.assign(static_cast<std::size_t>(extra_bytes), '\0');
+  read_all(fd_, extra_.data(), extra_.size(), want.size() + sizeof extra_bytes, file_, what_);
+  header_ = want.size() + sizeof extra_bytes + extra_bytes;
 }
 
 std::uint64_t RecordFile::hash_of_records(std::size_t n) const {
@@ -154,11 +165,11 @@ std::uint64_t RecordFile::hash_of_records(std::size_t n) const {
   return h;
 }
 
-void RecordFile::reattach(const std::filesystem::path& file) {
+void RecordFile::reattach(const std::filesystem::path& file, std::string_view extra) {
   if (fd_ >= 0) throw InternalError("the " + what_ + " already has a file: " + file_.string());
   const int fd = ::open(file.c_str(), O_RDWR | O_CLOEXEC);
   if (fd < 0) {
-    if (count_ == 0) return create(file);  // nothing to find in it
+    if (count_ == 0) return create(file, extra);  // nothing to find in it
     throw InputError(file.string(), "", "(missing)",
                      "the checkpoint's older records of the " + what_ +
                          " are in this file: " + std::string(std::strerror(errno)));
@@ -166,7 +177,7 @@ void RecordFile::reattach(const std::filesystem::path& file) {
   fd_ = fd;
   file_ = file;
   try {
-    check_header();
+    read_header();
     if (count_ > 0 && hash_of_records(count_) != hash_)
       throw InputError(file.string(), "", "(records differ)",
                        "the " + what_ + " does not hold the records the checkpoint counted");

@@ -1,8 +1,9 @@
 #pragma once
 // Records on disk for logs that outgrow memory: an append-only file of fixed-size records after a
-// header (magic, format, record size, the log's name), with the FNV-1a hash of the records as
-// written. A checkpoint keeps the count and hash of the records in the file; reattach() checks
-// that the file still holds them and drops any written after the checkpoint.
+// header (magic, format, record size, the log's name and what its owner adds: the crack
+// catalogue's table of law names), with the FNV-1a hash of the records as written. A checkpoint
+// keeps the count and hash of the records in the file; reattach() checks that the file still holds
+// them and drops any written after the checkpoint.
 //
 // RecordLog<T> keeps a log of plain records of one type in memory, or, once given a file, only
 // its newest records, the older ones in the file (the acoustic-emission monitor's event catalogue
@@ -38,8 +39,11 @@ class RecordFile {
 
   bool attached() const noexcept { return fd_ >= 0; }
   std::size_t count() const noexcept { return count_; }  // records in the file
-  // Creates (or empties) `file` and writes the header.
-  void create(const std::filesystem::path& file);
+  const std::filesystem::path& path() const noexcept { return file_; }
+  // Creates (or empties) `file` and writes the header, with `extra` (the owner's) at its end.
+  void create(const std::filesystem::path& file, std::string_view extra = {});
+  // The owner's part of the header, as written or as read by reattach().
+  const std::string& extra() const noexcept { return extra_; }
   void append(const void* records, std::size_t n);
   void read(std::size_t first, std::size_t n, void* out) const;
   void sync() const;  // to the disk: a checkpoint refers to the records written
@@ -52,13 +56,14 @@ class RecordFile {
     if constexpr (Archive::reading) detach();
   }
   // Opens the file a checkpoint counted records in: checks its header and the hash of those
-  // records, and drops any written after them. With none counted, a missing file is created.
-  void reattach(const std::filesystem::path& file);
+  // records, and drops any written after them. With none counted, a missing file is created
+  // with `extra` in its header.
+  void reattach(const std::filesystem::path& file, std::string_view extra = {});
   void detach() noexcept;
 
  private:
-  std::string header() const;
-  void check_header();
+  std::string fixed_header() const;
+  void read_header();
   std::uint64_t hash_of_records(std::size_t n) const;
 
   std::string what_;
@@ -68,6 +73,7 @@ class RecordFile {
   std::uint64_t count_ = 0;
   std::uint64_t hash_ = 0;    // FNV-1a of the records in the file
   std::uint64_t header_ = 0;  // bytes before the first record
+  std::string extra_;
 };
 
 template <class T>

@@ -1,17 +1,11 @@
 #include "breccia/engine/crack_catalogue.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstring>
 #include <string>
 #include <utility>
 
 #include "breccia/core/archive.hpp"
-#include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
-#include "breccia/core/record_file.hpp"
 #include "breccia/core/type_list.hpp"
 #include "breccia/law/registry.hpp"
 
@@ -31,12 +25,9 @@ struct StoredCrack {
   double bond_radius, Fn, Fs, Mt, Mb, sigma, tau, ratio_t, ratio_s;
   BondEnergy energy;
 };
-static_assert(sizeof(StoredCrack) == 224 && std::is_trivially_copyable_v<StoredCrack>);
+static_assert(sizeof(StoredCrack) == CrackCatalogue::kStoredBytes &&
+              std::is_trivially_copyable_v<StoredCrack>);
 static_assert(sizeof(CrackRecord) == 240, "CrackRecord changed: update StoredCrack");
-
-constexpr char kMagic[] = "breccia crack catalogue";
-constexpr std::uint32_t kFileFormat = 1;
-constexpr std::uint64_t kHashSeed = 1469598103934665603ull;  // FNV-1a of no bytes
 
 // The bond and joint laws of this build, in registry order: the codes of a new file.
 std::vector<std::string_view> registered_laws() {
@@ -54,14 +45,11 @@ std::string_view registered_law(const std::string& name, const std::string& wher
   throw InputError(where, "crack law", name, "not a bond law of this build of Breccia");
 }
 
-constexpr std::string_view kWhat = "crack catalogue";
-
-// The file's header: magic, format, record size and the law names the codes stand for.
-std::string header_bytes(const std::vector<std::string_view>& laws) {
-  std::string h(kMagic, sizeof(kMagic));
+// The law names the codes of a file stand for, as its header holds them: a count, then each
+// name with its length.
+std::string law_table(const std::vector<std::string_view>& laws) {
+  std::string h;
   auto put = [&](std::uint32_t v) { h.append(reinterpret_cast<const char*>(&v), sizeof v); };
-  put(kFileFormat);
-  put(sizeof(StoredCrack));
   put(static_cast<std::uint32_t>(laws.size()));
   for (std::string_view name : laws) {
     put(static_cast<std::uint32_t>(name.size()));
@@ -72,33 +60,6 @@ std::string header_bytes(const std::vector<std::string_view>& laws) {
 
 }  // namespace
 
-CrackCatalogue::~CrackCatalogue() {
-  close();
-}
-
-void CrackCatalogue::close() noexcept {
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = -1;
-}
-
-CrackCatalogue::CrackCatalogue(CrackCatalogue&& o) noexcept {
-  *this = std::move(o);
-}
-
-CrackCatalogue& CrackCatalogue::operator=(CrackCatalogue&& o) noexcept {
-  if (this == &o) return *this;
-  close();
-  tail_ = std::move(o.tail_);
-  spilled_ = std::exchange(o.spilled_, 0);
-  resident_ = o.resident_;
-  fd_ = std::exchange(o.fd_, -1);
-  file_ = std::move(o.file_);
-  hash_ = std::exchange(o.hash_, 0);
-  laws_ = std::move(o.laws_);
-  header_ = std::exchange(o.header_, 0);
-  return *this;
-}
-
 CrackCatalogue::CrackCatalogue(const CrackCatalogue& o) {
   *this = o;
 }
@@ -108,46 +69,33 @@ CrackCatalogue& CrackCatalogue::operator=(const CrackCatalogue& o) {
   std::vector<CrackRecord> all;
   all.reserve(o.size());
   o.visit(0, [&](const CrackRecord& c) { all.push_back(c); });
-  close();
   tail_ = std::move(all);
-  spilled_ = 0;
   resident_ = 0;
-  file_.clear();
-  hash_ = 0;
+  file_ = RecordFile{"crack catalogue", kStoredBytes};
   laws_.clear();
-  header_ = 0;
   return *this;
 }
 
 void CrackCatalogue::push_back(const CrackRecord& r) {
-  if (fd_ >= 0 && tail_.size() >= resident_) spill_tail();
+  if (spilling() && tail_.size() >= resident_) spill_tail();
   tail_.push_back(r);
 }
 
 void CrackCatalogue::reserve_more(std::size_t n) {
   const std::size_t want = tail_.size() + n;
-  tail_.reserve(fd_ >= 0 ? std::min(want, resident_) : want);
+  tail_.reserve(spilling() ? std::min(want, resident_) : want);
 }
 
 CrackRecord CrackCatalogue::operator[](std::size_t k) const {
-  if (k >= spilled_) return tail_[k - spilled_];
+  if (k >= spilled()) return tail_[k - spilled()];
   std::vector<CrackRecord> one;
   read_spilled(k, 1, one);
   return one.front();
 }
 
 void CrackCatalogue::spill_to(const std::filesystem::path& file, std::size_t resident) {
-  if (spilled_ > 0 || fd_ >= 0)
-    throw InternalError("the crack catalogue already has a file: " + file_.string());
-  const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw InputError(file.string(), "", "", io_failure(file, "create", kWhat));
-  fd_ = fd;
-  file_ = file;
   laws_ = registered_laws();
-  const std::string h = header_bytes(laws_);
-  write_all(fd_, h.data(), h.size(), 0, file_, kWhat);
-  header_ = h.size();
-  hash_ = 0;
+  file_.create(file, law_table(laws_));
   resident_ = std::max<std::size_t>(resident, 1);
   keep_room_for_resident();
   if (tail_.size() >= resident_) spill_tail();
@@ -169,7 +117,7 @@ void CrackCatalogue::spill_tail() {
     std::uint32_t law = 0;
     while (law < laws_.size() && laws_[law] != c.law) ++law;
     if (law == laws_.size())
-      throw InputError(file_.string(), "law", std::string(c.law),
+      throw InputError(file_.path().string(), "law", std::string(c.law),
                        "not a law of the crack catalogue's file (written by another build)");
     StoredCrack& s = out[k];
     s = {c.step,
@@ -194,26 +142,19 @@ void CrackCatalogue::spill_tail() {
          c.ratio_s,
          c.energy};
   }
-  const std::size_t bytes = out.size() * sizeof(StoredCrack);
-  write_all(fd_, out.data(), bytes, header_ + spilled_ * sizeof(StoredCrack), file_, kWhat);
-  hash_ = fnv1a64({reinterpret_cast<const char*>(out.data()), bytes},
-                  spilled_ == 0 ? kHashSeed : hash_);
-  spilled_ += tail_.size();
+  file_.append(out.data(), out.size());
   tail_.clear();
 }
 
 void CrackCatalogue::read_spilled(std::size_t first, std::size_t count,
                                   std::vector<CrackRecord>& out) const {
-  if (fd_ < 0)
-    throw InternalError("the crack catalogue's file is not attached (reattach after restore)");
   std::vector<StoredCrack> in(count);
-  read_all(fd_, in.data(), count * sizeof(StoredCrack), header_ + first * sizeof(StoredCrack),
-           file_, kWhat);
+  file_.read(first, count, in.data());
   out.resize(count);
   for (std::size_t k = 0; k < count; ++k) {
     const StoredCrack& s = in[k];
     if (s.law >= laws_.size() || s.mode > 1)
-      throw InputError(file_.string(), "record", std::to_string(first + k),
+      throw InputError(file_.path().string(), "record", std::to_string(first + k),
                        "a damaged record: the crack catalogue no longer matches the run");
     CrackRecord& c = out[k];
     c.step = s.step;
@@ -240,89 +181,44 @@ void CrackCatalogue::read_spilled(std::size_t first, std::size_t count,
   }
 }
 
-void CrackCatalogue::sync() const {
-  if (fd_ >= 0 && ::fdatasync(fd_) != 0)
-    throw InputError(file_.string(), "", "", io_failure(file_, "flush", kWhat));
-}
-
-// Reads the header of the open file: checks its magic, format and record size, and takes its
-// table of law names (each a law of this build) as the codes' meanings.
-void CrackCatalogue::read_header() {
+// The file's table of law names (each a law of this build): the codes' meanings.
+void CrackCatalogue::read_law_table() {
+  const std::string& t = file_.extra();
   const auto mismatch = [&](const std::string& what) {
-    return InputError(file_.string(), "header", what,
+    return InputError(file_.path().string(), "law table", what,
                       "not a crack catalogue this build of Breccia wrote");
   };
-  char magic[sizeof(kMagic)] = {};
-  std::uint32_t fixed[3] = {};
-  try {
-    read_all(fd_, magic, sizeof magic, 0, file_, kWhat);
-    read_all(fd_, fixed, sizeof fixed, sizeof magic, file_, kWhat);
-  } catch (const InputError&) {
-    throw mismatch("(too short)");
-  }
-  if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw mismatch("(wrong magic)");
-  if (fixed[0] != kFileFormat || fixed[1] != sizeof(StoredCrack) || fixed[2] > 64)
-    throw mismatch("format " + std::to_string(fixed[0]));
-  std::uint64_t at = sizeof magic + sizeof fixed;
+  std::size_t at = 0;
+  auto get = [&]() {
+    std::uint32_t v = 0;
+    if (t.size() < at + sizeof v) throw mismatch("(too short)");
+    std::memcpy(&v, t.data() + at, sizeof v);
+    at += sizeof v;
+    return v;
+  };
+  const std::uint32_t n = get();
+  if (n > 64) throw mismatch(std::to_string(n) + " laws");
   laws_.clear();
-  for (std::uint32_t k = 0; k < fixed[2]; ++k) {
-    std::uint32_t length = 0;
-    read_all(fd_, &length, sizeof length, at, file_, kWhat);
-    if (length > 64) throw mismatch("law name of " + std::to_string(length) + " bytes");
-    std::string name(length, '\0');
-    read_all(fd_, name.data(), length, at + sizeof length, file_, kWhat);
-    at += sizeof length + length;
-    laws_.push_back(registered_law(name, file_.string()));
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const std::uint32_t length = get();
+    if (length > 64 || t.size() < at + length)
+      throw mismatch("law name of " + std::to_string(length) + " bytes");
+    laws_.push_back(registered_law(t.substr(at, length), file_.path().string()));
+    at += length;
   }
-  header_ = at;
-}
-
-// FNV-1a of the first `count` records in the file.
-std::uint64_t CrackCatalogue::hash_of_records(std::size_t count) const {
-  std::uint64_t h = kHashSeed;
-  std::vector<StoredCrack> chunk;
-  for (std::size_t k = 0; k < count; k += chunk.size()) {
-    chunk.resize(std::min(count - k, kReadChunk));
-    const std::size_t bytes = chunk.size() * sizeof(StoredCrack);
-    read_all(fd_, chunk.data(), bytes, header_ + k * sizeof(StoredCrack), file_, kWhat);
-    h = fnv1a64({reinterpret_cast<const char*>(chunk.data()), bytes}, h);
-  }
-  return h;
 }
 
 void CrackCatalogue::reattach(const std::filesystem::path& file, std::size_t resident) {
-  if (fd_ >= 0) throw InternalError("the crack catalogue already has a file: " + file_.string());
-  const int fd = ::open(file.c_str(), O_RDWR | O_CLOEXEC);
-  if (fd < 0) {
-    if (spilled_ == 0) return spill_to(file, resident);  // nothing to find in it
-    throw InputError(file.string(), "", "(missing)",
-                     "the checkpoint's older crack records are in this file: " +
-                         std::string(std::strerror(errno)));
-  }
-  fd_ = fd;
-  file_ = file;
+  file_.reattach(file, law_table(registered_laws()));
+  read_law_table();
   resident_ = std::max<std::size_t>(resident, 1);
-  try {
-    read_header();
-    // The records the checkpoint counted, by their hash; any later ones are dropped.
-    if (spilled_ > 0 && hash_of_records(spilled_) != hash_)
-      throw InputError(file.string(), "", "(records differ)",
-                       "the crack catalogue does not hold the records the checkpoint counted");
-    if (::ftruncate(fd_, static_cast<off_t>(header_ + spilled_ * sizeof(StoredCrack))) != 0)
-      throw InputError(file.string(), "", "", io_failure(file, "truncate", kWhat));
-  } catch (...) {
-    close();
-    throw;
-  }
   keep_room_for_resident();
   tail_.reserve(resident_);
 }
 
 template <class Archive>
 void CrackCatalogue::transfer(Archive& a) {
-  if constexpr (!Archive::reading) sync();
-  a.value(spilled_);
-  a.value(hash_);
+  file_.transfer(a);
   a.sized(tail_, sizeof(CrackRecord));
   for (CrackRecord& c : tail_) {
     std::string name(c.law);
@@ -335,11 +231,7 @@ void CrackCatalogue::transfer(Archive& a) {
       c.law = registered_law(name, a.where());
     }
   }
-  if constexpr (Archive::reading) {
-    close();
-    file_.clear();
-    laws_.clear();
-  }
+  if constexpr (Archive::reading) laws_.clear();
 }
 
 template void CrackCatalogue::transfer(ArchiveWriter&);
@@ -347,24 +239,24 @@ template void CrackCatalogue::transfer(ArchiveReader&);
 
 CrackCatalogue::const_iterator::const_iterator(const CrackCatalogue* c, std::size_t k)
     : c_(c), k_(k) {
-  if (k_ < c_->spilled_) {
+  if (k_ < c_->spilled()) {
     chunk_ = std::make_shared<std::vector<CrackRecord>>();
     chunk_begin_ = k_;
-    c_->read_spilled(k_, std::min(c_->spilled_ - k_, kReadChunk), *chunk_);
+    c_->read_spilled(k_, std::min(c_->spilled() - k_, kReadChunk), *chunk_);
   }
 }
 
 const CrackRecord& CrackCatalogue::const_iterator::operator*() const {
-  if (k_ >= c_->spilled_) return c_->tail_[k_ - c_->spilled_];
+  if (k_ >= c_->spilled()) return c_->tail_[k_ - c_->spilled()];
   return (*chunk_)[k_ - chunk_begin_];
 }
 
 CrackCatalogue::const_iterator& CrackCatalogue::const_iterator::operator++() {
   ++k_;
-  if (k_ < c_->spilled_ && k_ >= chunk_begin_ + chunk_->size()) {
+  if (k_ < c_->spilled() && k_ >= chunk_begin_ + chunk_->size()) {
     chunk_ = std::make_shared<std::vector<CrackRecord>>();  // the old chunk stays with copies
     chunk_begin_ = k_;
-    c_->read_spilled(k_, std::min(c_->spilled_ - k_, kReadChunk), *chunk_);
+    c_->read_spilled(k_, std::min(c_->spilled() - k_, kReadChunk), *chunk_);
   }
   return *this;
 }

@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "breccia/core/record_file.hpp"
 #include "breccia/engine/events.hpp"
 
 namespace breccia {
@@ -25,17 +26,17 @@ class CrackCatalogue {
   // Records kept in memory before they go to the file: 4 MB of records, read and written a
   // chunk at a time (a run reads its catalogue in order).
   static constexpr std::size_t kResidentRecords = std::size_t{1} << 14;
+  static constexpr std::size_t kStoredBytes = 224;  // a record in the file (no padding)
 
   CrackCatalogue() = default;
-  ~CrackCatalogue();
-  CrackCatalogue(CrackCatalogue&& other) noexcept;
-  CrackCatalogue& operator=(CrackCatalogue&& other) noexcept;
+  CrackCatalogue(CrackCatalogue&& other) noexcept = default;
+  CrackCatalogue& operator=(CrackCatalogue&& other) noexcept = default;
   // A copy holds every record in memory and no file (a second writer of one file would corrupt
   // it).
   CrackCatalogue(const CrackCatalogue& other);
   CrackCatalogue& operator=(const CrackCatalogue& other);
 
-  std::size_t size() const noexcept { return spilled_ + tail_.size(); }
+  std::size_t size() const noexcept { return spilled() + tail_.size(); }
   bool empty() const noexcept { return size() == 0; }
   void push_back(const CrackRecord& r);
   // Room for `n` more records in memory (capped at the resident records while spilling), taken
@@ -51,11 +52,12 @@ class CrackCatalogue {
   template <class F>
   void visit(std::size_t from, F&& f) const {
     std::vector<CrackRecord> chunk;
-    for (std::size_t k = from; k < spilled_; k += chunk.size()) {
-      read_spilled(k, std::min(spilled_ - k, kReadChunk), chunk);
+    const std::size_t spilled = file_.count();
+    for (std::size_t k = from; k < spilled; k += chunk.size()) {
+      read_spilled(k, std::min(spilled - k, kReadChunk), chunk);
       for (const CrackRecord& c : chunk) f(c);
     }
-    for (std::size_t k = from > spilled_ ? from - spilled_ : 0; k < tail_.size(); ++k) f(tail_[k]);
+    for (std::size_t k = from > spilled ? from - spilled : 0; k < tail_.size(); ++k) f(tail_[k]);
   }
 
   // Indexed reads that are fast while the index ascends (the file read a chunk at a time);
@@ -65,10 +67,11 @@ class CrackCatalogue {
     explicit Reader(const CrackCatalogue& c) : c_(c) {}
     std::size_t size() const noexcept { return c_.size(); }
     const CrackRecord& operator[](std::size_t k) {
-      if (k >= c_.spilled_) return c_.tail_[k - c_.spilled_];
+      const std::size_t spilled = c_.spilled();
+      if (k >= spilled) return c_.tail_[k - spilled];
       if (k < begin_ || k >= begin_ + chunk_.size()) {
         begin_ = k;
-        c_.read_spilled(k, std::min(c_.spilled_ - k, kReadChunk), chunk_);
+        c_.read_spilled(k, std::min(spilled - k, kReadChunk), chunk_);
       }
       return chunk_[k - begin_];
     }
@@ -111,11 +114,11 @@ class CrackCatalogue {
   // From now on records beyond `resident` go to `file` (created, or emptied). Records already
   // held move there once the resident ones are full.
   void spill_to(const std::filesystem::path& file, std::size_t resident = kResidentRecords);
-  bool spilling() const noexcept { return fd_ >= 0; }
+  bool spilling() const noexcept { return file_.attached(); }
   // Records in the file.
-  std::size_t spilled() const noexcept { return spilled_; }
+  std::size_t spilled() const noexcept { return file_.count(); }
   // Flushes the file to the disk (a checkpoint refers to the records it holds).
-  void sync() const;
+  void sync() const { file_.sync(); }
 
   // Checkpoints: the records in memory, and the count and hash of those in the file, which
   // stays beside the checkpoint. A catalogue read from a checkpoint whose records were partly in
@@ -130,18 +133,12 @@ class CrackCatalogue {
   static constexpr std::size_t kReadChunk = 4096;
   void read_spilled(std::size_t first, std::size_t count, std::vector<CrackRecord>& out) const;
   void spill_tail();
-  void read_header();
-  std::uint64_t hash_of_records(std::size_t count) const;
+  void read_law_table();
   void keep_room_for_resident();
-  void close() noexcept;
 
-  std::vector<CrackRecord> tail_;  // records [spilled_, size())
-  std::size_t spilled_ = 0;
-  std::size_t resident_ = 0;  // spill when the tail reaches it (while spilling)
-  int fd_ = -1;
-  std::filesystem::path file_;
-  std::uint64_t hash_ = 0;              // FNV-1a of the spilled records as written
-  std::uint64_t header_ = 0;            // bytes before the first record
+  std::vector<CrackRecord> tail_;  // records [spilled(), size())
+  std::size_t resident_ = 0;       // spill when the tail reaches it (while spilling)
+  RecordFile file_{"crack catalogue", kStoredBytes};
   std::vector<std::string_view> laws_;  // law of each code in the file (registry order)
 };
 
