@@ -10,12 +10,14 @@ namespace breccia::test {
 
 inline Simulation compressed_block(int nx, int ny, int nz, double platen_speed,
                                    double bond_strength, double damping = 0.7,
-                                   const std::function<void(Simulation&)>& before_start = {}) {
+                                   const std::function<void(Simulation&)>& before_start = {},
+                                   bool keep_pair_forces = false) {
   const double R = 0.5e-3;
   ParticleStore ps = fcc_block(nx, ny, nz, R, 2650);
   EngineConfig cfg;
   cfg.local_damping = damping;
   cfg.energy_interval = 50;
+  cfg.keep_pair_forces = keep_pair_forces;
   LinearContact::Params lp;
   LinearContact::Params wall = lp;
   wall.friction = 0.0;

@@ -646,6 +646,11 @@ TEST(MemoryBudget, ASampleLargerThanTheMemoryIsRefusedWithTheEstimate) {
   EXPECT_GT(e.pair_bytes, 0.0);
   // Bonding touching grains itself: 3 bonds per grain assumed in 3D.
   EXPECT_DOUBLE_EQ(estimate_memory(spec, 1000000, 0).bond_bytes, e.bond_bytes);
+  // A contact dashpot's force is kept per pair (no state gives it back): 24 bytes a pair more.
+  const ExperimentSpec damped =
+      parse_experiment("name = \"m\"\n[contact]\nnormal_damping_ratio = 0.1\n", "exp.toml", {});
+  EXPECT_DOUBLE_EQ(estimate_memory(damped, 1000000, 3000000).pair_bytes - e.pair_bytes,
+                   e.neighbour_pairs * static_cast<double>(sizeof(Vec3)));
   try {
     check_memory(spec, 1000000, 3000000, 0.5 * e.total());
     ADD_FAILURE() << "no error for a run twice the memory available";

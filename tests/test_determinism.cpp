@@ -93,11 +93,12 @@ TEST(PairPass, ParticleTotalsAreTheSumsOfTheirPairs) {
       [&](const auto& c) {
         for (std::size_t k = 0; k < c.pairs.size(); ++k) {
           const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
-          reference[i] -= c.force[k];
-          reference[j] += c.force[k];
+          const Vec3 f = sim.pair_force(c, k);
+          reference[i] -= f;
+          reference[j] += f;
           for (int a = 0; a < 3; ++a) {
-            magnitude[i][a] += std::abs(c.force[k][a]);
-            magnitude[j][a] += std::abs(c.force[k][a]);
+            magnitude[i][a] += std::abs(f[a]);
+            magnitude[j][a] += std::abs(f[a]);
           }
           cross_pairs += i / kParticleBlock != j / kParticleBlock ? 1 : 0;
         }
@@ -186,7 +187,7 @@ namespace {
 // A block bonded with law BL (example parameters) and touching through CL, squeezed by two
 // platens: spheres in an FCC block, or disks in a hexagonal one for a law made for 2D.
 template <class CL, class BL>
-Simulation law_block() {
+Simulation law_block(bool keep_pair_forces = false) {
   const double R = 0.5e-3;
   ParticleStore ps =
       planar_only_law<BL> ? hex_block(6, 10, R, 2650, 1e-3) : fcc_block(2, 2, 4, R, 2650);
@@ -196,6 +197,7 @@ Simulation law_block() {
                      planar_only_law<BL> ? 0.0 : 1e-3 * std::sin(0.9 * static_cast<double>(i))};
   EngineConfig cfg;
   cfg.energy_interval = 20;
+  cfg.keep_pair_forces = keep_pair_forces;
   // A contact layout with the rolling moments runs with rolling and twisting resistance on.
   typename CL::Params cp = CL::example_params();
   if constexpr (CL::rolling) {
@@ -247,6 +249,35 @@ void expect_exact_continuation(Simulation& a) {
   for (int k = 0; k < 3; ++k) EXPECT_EQ(a.walls()[1].force[k], b.walls()[1].force[k]);
 }
 
+// Runs `kept` (the pair pass keeps every pair's force) and `read` (the default) side by side
+// and compares every pair's force after each stretch of steps, to the bit: where the laws' states
+// give the forces back, Simulation::pair_force sums them in the pass's order from the same
+// numbers (no fused multiply-add: the build is ISO C++, whose default leaves a * b + c alone).
+// Returns the nonzero forces compared.
+std::size_t expect_same_pair_forces(Simulation& kept, Simulation& read, int stretches, int steps) {
+  std::size_t nonzero = 0;
+  for (int s = 0; s < stretches; ++s) {
+    kept.run(static_cast<std::uint64_t>(steps));
+    read.run(static_cast<std::uint64_t>(steps));
+    std::visit(
+        [&]<class CL>(const ContactSet<CL>& a) {
+          const auto& b = std::get<ContactSet<CL>>(read.contact_model());
+          EXPECT_EQ(a.pairs.size(), b.pairs.size());
+          for (std::size_t k = 0; k < std::min(a.pairs.size(), b.pairs.size()); ++k) {
+            const Vec3 fa = kept.pair_force(a, k), fb = read.pair_force(b, k);
+            EXPECT_EQ(0, std::memcmp(&fa, &fb, sizeof(Vec3)))
+                << "step " << kept.step_count() << " pair " << k << ": " << fa.x << " " << fb.x;
+            nonzero += norm2(fa) > 0.0 ? 1 : 0;
+          }
+        },
+        kept.contact_model());
+  }
+  EXPECT_TRUE(kept.keeps_pair_forces());
+  EXPECT_EQ(0, std::memcmp(kept.particles().pos_rad.data(), read.particles().pos_rad.data(),
+                           kept.particles().size() * sizeof(PosRad)));
+  return nonzero;
+}
+
 template <class Law>
 class CheckpointOfEveryBondLaw : public ::testing::Test {};
 TYPED_TEST_SUITE(CheckpointOfEveryBondLaw, test::GTypes<BondLaws>::type);
@@ -265,4 +296,55 @@ TYPED_TEST(CheckpointOfEveryBondLaw, RestoredSimulationContinuesBitwiseEqual) {
 TYPED_TEST(CheckpointOfEveryContactLaw, RestoredSimulationContinuesBitwiseEqual) {
   Simulation a = law_block<TypeParam, ParallelBond>();
   expect_exact_continuation(a);
+}
+
+// A bonded block squeezed until bonds break, with frictional contacts: the engine keeps no array
+// of pair forces (parallel bonds and linear contacts keep their forces in their states), and
+// the forces it reads back are the pass's to the bit, before and after bonds break and across
+// neighbour rebuilds.
+TEST(PairForces, ReadFromTheStatesAreThePassForcesToTheBit) {
+  Simulation kept = test::compressed_block(4, 4, 12, 2.0, 3e6, 0.7, {}, true);
+  Simulation read = test::compressed_block(4, 4, 12, 2.0, 3e6);
+  const std::size_t nonzero = expect_same_pair_forces(kept, read, 10, 250);
+  EXPECT_FALSE(read.keeps_pair_forces());
+  ASSERT_GT(read.cracks().size(), 10u) << "the test must break bonds";
+  ASSERT_GT(read.neighbour_rebuilds(), 1u) << "the test must rebuild the neighbour list";
+  EXPECT_GT(nonzero, 1000u);
+  EXPECT_EQ(0, std::memcmp(&kept.ledger(), &read.ledger(), sizeof(EnergyLedger)));
+}
+
+// Every bond law and contact layout: the states give the forces back where the law says so, and
+// the engine keeps the array where it does not (beams, laws judged on the interface, rolling
+// layouts included); the forces read are the pass's either way.
+TYPED_TEST(CheckpointOfEveryBondLaw, PairForcesReadBackAreThePassForces) {
+  Simulation kept = law_block<LinearContact, TypeParam>(true);
+  Simulation read = law_block<LinearContact, TypeParam>();
+  EXPECT_GT(expect_same_pair_forces(kept, read, 4, 100), 0u);
+  EXPECT_EQ(read.keeps_pair_forces(), !has_state_force<TypeParam>);
+}
+TYPED_TEST(CheckpointOfEveryContactLaw, PairForcesReadBackAreThePassForces) {
+  Simulation kept = law_block<TypeParam, ParallelBond>(true);
+  Simulation read = law_block<TypeParam, ParallelBond>();
+  EXPECT_GT(expect_same_pair_forces(kept, read, 4, 100), 0u);
+  EXPECT_EQ(read.keeps_pair_forces(), !has_state_force<TypeParam>);
+}
+
+// A contact dashpot's force depends on the step's velocities, which no state keeps: the engine
+// keeps the array, and so it does with dashpots on the bonds.
+TEST(PairForces, DashpotsKeepTheArray) {
+  const auto block = [](double contact_damping, double bond_damping) {
+    ParticleStore ps = fcc_block(2, 2, 3, 0.5e-3, 2650);
+    EngineConfig cfg;
+    cfg.bond_normal_damping_ratio = bond_damping;
+    HertzMindlin::Params hp;
+    hp.normal_damping_ratio = contact_damping;
+    Simulation sim(std::move(ps), cfg, make_contact_model<HertzMindlin>(hp, hp));
+    sim.bond_touching_pairs<ParallelBond>(1e-9);
+    sim.initialise();
+    sim.run(2);
+    return sim.keeps_pair_forces();
+  };
+  EXPECT_FALSE(block(0.0, 0.0));
+  EXPECT_TRUE(block(0.1, 0.0));
+  EXPECT_TRUE(block(0.0, 0.1));
 }

@@ -50,7 +50,7 @@ Moduli measure(double rate, double contact_modulus) {
           const auto i = c.pairs.first[k], j = c.pairs.second[k];
           if (i != centre && j != centre) continue;
           const Vec3 l = sim.particles().pos_rad[j].x - sim.particles().pos_rad[i].x;
-          const Vec3 f = c.force[k];  // on particle j (particle 2)
+          const Vec3 f = sim.pair_force(c, k);  // on particle j (particle 2)
           sxx += 0.5 * l.x * f.x;
           syy += 0.5 * l.y * f.y;
         }

@@ -160,7 +160,8 @@ void Simulation::transfer_contacts(Archive& a) {
         a.sized(c.stores, 8);
         for (auto& store : c.stores) a.vector(store);
         a.vector(c.packed);
-        a.vector(c.force);
+        a.value(keep_pair_forces_);
+        a.vector(c.force);  // empty where the states give the forces back
       },
       contact_);
   std::visit(
@@ -195,7 +196,7 @@ void Simulation::transfer(Archive& a) {
   // are saved by law, so a new law needs nothing here.
   static_assert(sizeof(Simulation) - sizeof(ContactModel) - sizeof(wall_contacts_) -
                         sizeof(BondSets) - sizeof(JointSets) ==
-                    1720,
+                    1728,
                 "Simulation changed: update engine/checkpoint.cpp");
   a.label("simulation");
   if constexpr (Archive::reading)
@@ -278,7 +279,8 @@ Simulation Simulation::restore(ArchiveReader& a) {
     fail("per-particle arrays");
   std::visit(
       [&](const auto& c) {
-        if (c.history.size() != c.pairs.size() || c.force.size() != c.pairs.size() ||
+        if (c.history.size() != c.pairs.size() ||
+            c.force.size() != (s.keep_pair_forces_ ? c.pairs.size() : 0) ||
             (c.pairs.offsets.size() != n + 1 && !c.pairs.offsets.empty()) ||
             ((c.stores.size() != (n + kParticleBlock - 1) / kParticleBlock ||
               c.packed.size() != c.stores.size()) &&

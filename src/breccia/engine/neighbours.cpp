@@ -95,7 +95,8 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
   assign_joints();
-  contacts.force.assign(contacts.pairs.size(), Vec3{});
+  keep_pair_forces_ = pair_forces_needed(contacts);
+  if (keep_pair_forces_) contacts.force.assign(contacts.pairs.size(), Vec3{});
   // Wall candidates: particles within the skin of each wall, history carried by particle index.
   auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
   for (std::size_t wi = 0; wi < walls_.size(); ++wi) {

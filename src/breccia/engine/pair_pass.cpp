@@ -54,6 +54,7 @@ class Simulation::PairWalk {
         dt_(sim.dt_),
         contact_motion_(contact_needs_motion<CL>(c.params)),
         torques_(!sim.central_forces_only(c)),
+        keep_forces_(sim.keep_pair_forces_),
         frames_ahead_(reads_frames(sim)),
         fails_(fails),
         g_(g),
@@ -85,13 +86,13 @@ class Simulation::PairWalk {
       bond_parts(kBondLaws);
       joint_parts(kJointLaws);
       if (!have_geometry_ && !lane_loaded_ && !touching_or_loaded()) {
-        c_.force[k] = {};
+        if (keep_forces_) c_.force[k] = {};
         if (j_ >= owned_end) sim_.cross_slots_[next_cross++] = CrossSlot{};
         continue;
       }
       const Vec3 contact_force = contact_part();
       if (held_law_ != kNoHeldBond) judge_held_bond(contact_force, kBondLaws);
-      c_.force[k] = force_;
+      if (keep_forces_) c_.force[k] = force_;
       force[i_] -= force_;
       Vec3 torque2;
       if (torques_) {
@@ -362,6 +363,7 @@ class Simulation::PairWalk {
   const double dt_;
   const bool contact_motion_;  // whether the contact law reads the pair's velocities
   const bool torques_;         // false with central forces only (no torque but rounding)
+  const bool keep_forces_;     // each pair's force goes to c_.force (Simulation::pair_force)
   const bool frames_ahead_;    // prefetch the second grain's orientation
   std::vector<Failure>& fails_;
   std::vector<typename CL::State>* store_ = nullptr;  // the block's contact histories
@@ -394,6 +396,11 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
   block_joint_dis_.assign(nb, PairDissipation{});
   if (block_failures_.size() < nb) block_failures_.resize(nb);
   cross_slots_.resize(c.pairs.cross_slots());
+  keep_pair_forces_ = pair_forces_needed(c);
+  if (!keep_pair_forces_)
+    std::vector<Vec3>().swap(c.force);
+  else if (c.force.size() != c.pairs.size())
+    c.force.assign(c.pairs.size(), Vec3{});
   for_each_item(nb, [&](std::size_t blk) {
     const std::size_t begin = blk * kParticleBlock, end = std::min(n, begin + kParticleBlock);
     std::fill(p_.force.begin() + static_cast<std::ptrdiff_t>(begin),

@@ -378,7 +378,7 @@ PairStress Simulation::pair_stress() const {
   std::visit(
       [&]<class CL>(const ContactSet<CL>& c) {
         for (std::size_t k = 0; k < c.pairs.size(); ++k) {
-          const Vec3& force = c.force[k];
+          const Vec3 force = pair_force(c, k);
           const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
           const Vec3 l = p_.pos_rad[j].x - p_.pos_rad[i].x;
           for (int a = 0; a < 3; ++a)
@@ -449,12 +449,14 @@ std::array<double, 9> Simulation::ParticleStressStream::at(std::size_t p) {
           const std::size_t row = p - chunk_begin_;
           for (std::uint32_t m = in_offsets_[row]; m < in_offsets_[row + 1]; ++m) {
             const std::uint32_t k = in_slot_[m];
-            if (zero(c.force[k])) continue;
-            add(s.geometry(l.first[k], static_cast<std::uint32_t>(p)).r2, c.force[k]);
+            const Vec3 f = s.pair_force(c, k);
+            if (zero(f)) continue;
+            add(s.geometry(l.first[k], static_cast<std::uint32_t>(p)).r2, f);
           }
           for (std::uint32_t k = l.offsets[p]; k < l.offsets[p + 1]; ++k) {
-            if (zero(c.force[k])) continue;
-            add(s.geometry(static_cast<std::uint32_t>(p), l.second[k]).r1, -c.force[k]);
+            const Vec3 f = s.pair_force(c, k);
+            if (zero(f)) continue;
+            add(s.geometry(static_cast<std::uint32_t>(p), l.second[k]).r1, -f);
           }
         }
         const auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(s.wall_contacts_);

@@ -38,6 +38,9 @@ struct EngineConfig {
   double skin = 0.0;                    // m; 0 = 0.4 x the mean radius
   std::uint64_t seed = 1;               // strengths and anything else random
   std::uint64_t energy_interval = 100;  // steps between energy-ledger samples (0 = on demand)
+  // The reference path of Simulation::pair_force: the pair pass keeps every pair's force in an
+  // array even where the laws' states give it back (tests compare the two).
+  bool keep_pair_forces = false;
 };
 
 // One sample of the energy budget at time t_n (docs/physics.md §2.4). Cumulative terms count from
@@ -266,6 +269,23 @@ class Simulation {
   std::size_t neighbour_pairs() const noexcept;
   // Pairs whose second grain lies in a later particle block of the pair pass (pair_list.hpp).
   std::size_t cross_block_pairs() const noexcept;
+  // The force on pair k's second grain in the last step, for the contact set in use (k below its
+  // pair count). Where every law in use keeps its force in its state (has_state_force), it is the
+  // sum of the pair's bond, joint and contact state forces in the pair pass's order, the pass's
+  // number to the bit, and the engine holds no array of pair forces (24 B a pair); otherwise
+  // (dashpots, beams, laws judged on the interface) the pass keeps one and this reads it.
+  template <class CL>
+  Vec3 pair_force(const ContactSet<CL>& c, std::size_t k) const noexcept {
+    if (keep_pair_forces_) return c.force[k];
+    Vec3 f;
+    std::apply([&](const auto&... set) { (add_state_force(set, k, true, f), ...); }, bonds_);
+    std::apply([&](const auto&... set) { (add_state_force(set, k, false, f), ...); }, joints_);
+    if constexpr (has_state_force<CL>)
+      if (c.history[k] != kNoHistory) f += CL::state_force(c.state(k));
+    return f;
+  }
+  // Whether the pair pass keeps the array of pair forces (above).
+  bool keeps_pair_forces() const noexcept { return keep_pair_forces_; }
   // Pair forces of the last step as a stress sum and contact counts (docs/physics.md §6.5, §7.2).
   PairStress pair_stress() const;
   // Per-particle stress of the last step's forces (docs/physics.md §6.5), compression-positive,
@@ -369,6 +389,39 @@ class Simulation {
     std::apply([&](const auto&... set) { ((none = none && set.size() == 0), ...); }, joints_);
     return none;
   }
+  // Whether the pair pass must keep the array of pair forces: a law in use whose state does not
+  // give its force back, bond dashpots, or the reference path asked for.
+  template <class CL>
+  bool pair_forces_needed(const ContactSet<CL>& c) const noexcept {
+    if (cfg_.keep_pair_forces || cfg_.bond_normal_damping_ratio > 0.0 ||
+        cfg_.bond_shear_damping_ratio > 0.0)
+      return true;
+    if constexpr (!has_state_force<CL>)
+      return true;
+    else if (!CL::state_holds_force(c.params))
+      return true;
+    bool needed = false;
+    const auto check = [&]<class Law>(const BondSet<Law>& set) {
+      if constexpr (has_state_force<Law>)
+        needed = needed || (set.size() > 0 && !Law::state_holds_force(set.params));
+      else
+        needed = needed || set.size() > 0;
+    };
+    std::apply([&](const auto&... set) { (check(set), ...); }, bonds_);
+    std::apply([&](const auto&... set) { (check(set), ...); }, joints_);
+    return needed;
+  }
+  // Adds the state force of pair k's bond of this law (intact: a broken bond's force was not
+  // applied) or joint (bonded or not: a joint acts either way), if it has one.
+  template <class Law>
+  static void add_state_force(const BondSet<Law>& set, std::size_t k, bool intact_only,
+                              Vec3& f) noexcept {
+    if constexpr (has_state_force<Law>) {
+      const std::uint32_t b = set.bond_at_pair(k);
+      if (b != BondSet<Law>::kNoBond && (set.intact[b] || !intact_only))
+        f += Law::state_force(set.state[b]);
+    }
+  }
   template <class CL>
   void sample_stored_energy_for(ContactSet<CL>& contacts);
   template <class Law>
@@ -453,6 +506,7 @@ class Simulation {
   double dt_ = 0.0, dt_crit_ = 0.0, time_ = 0.0, skin_ = 0.0;
   std::uint64_t step_ = 0, rebuilds_ = 0, next_bond_tag_ = 1;
   bool initialised_ = false, sample_requested_ = false, retired_ = false;
+  bool keep_pair_forces_ = true;  // the pair pass keeps ContactSet::force (pair_force())
   std::vector<Vec3> x_at_build_;
   std::vector<CrossSlot> cross_slots_;  // the pair pass's cross pairs (pair_list.hpp)
   std::vector<Vec3> user_force_;        // external loads (empty when unused)

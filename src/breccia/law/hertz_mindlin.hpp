@@ -174,6 +174,15 @@ struct HertzMindlinLaw {
     return {force, couple};
   }
 
+  // compute()'s force of the last step, elastic normal plus shear, from the state it left (zero
+  // once separated); with dashpots the step's force also had a damping part that no state keeps.
+  static bool state_holds_force(const Params& p) noexcept {
+    return p.normal_damping_ratio == 0.0 && p.shear_damping_ratio == 0.0;
+  }
+  static Vec3 state_force(const State& s) noexcept {
+    return s.n_old * s.normal_force + s.shear_force;
+  }
+
   static double stored_energy(const Params&, const State& s) noexcept {
     if (s.kt == 0.0) return 0.0;
     return 0.4 * s.normal_force * s.overlap + 0.5 * norm2(s.shear_force) / s.kt + rolling_energy(s);

@@ -149,6 +149,15 @@ struct LinearContactLaw {
     return {};
   }
 
+  // compute()'s force of the last step, elastic normal plus shear, from the state it left (zero
+  // once separated); with dashpots the step's force also had a damping part that no state keeps.
+  static bool state_holds_force(const Params& p) noexcept {
+    return p.normal_damping_ratio == 0.0 && p.shear_damping_ratio == 0.0;
+  }
+  static Vec3 state_force(const State& s) noexcept {
+    return s.n_old * s.normal_force + s.shear_force;
+  }
+
   // Elastic energy stored in the contact (§3.6).
   static double stored_energy(const Params& p, const State& s) noexcept {
     if (s.kn == 0.0) return 0.0;

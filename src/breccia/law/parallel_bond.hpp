@@ -203,6 +203,13 @@ struct ParallelBond {
     return {g.n * fn + fs, g.n * mt + mb};
   }
 
+  // compute()'s force of the last step from the state it left (zero before the first step and
+  // for a bond that broke, whose force was not applied: the engine reads intact bonds only).
+  static bool state_holds_force(const Params&) noexcept { return true; }
+  static Vec3 state_force(const State& s) noexcept {
+    return s.n_old * s.normal_force + s.shear_force;
+  }
+
   // The peak stresses on the periphery of the cement (tension-positive sigma) and the shear
   // strength at the present mean normal stress: tensile when sigma_max reaches sigma_c (tested
   // first), else shear when tau_max reaches c - sigma_avg tan(phi).

@@ -2,6 +2,7 @@
 // The one list of laws. Adding a law is one new header and one entry here: the experiment file's
 // [contact] and [bond] tables, their validation, the generated docs, the engine's law sets and the
 // conformance tests (tests/test_law_conformance.cpp) all follow from the lists.
+#include <concepts>
 #include <string>
 #include <string_view>
 
@@ -91,6 +92,18 @@ bool contact_needs_motion(const typename CL::Params& p) noexcept {
   else
     return true;
 }
+
+// A law whose state holds the pair's force of its last step: state_force(state) gives back, to
+// the bit, the force on the pair's second grain that compute() returned (the same expression on
+// the same numbers), whenever state_holds_force(params) is true (a contact without dashpots, whose
+// damping force no state keeps). The engine then keeps no array of pair forces for the observers
+// (Simulation::pair_force).
+template <class Law>
+constexpr bool has_state_force = requires(const typename Law::Params& p,
+                                          const typename Law::State& s) {
+  { Law::state_force(s) } -> std::same_as<Vec3>;
+  { Law::state_holds_force(p) } -> std::same_as<bool>;
+};
 
 // The chosen laws' parameters (the experiment's [contact] and [bond] tables).
 using ContactParams = ParamsVariant<ContactLaws>;

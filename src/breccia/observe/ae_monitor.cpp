@@ -57,10 +57,11 @@ void for_pairs(const Simulation& sim,
       [&](const auto& c) {
         const PairList& l = c.pairs;
         if (l.offsets.size() <= p + 1) return;
-        for (std::uint32_t k = l.offsets[p]; k < l.offsets[p + 1]; ++k) f(l.second[k], c.force[k]);
+        for (std::uint32_t k = l.offsets[p]; k < l.offsets[p + 1]; ++k)
+          f(l.second[k], sim.pair_force(c, k));
         for (const std::uint64_t* e = incoming.first; e != incoming.second; ++e) {
           const auto k = static_cast<std::uint32_t>(*e & 0xffffffffu);
-          f(l.first[k], -c.force[k]);
+          f(l.first[k], -sim.pair_force(c, k));
         }
       },
       sim.contact_model());

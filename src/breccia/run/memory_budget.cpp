@@ -19,8 +19,16 @@ MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, s
   const double bond_count = bonds > 0 ? static_cast<double>(bonds) : n * (planar ? 2.0 : 3.0);
   e.particle_bytes = n * static_cast<double>(ParticleStore::kBytesPerParticle +
                                              Simulation::kScratchBytesPerParticle);
-  visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params&) {
+  // The pair pass keeps an array of pair forces unless the laws' states give them back
+  // (Simulation::pair_force): dashpots on the bonds or contacts, or a law without state forces.
+  bool forces_kept = s.engine.bond_normal_damping_ratio > 0.0 ||
+                     s.engine.bond_shear_damping_ratio > 0.0 || s.engine.keep_pair_forces;
+  visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params& p) {
     e.bond_bytes = bond_count * static_cast<double>(BondSet<Law>::kBytesPerBond);
+    if constexpr (has_state_force<Law>)
+      forces_kept = forces_kept || !Law::state_holds_force(p);
+    else
+      forces_kept = true;
   });
   visit_params<ContactLaws>(s.contact, [&]<class Law>(const typename Law::Params& p) {
     // The state layout the engine will hold (with the rolling moments only when they are on).
@@ -32,10 +40,15 @@ MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, s
     // (an FCC block's pairs all touch). A rebuild frees the forces and bond indexes before it
     // builds the new list, so the two lists coexist within that room.
     const double kept = 3.0 * sizeof(std::uint32_t) + 1.25 * state_bytes;
-    // Every pair keeps its force and one bond index; a cross pair (pair_list.hpp) also a slot
-    // and its entry in the gather index.
+    // Every pair keeps one bond index, and its force where the states do not give it back; a
+    // cross pair (pair_list.hpp) also a slot and its entry in the gather index.
+    if constexpr (has_state_force<Law>)
+      forces_kept = forces_kept || !Law::state_holds_force(p);
+    else
+      forces_kept = true;
+    const double force = forces_kept ? sizeof(Vec3) : 0.0;
     const double cross = kCrossPairShare * (sizeof(CrossSlot) + sizeof(std::uint32_t));
-    e.pair_bytes = e.neighbour_pairs * (kept + sizeof(Vec3) + sizeof(std::uint32_t) + cross);
+    e.pair_bytes = e.neighbour_pairs * (kept + force + sizeof(std::uint32_t) + cross);
   });
   return e;
 }
