@@ -200,7 +200,7 @@ class Simulation {
   // see the move through their skin test.
   void displace_particle(std::size_t index, const Vec3& dx);
   // Ends the stepping of a finished run: frees the neighbour list with its contact histories and
-  // pair forces, the pair-to-bond indexes and the pair pass's scratch (about 400 B a grain of a
+  // any pair forces, the pair-to-bond indexes and the pair pass's scratch (about 300 B a grain of a
   // bonded 3D sample), so that the analysis that follows has that room. What it reads stays: the
   // grains, bonds, joints, walls, ledger and cracks. A retired simulation refuses to step or to
   // write a checkpoint, and reports no contacts or pair forces.
