@@ -127,6 +127,10 @@ int main(int argc, char** argv) {
   app.add_option("--warmup", warmup, "steps before timing");
   double skin = 0.0;
   app.add_option("--skin", skin, "neighbour-list skin in m (0: the engine's default)");
+  bool keep_pair_forces = false;
+  app.add_flag("--keep-pair-forces", keep_pair_forces,
+               "keep every pair's force in an array even where the laws' states give it back "
+               "(the reference path, for comparison)");
   CLI11_PARSE(app, argc, argv);
   if (sample == "cylinder" && dim != 3) {
     std::fprintf(stderr, "bench_engine: --sample cylinder is 3D only (got --dim %d)\n", dim);
@@ -151,6 +155,7 @@ int main(int argc, char** argv) {
   cfg.local_damping = 0.7;
   cfg.energy_interval = 100;
   cfg.skin = skin;
+  cfg.keep_pair_forces = keep_pair_forces;
   LinearContact::Params lp, wall;
   wall.friction = 0.0;
   Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, wall));
@@ -202,6 +207,7 @@ int main(int argc, char** argv) {
   if (sample == "cylinder") name = "cyl-" + name;
   if (bond == "brittle_beam") name += "-beam";
   if (bond == "quaternion_bond") name += "-quat";
+  if (keep_pair_forces) name += "-kept";
   std::fprintf(stderr,
                "%-16s threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts, %zu pairs "
                "(%zu across blocks); "
@@ -215,6 +221,7 @@ int main(int argc, char** argv) {
                    {"phase", phase},
                    {"sample", sample},
                    {"bond_law", bond},
+                   {"keep_pair_forces", keep_pair_forces},
                    {"pack_s", pack_s},
                    {"particles", sim.particles().size()},
                    {"bonds", bonds0},
