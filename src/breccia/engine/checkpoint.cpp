@@ -161,7 +161,7 @@ void Simulation::transfer_contacts(Archive& a) {
         for (auto& store : c.stores) a.vector(store);
         a.vector(c.packed);
         a.value(keep_pair_forces_);
-        a.vector(c.force);  // empty where the states give the forces back
+        a.vector(c.kept_force);  // empty where the states give the forces back
       },
       contact_);
   std::visit(
@@ -280,7 +280,7 @@ Simulation Simulation::restore(ArchiveReader& a) {
   std::visit(
       [&](const auto& c) {
         if (c.history.size() != c.pairs.size() ||
-            c.force.size() != (s.keep_pair_forces_ ? c.pairs.size() : 0) ||
+            c.kept_force.size() != (s.keep_pair_forces_ ? c.pairs.size() : 0) ||
             (c.pairs.offsets.size() != n + 1 && !c.pairs.offsets.empty()) ||
             ((c.stores.size() != (n + kParticleBlock - 1) / kParticleBlock ||
               c.packed.size() != c.stores.size()) &&

@@ -71,7 +71,7 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   // What the new list replaces goes before it is built, so that old and new coexist only in the
   // parts the history merge reads (the peak memory of a run is a rebuild's).
   // The per-pair forces, the bonds' pair indexes and the cross slots are rewritten after it.
-  release(contacts.force);
+  release(contacts.kept_force);
   release(cross_slots_);
   std::apply([&](auto&... set) { (release(set.bond_of_pair), ...); }, bonds_);
   std::apply([&](auto&... set) { (release(set.bond_of_pair), ...); }, joints_);
@@ -96,7 +96,7 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
   assign_joints();
   keep_pair_forces_ = pair_forces_needed(contacts);
-  if (keep_pair_forces_) contacts.force.assign(contacts.pairs.size(), Vec3{});
+  if (keep_pair_forces_) contacts.kept_force.assign(contacts.pairs.size(), Vec3{});
   // Wall candidates: particles within the skin of each wall, history carried by particle index.
   auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
   for (std::size_t wi = 0; wi < walls_.size(); ++wi) {

@@ -86,13 +86,13 @@ class Simulation::PairWalk {
       bond_parts(kBondLaws);
       joint_parts(kJointLaws);
       if (!have_geometry_ && !lane_loaded_ && !touching_or_loaded()) {
-        if (keep_forces_) c_.force[k] = {};
+        if (keep_forces_) c_.kept_force[k] = {};
         if (j_ >= owned_end) sim_.cross_slots_[next_cross++] = CrossSlot{};
         continue;
       }
       const Vec3 contact_force = contact_part();
       if (held_law_ != kNoHeldBond) judge_held_bond(contact_force, kBondLaws);
-      if (keep_forces_) c_.force[k] = force_;
+      if (keep_forces_) c_.kept_force[k] = force_;
       force[i_] -= force_;
       Vec3 torque2;
       if (torques_) {
@@ -363,7 +363,7 @@ class Simulation::PairWalk {
   const double dt_;
   const bool contact_motion_;  // whether the contact law reads the pair's velocities
   const bool torques_;         // false with central forces only (no torque but rounding)
-  const bool keep_forces_;     // each pair's force goes to c_.force (Simulation::pair_force)
+  const bool keep_forces_;     // each pair's force goes to c_.kept_force (pair_force)
   const bool frames_ahead_;    // prefetch the second grain's orientation
   std::vector<Failure>& fails_;
   std::vector<typename CL::State>* store_ = nullptr;  // the block's contact histories
@@ -398,9 +398,9 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
   cross_slots_.resize(c.pairs.cross_slots());
   keep_pair_forces_ = pair_forces_needed(c);
   if (!keep_pair_forces_)
-    std::vector<Vec3>().swap(c.force);
-  else if (c.force.size() != c.pairs.size())
-    c.force.assign(c.pairs.size(), Vec3{});
+    std::vector<Vec3>().swap(c.kept_force);
+  else if (c.kept_force.size() != c.pairs.size())
+    c.kept_force.assign(c.pairs.size(), Vec3{});
   for_each_item(nb, [&](std::size_t blk) {
     const std::size_t begin = blk * kParticleBlock, end = std::min(n, begin + kParticleBlock);
     std::fill(p_.force.begin() + static_cast<std::ptrdiff_t>(begin),

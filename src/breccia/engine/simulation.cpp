@@ -209,7 +209,7 @@ void Simulation::retire_interactions() {
         c.history = {};
         c.stores = {};
         c.packed = {};
-        c.force = {};
+        c.kept_force = {};
       },
       contact_);
   const auto free_index = [](auto&... set) { ((set.bond_of_pair = {}), ...); };

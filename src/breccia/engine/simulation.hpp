@@ -276,7 +276,7 @@ class Simulation {
   // (dashpots, beams, laws judged on the interface) the pass keeps one and this reads it.
   template <class CL>
   Vec3 pair_force(const ContactSet<CL>& c, std::size_t k) const noexcept {
-    if (keep_pair_forces_) return c.force[k];
+    if (keep_pair_forces_) return c.kept_force[k];
     Vec3 f;
     std::apply([&](const auto&... set) { (add_state_force(set, k, true, f), ...); }, bonds_);
     std::apply([&](const auto&... set) { (add_state_force(set, k, false, f), ...); }, joints_);
@@ -506,7 +506,7 @@ class Simulation {
   double dt_ = 0.0, dt_crit_ = 0.0, time_ = 0.0, skin_ = 0.0;
   std::uint64_t step_ = 0, rebuilds_ = 0, next_bond_tag_ = 1;
   bool initialised_ = false, sample_requested_ = false, retired_ = false;
-  bool keep_pair_forces_ = true;  // the pair pass keeps ContactSet::force (pair_force())
+  bool keep_pair_forces_ = true;  // the pair pass keeps ContactSet::kept_force (pair_force())
   std::vector<Vec3> x_at_build_;
   std::vector<CrossSlot> cross_slots_;  // the pair pass's cross pairs (pair_list.hpp)
   std::vector<Vec3> user_force_;        // external loads (empty when unused)

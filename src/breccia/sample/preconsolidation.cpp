@@ -61,7 +61,7 @@ double row_load(const Simulation& sim, const std::vector<std::size_t>& row, std:
         for (std::size_t k = 0; k < c.pairs.size(); ++k) {
           const std::size_t i = c.pairs.first[k], j = c.pairs.second[k];
           // A pair keeps the force on its second particle; sample disks come first.
-          if (i < n_sample && j >= lo && j <= hi) f -= dot(c.force[k], inward);
+          if (i < n_sample && j >= lo && j <= hi) f -= dot(sim.pair_force(c, k), inward);
         }
       },
       sim.contact_model());
@@ -76,7 +76,7 @@ double internal_sxx(const Simulation& sim, std::size_t n_sample) {
         const auto& p = sim.particles().pos_rad;
         for (std::size_t k = 0; k < c.pairs.size(); ++k) {
           const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
-          if (i < n_sample && j < n_sample) lf += (p[j].x.x - p[i].x.x) * c.force[k].x;
+          if (i < n_sample && j < n_sample) lf += (p[j].x.x - p[i].x.x) * sim.pair_force(c, k).x;
         }
       },
       sim.contact_model());

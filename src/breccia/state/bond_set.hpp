@@ -64,7 +64,9 @@ struct ContactSet {
   std::vector<std::uint32_t> history;      // per pair: its entry in its block's store
   std::vector<std::vector<State>> stores;  // per particle block of the pair pass
   std::vector<std::uint32_t> packed;       // per block: its store's size when last in order
-  std::vector<Vec3> force;  // each pair's force on its second particle in the last step
+  // Each pair's force on its second particle in the last step, where the pair pass keeps it
+  // (empty where the laws' states give it back): read it through Simulation::pair_force.
+  std::vector<Vec3> kept_force;
 
   // The state of pair k (which must have an entry).
   const State& state(std::size_t k) const noexcept {
