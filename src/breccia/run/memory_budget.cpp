@@ -11,6 +11,20 @@
 
 namespace breccia {
 
+namespace {
+
+// Whether the pair pass keeps the array of pair forces for a law with these parameters: its state
+// does not give its force back (Simulation::pair_force).
+template <class Law>
+bool keeps_pair_forces(const typename Law::Params& p) {
+  if constexpr (has_state_force<Law>)
+    return !Law::state_holds_force(p);
+  else
+    return true;
+}
+
+}  // namespace
+
 MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, std::size_t bonds) {
   const bool planar = s.dimension == 2;
   const double n = static_cast<double>(particles);
@@ -23,12 +37,13 @@ MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, s
   // (Simulation::pair_force): dashpots on the bonds or contacts, or a law without state forces.
   bool forces_kept = s.engine.bond_normal_damping_ratio > 0.0 ||
                      s.engine.bond_shear_damping_ratio > 0.0 || s.engine.keep_pair_forces;
+  if (!s.joint_planes.empty())
+    visit_params<JointLaws>(s.joint, [&]<class Law>(const typename Law::Params& p) {
+      forces_kept = forces_kept || keeps_pair_forces<Law>(p);
+    });
   visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params& p) {
     e.bond_bytes = bond_count * static_cast<double>(BondSet<Law>::kBytesPerBond);
-    if constexpr (has_state_force<Law>)
-      forces_kept = forces_kept || !Law::state_holds_force(p);
-    else
-      forces_kept = true;
+    forces_kept = forces_kept || keeps_pair_forces<Law>(p);
   });
   visit_params<ContactLaws>(s.contact, [&]<class Law>(const typename Law::Params& p) {
     // The state layout the engine will hold (with the rolling moments only when they are on).
@@ -42,10 +57,7 @@ MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, s
     const double kept = 3.0 * sizeof(std::uint32_t) + 1.25 * state_bytes;
     // Every pair keeps one bond index, and its force where the states do not give it back; a
     // cross pair (pair_list.hpp) also a slot and its entry in the gather index.
-    if constexpr (has_state_force<Law>)
-      forces_kept = forces_kept || !Law::state_holds_force(p);
-    else
-      forces_kept = true;
+    forces_kept = forces_kept || keeps_pair_forces<Law>(p);
     const double force = forces_kept ? sizeof(Vec3) : 0.0;
     const double cross = kCrossPairShare * (sizeof(CrossSlot) + sizeof(std::uint32_t));
     e.pair_bytes = e.neighbour_pairs * (kept + force + sizeof(std::uint32_t) + cross);
