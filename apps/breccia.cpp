@@ -1,6 +1,7 @@
 // The `breccia` command: one function per subcommand (run, resume, generate, sweep, summarise,
 // report, check, docs, calibrate, materials, predict, version) declares its options and what it
 // does.
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -19,8 +20,10 @@
 #include "breccia/core/allocator.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/io/run_folder.hpp"
 #include "breccia/material/library.hpp"
+#include "breccia/run/rank_pool.hpp"
 #include "breccia/run/run.hpp"
 #include "breccia/run/sample_build.hpp"
 #include "breccia/spec/experiment.hpp"
@@ -31,9 +34,13 @@ extern "C" void on_signal(int) {
   breccia::interrupt_flag().store(true);
 }
 
+// SIGUSR1 asks the same stop: mpirun passes it on to every rank as it is (its SIGINT and SIGTERM
+// end the ranks after a second), and batch systems send it ahead of a time limit (Slurm's
+// --signal=USR1@120).
 void catch_signals() {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+  std::signal(SIGUSR1, on_signal);
   // A file-size limit makes the write fail (EFBIG), which the run reports and marks, instead of
   // killing the process with a half-written folder.
   std::signal(SIGXFSZ, SIG_IGN);
@@ -57,6 +64,15 @@ bool unknown_command(int argc, char** argv, const CLI::App& app) {
 int calibrate_command(const std::string& file, const std::string& output, bool check_only,
                       const std::string& command_line) {
   const breccia::CalibrationSpec spec = breccia::load_calibration(file);
+  if (!breccia::ranks::root()) {
+    // Under mpirun the other ranks run the tests root hands out (none for --check).
+    if (check_only) return 0;
+    catch_signals();
+    breccia::RunOptions quiet;
+    quiet.interrupt = &breccia::interrupt_flag();
+    breccia::RankPool::serve(quiet);
+    return 0;
+  }
   if (check_only) {
     catch_signals();
     breccia::check_calibration(spec, [](const std::string& m) { std::cerr << m << std::endl; });
@@ -66,7 +82,9 @@ int calibrate_command(const std::string& file, const std::string& output, bool c
     return 0;
   }
   catch_signals();
+  breccia::RankPool pool;  // under mpirun: each trial's tests at once over the ranks
   breccia::CalibrationOptions opt;
+  opt.pool = &pool;
   opt.output_directory = output;
   opt.command_line = command_line;
   opt.log = [](const std::string& m) { std::cerr << m << std::endl; };
@@ -155,9 +173,20 @@ std::string own_executable() {
 
 // Prints the outcome of a sweep; the exit status of the command.
 int finish_sweep(const breccia::SweepResult& r) {
-  std::cerr << breccia::summarise_folder(r.folder);
-  std::cout << r.folder << std::endl;
+  if (breccia::ranks::root()) {
+    std::cerr << breccia::summarise_folder(r.folder);
+    std::cout << r.folder << std::endl;
+  }
   return r.status == "complete" ? 0 : 130;
+}
+
+// Under mpirun the ranks share out a sweep's runs; child processes (--jobs) would compete with
+// them for the cores.
+void check_jobs_on_ranks(int jobs) {
+  if (breccia::ranks::size() > 1 && jobs > 1)
+    throw breccia::InputError("sweep", "--jobs", std::to_string(jobs),
+                              "under mpirun the ranks run the sweep's runs, one each at a time: "
+                              "leave --jobs out (or give more ranks)");
 }
 
 Command add_resume(CLI::App& app, const std::string& command_line) {
@@ -191,16 +220,24 @@ Command add_resume(CLI::App& app, const std::string& command_line) {
             opt.interrupt = &breccia::interrupt_flag();
             opt.stop_at_step = static_cast<std::uint64_t>(o->stop_at_step);
             opt.show_progress = !o->quiet && isatty(fileno(stderr));
-            if (!o->quiet) opt.log = log_to_stderr;
+            if (!o->quiet && breccia::ranks::root()) opt.log = log_to_stderr;
             if (std::filesystem::exists(std::filesystem::path(o->folder) / "sweep-plan.json")) {
               if (o->threads >= 0)
                 throw breccia::InputError(
                     "resume", "--threads", std::to_string(o->threads),
                     "a sweep's runs keep the threads of their experiment; give --jobs instead");
+              check_jobs_on_ranks(o->jobs);
               opt.jobs = o->jobs;
               opt.executable = own_executable();
               return finish_sweep(breccia::resume_sweep(o->folder, opt));
             }
+            if (breccia::ranks::size() > 1)
+              throw breccia::InputError(
+                  "resume", "folder", o->folder,
+                  fmt::format("a run resumes in one process (its threads: --threads); on {} "
+                              "ranks it would run {} times over. Under mpirun: resume a sweep "
+                              "folder, whose runs the ranks share",
+                              breccia::ranks::size(), breccia::ranks::size()));
             return finish_run(
                 breccia::resume_run(o->folder, breccia::ResumeOptions{o->threads}, opt), o->quiet);
           }};
@@ -274,7 +311,8 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
             opt.command_line = command_line;
             opt.interrupt = &breccia::interrupt_flag();
             opt.show_progress = spec.progress && isatty(fileno(stderr));
-            opt.log = log_to_stderr;
+            if (breccia::ranks::root()) opt.log = log_to_stderr;
+            check_jobs_on_ranks(o->jobs);
             opt.jobs = o->jobs;
             opt.stop_at_step = static_cast<std::uint64_t>(o->stop_at_step);
             opt.executable = own_executable();
@@ -432,38 +470,66 @@ Command add_predict(CLI::App& app) {
 
 Command add_version(CLI::App& app) {
   return {app.add_subcommand("version", "print the version"), [] {
-            std::cout << "breccia " << breccia::kVersion << "\n";
+            std::cout << "breccia " << breccia::kVersion << "\n"
+                      << (breccia::ranks::built_with_mpi() ? "MPI: yes (mpirun -np N breccia sweep)"
+                                                           : "MPI: no")
+                      << "\n";
             return 0;
           }};
 }
 
-// Runs a command, turning what it throws into a message and an exit status.
+// Runs a command, turning what it throws into a message and an exit status. Under mpirun root
+// prints; another rank prints only an error of its own, named by its rank (a bad input is bad on
+// every rank, and an error root passed on is root's to print). A failure the other ranks do not
+// share aborts the launch, which would otherwise wait for this rank.
 int guarded(const std::function<int()>& body) {
+  const auto fail = [](int code, bool bad_input, const std::string& message) {
+    const bool shared = breccia::ranks::failure_is_shared(bad_input);
+    if (breccia::ranks::root())
+      std::cerr << "error: " << message << "\n";
+    else if (!shared)
+      std::cerr << "error: rank " << breccia::ranks::rank() << ": " << message << "\n";
+    if (!shared) breccia::ranks::abort(code);
+    return code;
+  };
   try {
     return body();
+  } catch (const breccia::ranks::RootFailed&) {
+    return 1;  // root prints it
   } catch (const breccia::Interrupted& e) {
-    std::cerr << "error: " << e.what() << "; nothing was written\n";
-    return 130;
+    return fail(130, false, std::string(e.what()) + "; nothing was written");
   } catch (const breccia::InputError& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 2;
+    return fail(2, true, e.what());
   } catch (const std::bad_alloc&) {
-    std::cerr << "error: out of memory: the sample or the run is larger than this machine can "
-                 "hold (see sample.max_particles)\n";
-    return 1;
+    return fail(1, false,
+                "out of memory: the sample or the run is larger than this machine can hold (see "
+                "sample.max_particles)");
   } catch (const std::filesystem::filesystem_error& e) {
-    std::cerr << "error: " << e.path1().string() << ": " << e.code().message() << "\n";
-    return 1;
+    return fail(1, false, e.path1().string() + ": " + e.code().message());
   } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 1;
+    return fail(1, false, e.what());
   }
 }
 
 }  // namespace
 
+// The subcommand a launch names (argv[1]), or empty.
+std::string command_word(int argc, char** argv) {
+  return argc >= 2 && argv[1][0] != '-' ? argv[1] : "";
+}
+
 int main(int argc, char** argv) {
   breccia::configure_allocator();
+  // Refused before MPI starts: a build without MPI cannot call it, and a command that runs in
+  // one process must not run once per rank.
+  if (const auto refusal = breccia::ranks::launch_refusal(
+          breccia::ranks::launch_from_environment(), breccia::ranks::built_with_mpi(),
+          command_word(argc, argv), {"sweep", "resume", "calibrate"})) {
+    if (breccia::ranks::launch_from_environment().rank == 0)
+      std::cerr << "error: " << *refusal << "\n";
+    return 2;
+  }
+  const breccia::ranks::World world(argc, argv);
   CLI::App app{"Breccia: a virtual rock-mechanics laboratory (bonded-particle DEM)"};
   app.require_subcommand(1);
   std::string command_line;

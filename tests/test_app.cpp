@@ -14,6 +14,7 @@
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/calibrate/calibration_file.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/run/memory_budget.hpp"
 #include "breccia/spec/experiment.hpp"
 #include "breccia/state/particle_store.hpp"
@@ -261,6 +262,22 @@ TEST(App, BadInputOnTheCommandLineWritesNoRunFolder) {
   const Result r = run("run --quiet --output " + out.string() + " --set loading.max_strain=2");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("loading.max_strain"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// Started by a launcher as one of two processes (its environment says so), `run` refuses before
+// it writes anything: without MPI each process would run the whole test, and with MPI a run is
+// one process's. Either way the refusal names what to do.
+TEST(App, ARunLaunchedAsOneOfSeveralProcessesIsRefused) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_two_ranks";
+  fs::remove_all(out);
+  const Result r = run_with_prefix("OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=0 ",
+                                   "run --quiet --output " + out.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find(breccia::ranks::built_with_mpi() ? "`breccia run` runs in one process"
+                                                        : "built without MPI"),
+            std::string::npos)
+      << r.out;
   EXPECT_FALSE(fs::exists(out));
 }
 

@@ -2,10 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 #include <optional>
 
 #include "breccia/core/quat.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/core/vec3.hpp"
 #include "breccia/state/tag_index.hpp"
@@ -122,4 +124,64 @@ TEST(TagIndex, DenseAndSparseTagsFindTheirIndexes) {
   t.clear();
   EXPECT_FALSE(t.contains(1));
   EXPECT_EQ(t.size(), 0u);
+}
+
+// The launcher's environment as Open MPI and MPICH/Slurm's PMI write it; none: one process.
+TEST(Ranks, LaunchReadFromTheLaunchersEnvironment) {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "OMPI_COMM_WORLD_RANK",
+                        "OMPI_COMM_WORLD_LOCAL_SIZE", "PMI_SIZE", "PMI_RANK", "MPI_LOCALNRANKS"})
+    unsetenv(v);
+  breccia::ranks::Launch l = breccia::ranks::launch_from_environment();
+  EXPECT_FALSE(l.launched);
+  EXPECT_EQ(l.size, 1);
+  setenv("PMI_SIZE", "4", 1);
+  setenv("PMI_RANK", "3", 1);
+  setenv("MPI_LOCALNRANKS", "2", 1);
+  l = breccia::ranks::launch_from_environment();
+  EXPECT_TRUE(l.launched);
+  EXPECT_EQ(l.size, 4);
+  EXPECT_EQ(l.rank, 3);
+  EXPECT_EQ(l.local_size, 2);
+  setenv("OMPI_COMM_WORLD_SIZE", "3", 1);  // Open MPI's own variables come first
+  setenv("OMPI_COMM_WORLD_RANK", "1", 1);
+  setenv("OMPI_COMM_WORLD_LOCAL_SIZE", "3", 1);
+  l = breccia::ranks::launch_from_environment();
+  EXPECT_EQ(l.size, 3);
+  EXPECT_EQ(l.rank, 1);
+  EXPECT_EQ(l.local_size, 3);
+  setenv("OMPI_COMM_WORLD_SIZE", "three", 1);  // unreadable: the next launcher's
+  EXPECT_EQ(breccia::ranks::launch_from_environment().size, 4);
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "OMPI_COMM_WORLD_RANK",
+                        "OMPI_COMM_WORLD_LOCAL_SIZE", "PMI_SIZE", "PMI_RANK", "MPI_LOCALNRANKS"})
+    unsetenv(v);
+}
+
+// One process always runs; several run only a command that spreads over ranks, in a build with
+// MPI, and a refusal says why and what to do.
+TEST(Ranks, SeveralProcessesRunOnlyWhatSpreadsOverRanks) {
+  using breccia::ranks::launch_refusal;
+  const std::vector<std::string> spread{"sweep", "resume", "calibrate"};
+  breccia::ranks::Launch one{true, 1, 0, 1}, two{true, 2, 1, 2};
+  EXPECT_FALSE(launch_refusal(one, false, "run", spread));
+  EXPECT_FALSE(launch_refusal(two, true, "sweep", spread));
+  const auto no_mpi = launch_refusal(two, false, "sweep", spread);
+  ASSERT_TRUE(no_mpi);
+  EXPECT_NE(no_mpi->find("built without MPI"), std::string::npos) << *no_mpi;
+  EXPECT_NE(no_mpi->find("-DBRECCIA_MPI=ON"), std::string::npos) << *no_mpi;
+  const auto run = launch_refusal(two, true, "run", spread);
+  ASSERT_TRUE(run);
+  EXPECT_NE(run->find("`breccia run` runs in one process"), std::string::npos) << *run;
+  EXPECT_NE(run->find("sweep, resume, calibrate"), std::string::npos) << *run;
+}
+
+// Without a launcher a command is rank 0 of 1, and the collective calls are those of one process.
+TEST(Ranks, OneProcessIsRankZeroOfOne) {
+  EXPECT_EQ(breccia::ranks::rank(), 0);
+  EXPECT_EQ(breccia::ranks::size(), 1);
+  EXPECT_EQ(breccia::ranks::broadcast("text"), "text");
+  EXPECT_EQ(breccia::ranks::gather("mine"), std::vector<std::string>{"mine"});
+  EXPECT_EQ(breccia::ranks::on_root([] { return std::string("done"); }), "done");
+  EXPECT_THROW(breccia::ranks::on_root([]() -> std::string { throw std::runtime_error("no"); }),
+               std::runtime_error);
+  EXPECT_TRUE(breccia::ranks::failure_is_shared(false));
 }

@@ -118,7 +118,7 @@ std::vector<std::vector<double>> check_points(const CalibrationSpec& c) {
 class Calibrator {
  public:
   Calibrator(const CalibrationSpec& c, const CalibrationOptions& o, fs::path folder)
-      : c_(c), o_(o), folder_(std::move(folder)), lab_(c, folder_, o.log) {
+      : c_(c), o_(o), folder_(std::move(folder)), lab_(c, folder_, o.log, o.pool) {
     for (const auto& f : c_.free) values_.push_back(f.start);
   }
 
@@ -384,6 +384,9 @@ void Calibrator::fit_stage(CalibrationStage stage, int pass) {
 
 std::vector<TargetVerdict> Calibrator::verify(const Evaluation& final_eval) {
   std::map<Property, std::vector<double>> seen;
+  std::vector<std::string> sets;
+  for (auto seed : c_.verify_seeds) sets.push_back(fmt::format("verify-{}", seed));
+  lab_.prefetch(sets, values_, tests_for(c_, std::nullopt));  // at once, over the ranks
   for (auto seed : c_.verify_seeds) {
     const std::string set = fmt::format("verify-{}", seed);
     if (o_.log) o_.log(fmt::format("[calibrate] verifying with packing seed {}", seed));

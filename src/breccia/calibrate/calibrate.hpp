@@ -12,10 +12,15 @@
 
 namespace breccia {
 
+class RankPool;
+
 struct CalibrationOptions {
   std::string output_directory = "calibrations";  // receives <output>/<name>/
   std::string command_line;
   std::function<void(const std::string&)> log;  // progress and messages
+  // Root of an MPI launch: each trial's tests run at once over the ranks (RankPool::serve on the
+  // others).
+  RankPool* pool = nullptr;
 };
 
 struct TargetVerdict {

@@ -10,6 +10,7 @@
 #include "breccia/analysis/compression.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
 #include "breccia/run/run.hpp"
@@ -29,8 +30,8 @@ TestPlan tests_for(const CalibrationSpec& c, std::optional<CalibrationStage> sta
 }
 
 Laboratory::Laboratory(const CalibrationSpec& c, fs::path folder,
-                       std::function<void(const std::string&)> log)
-    : c_(c), folder_(std::move(folder)), log_(std::move(log)) {
+                       std::function<void(const std::string&)> log, RankPool* pool)
+    : c_(c), folder_(std::move(folder)), log_(std::move(log)), pool_(pool) {
   if (!log_) log_ = [](const std::string&) {};
   fs::create_directories(folder_ / "samples");
   fs::create_directories(folder_ / "trials");
@@ -115,7 +116,7 @@ std::vector<std::string> Laboratory::set_overrides(const std::string& set) const
 Measurement Laboratory::measure_fit(const std::vector<double>& values, const TestPlan& plan) {
   const std::vector<std::string> sets = c_.fit_sets();
   if (sets.size() == 1) return measure(sets.front(), values, plan);
-  Measurement all;
+  Measurement all = prefetch(sets, values, plan);
   std::map<Property, std::vector<double>> seen;
   for (const std::string& set : sets) {
     Measurement m = measure(set, values, plan);
@@ -281,49 +282,114 @@ void append_line(const fs::path& file, const json& j) {
 
 }  // namespace
 
-json Laboratory::run_test(const std::string& set, const std::vector<double>& values,
-                          const std::string& test, double sigma3, Measurement& m) {
+std::string Laboratory::test_key(const std::string& set, const std::vector<double>& values,
+                                 const std::string& test) const {
   std::string key = set + "|" + test;
   for (const auto& s : parameter_overrides(c_, values)) key += "|" + s;
-  if (auto it = book_.find(key); it != book_.end()) return it->second;
-  throw_if_interrupted("calibrating");
+  return key;
+}
 
-  ExperimentSpec spec = trial_spec(set, values, test, sigma3);
-  const int run = next_run_++;
-  spec.name = fmt::format("{:03d}-{}-{}", run, set, test);
+Laboratory::PendingTest Laboratory::pending_test(const std::string& set,
+                                                 const std::vector<double>& values,
+                                                 const std::string& test, double sigma3) {
+  PendingTest t{test_key(set, values, test),          set, test, sigma3, next_run_++,
+                trial_spec(set, values, test, sigma3)};
+  t.spec.name = fmt::format("{:03d}-{}-{}", t.run, set, test);
+  return t;
+}
 
-  RunOptions opt;
-  opt.interrupt = &interrupt_flag();
-  opt.log = [](const std::string&) {};
-  const auto t0 = std::chrono::steady_clock::now();
-  const RunResult r = run_experiment(spec, opt);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (r.status == "interrupted") throw Interrupted("running " + spec.name);
-
-  json record{{"key", key},         {"run", run},          {"set", set},
-              {"test", test},       {"sigma3_pa", sigma3}, {"values", values},
-              {"folder", r.folder}, {"status", r.status},  {"wall_seconds", wall}};
+json Laboratory::book_test(const PendingTest& t, const std::vector<double>& values,
+                           const std::string& folder, const std::string& status,
+                           const std::string& stop_reason, double wall, Measurement& m) {
+  json record{{"key", t.key},     {"run", t.run},          {"set", t.set},
+              {"test", t.test},   {"sigma3_pa", t.sigma3}, {"values", values},
+              {"folder", folder}, {"status", status},      {"wall_seconds", wall}};
   std::vector<std::string> why;
-  if (r.status == "complete") {
-    const json summary = read_json_object((fs::path(r.folder) / "summary.json").string());
+  if (status == "complete") {
+    const json summary = read_json_object((fs::path(folder) / "summary.json").string());
     record["properties"] =
-        test_properties(test, JsonView(summary, r.folder + "/summary.json"), why);
+        test_properties(t.test, JsonView(summary, folder + "/summary.json"), why);
   } else {
     record["properties"] = json::object();
-    why.push_back(test + ": run " + r.status + " (" + r.stop_reason + ")");
+    why.push_back(t.test + ": run " + status + " (" + stop_reason + ")");
   }
   record["problems"] = why;
   append_line(folder_ / "trials.jsonl", record);
-  book_[key] = record;
+  book_[t.key] = record;
   m.new_runs += 1;
   m.wall_seconds += wall;
   return record;
 }
 
+namespace {
+
+RunOptions quiet_run() {
+  RunOptions opt;
+  opt.interrupt = &interrupt_flag();
+  opt.log = [](const std::string&) {};
+  return opt;
+}
+
+std::string triaxial_name(double sigma3) {
+  return fmt::format("triaxial-{:g}MPa", sigma3 / 1e6);
+}
+
+}  // namespace
+
+json Laboratory::run_test(const std::string& set, const std::vector<double>& values,
+                          const std::string& test, double sigma3, Measurement& m) {
+  if (auto it = book_.find(test_key(set, values, test)); it != book_.end()) return it->second;
+  throw_if_interrupted("calibrating");
+  const PendingTest t = pending_test(set, values, test, sigma3);
+  const auto t0 = std::chrono::steady_clock::now();
+  const RunResult r = run_experiment(t.spec, quiet_run());
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (r.status == "interrupted") throw Interrupted("running " + t.spec.name);
+  return book_test(t, values, r.folder, r.status, r.stop_reason, wall, m);
+}
+
+Measurement Laboratory::prefetch(const std::vector<std::string>& sets,
+                                 const std::vector<double>& values, const TestPlan& plan) {
+  Measurement m;
+  if (pool_ == nullptr || ranks::size() == 1) return m;
+  std::vector<std::pair<std::string, double>> tests{{"ucs", 0.0}};
+  if (plan.brazilian) tests.emplace_back("brazilian", 0.0);
+  if (plan.envelope)
+    for (double sigma3 : c_.confining_stresses) tests.emplace_back(triaxial_name(sigma3), sigma3);
+  std::vector<PendingTest> todo;
+  for (const std::string& set : sets) {
+    prepare_samples(set, values);
+    for (const auto& [test, sigma3] : tests)
+      if (!book_.count(test_key(set, values, test)))
+        todo.push_back(pending_test(set, values, test, sigma3));
+  }
+  if (todo.empty()) return m;
+  throw_if_interrupted("calibrating");
+  std::vector<ExperimentSpec> specs;
+  for (const PendingTest& t : todo) specs.push_back(t.spec);
+  const std::vector<PooledRun> runs = pool_->run(specs, quiet_run());
+  // Every test that ended is recorded before a failure or a stop is raised, so that a resumed
+  // calibration reads them back.
+  std::string failure, stopped;
+  for (std::size_t i = 0; i < todo.size(); ++i) {
+    if (!runs[i].error.empty()) {
+      if (failure.empty()) failure = todo[i].spec.name + ": " + runs[i].error;
+    } else if (runs[i].status == "interrupted") {
+      if (stopped.empty()) stopped = todo[i].spec.name;
+    } else {
+      book_test(todo[i], values, runs[i].folder, runs[i].status, runs[i].stop_reason,
+                runs[i].wall_seconds, m);
+    }
+  }
+  if (!failure.empty()) throw std::runtime_error(failure);
+  if (!stopped.empty()) throw Interrupted("running " + stopped);
+  return m;
+}
+
 Measurement Laboratory::measure(const std::string& set, const std::vector<double>& values,
                                 const TestPlan& plan) {
   prepare_samples(set, values);
-  Measurement m;
+  Measurement m = prefetch({set}, values, plan);
   auto take = [&](const json& rec) {
     m.tests[rec.value("test", "?")] = rec.at("properties");
     m.run_folders.push_back(rec.value("folder", ""));
@@ -343,8 +409,7 @@ Measurement Laboratory::measure(const std::string& set, const std::vector<double
     std::vector<double> s3{0.0}, s1;
     if (ucs.contains("uniaxial_strength")) s1.push_back(ucs["uniaxial_strength"].get<double>());
     for (double sigma3 : c_.confining_stresses) {
-      const json t =
-          take(run_test(set, values, fmt::format("triaxial-{:g}MPa", sigma3 / 1e6), sigma3, m));
+      const json t = take(run_test(set, values, triaxial_name(sigma3), sigma3, m));
       if (t.contains("sigma1_at_peak")) {
         s3.push_back(sigma3);
         s1.push_back(t["sigma1_at_peak"].get<double>());

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "breccia/calibrate/calibration_file.hpp"
+#include "breccia/run/rank_pool.hpp"
 
 namespace breccia {
 
@@ -38,9 +39,10 @@ struct Measurement {
 
 class Laboratory {
  public:
-  // `folder` is the calibration folder; samples/ and trials/ live under it.
+  // `folder` is the calibration folder; samples/ and trials/ live under it. With a `pool` (root
+  // of an MPI launch) the tests a measurement needs run at once over the ranks.
   Laboratory(const CalibrationSpec& c, std::filesystem::path folder,
-             std::function<void(const std::string&)> log);
+             std::function<void(const std::string&)> log, RankPool* pool = nullptr);
 
   // The samples of a sample set: "calibration" (the [experiment] sample at the start values,
   // its seed), "fit-<seed>" (the same with that seed) or "verify-<seed>" (verify_set overrides,
@@ -51,6 +53,11 @@ class Laboratory {
   // What the search judges a trial by: measure() on each of the calibration's fit sets
   // (CalibrationSpec::fit_sets), each property the mean over them; `tests` keyed by set.
   Measurement measure_fit(const std::vector<double>& values, const TestPlan& plan);
+  // With a pool over several ranks: runs at once every test that measure() would run on these
+  // sets at `values`, and records them; measure() then reads them back. Numbered in measure()'s
+  // order. The runs it made, in new_runs and wall_seconds.
+  Measurement prefetch(const std::vector<std::string>& sets, const std::vector<double>& values,
+                       const TestPlan& plan);
 
   // Every check a trial can fail, before the first trial: the samples of every set (the
   // calibration's and each verification seed's) are packed, and each test the calibration will
@@ -71,6 +78,21 @@ class Laboratory {
   ExperimentSpec trial_spec(const std::string& set, const std::vector<double>& values,
                             const std::string& test, double sigma3) const;
   void read_trial_record();
+  // A test to run: its record's key, its number and its experiment.
+  struct PendingTest {
+    std::string key, set, test;
+    double sigma3 = 0.0;
+    int run = 0;
+    ExperimentSpec spec;
+  };
+  std::string test_key(const std::string& set, const std::vector<double>& values,
+                       const std::string& test) const;
+  PendingTest pending_test(const std::string& set, const std::vector<double>& values,
+                           const std::string& test, double sigma3);
+  // Records a finished test (trials.jsonl and the book) with what its summary says.
+  nlohmann::json book_test(const PendingTest& t, const std::vector<double>& values,
+                           const std::string& folder, const std::string& status,
+                           const std::string& stop_reason, double wall, Measurement& m);
   nlohmann::json run_test(const std::string& set, const std::vector<double>& values,
                           const std::string& test, double sigma3, Measurement& m);
 
@@ -80,6 +102,7 @@ class Laboratory {
   std::map<std::string, nlohmann::json> book_;  // key -> record of a finished test
   std::map<std::string, SamplePaths> samples_;
   int next_run_ = 1;
+  RankPool* pool_ = nullptr;
 };
 
 }  // namespace breccia

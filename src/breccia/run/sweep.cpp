@@ -23,6 +23,7 @@
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
 #include "breccia/core/parallel.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/core/text_file.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
@@ -253,13 +254,127 @@ std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int
   return results;
 }
 
+// One run of a sweep on this rank, in this process: its messages go to experiments/<name>.log
+// (as a child process's do), and what it throws becomes its status, so that every rank reaches
+// the gather that follows.
+RunResult run_on_this_rank(ExperimentSpec one, const EarlierRun& earlier, int threads,
+                           const fs::path& stem, const RunOptions& opt) {
+  one.threads = threads;
+  one.progress = false;
+  if (!earlier.resumable()) write_file_atomically(stem.string() + ".toml", to_toml(one));
+  auto log = std::make_shared<std::ofstream>(stem.string() + ".log");
+  RunOptions mine = opt;
+  mine.show_progress = false;
+  mine.progress = nullptr;
+  mine.jobs = 1;
+  mine.log = [log](const std::string& m) { *log << m << std::endl; };
+  RunResult r;
+  try {
+    return earlier.resumable() ? resume_run(earlier.folder.string(), ResumeOptions{threads}, mine)
+                               : run_experiment(one, mine);
+  } catch (const Interrupted& e) {
+    r.status = "interrupted";
+    r.stop_reason = std::string(e.what()) + " (not started: resume runs it)";
+  } catch (const std::exception& e) {
+    r.status = "failed";
+    r.stop_reason = fmt::format("rank {}: {}", ranks::rank(), e.what());
+  }
+  *log << "error: " << r.stop_reason << std::endl;
+  return r;
+}
+
+// What root must know of the sweep's runs before they start: where each stands (resuming), the
+// generated sample packed once into the cache every rank reads.
+std::vector<EarlierRun> runs_before_start(const std::vector<ExperimentSpec>& specs,
+                                          const fs::path& folder, bool resuming,
+                                          const RunOptions& opt) {
+  const json seen = json::parse(ranks::on_root([&] {
+    const ExperimentSpec& first = specs.front();
+    if (first.sample_source == "generate" && first.cache) {
+      json report;
+      SampleInfo info;
+      load_sample(first, report, info, opt.log);
+    }
+    json folders = json::array();
+    for (const ExperimentSpec& one : specs)
+      folders.push_back(resuming ? earlier_run(folder, one.name).folder.string() : "");
+    return folders.dump();
+  }));
+  std::vector<EarlierRun> earlier(specs.size());
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    earlier[i].folder = seen[i].get<std::string>();
+    if (!earlier[i].folder.empty()) earlier[i].result = result_of_folder(earlier[i].folder);
+  }
+  return earlier;
+}
+
+// The sweep's runs shared out over the ranks of an MPI launch: the k-th run still to do goes to
+// rank k mod N, which runs it in its own process with its share of its machine's cores. Runs do
+// not depend on where they ran, so the folders are those of a sweep in one process. Root
+// gathers every rank's outcomes and reads each run's folder, as it does a child process's.
+std::vector<RunResult> sweep_over_ranks(const std::vector<ExperimentSpec>& specs,
+                                        const fs::path& folder, const RunOptions& opt,
+                                        bool resuming) {
+  const std::vector<EarlierRun> earlier = runs_before_start(specs, folder, resuming, opt);
+  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int threads = specs.front().threads > 0 ? static_cast<int>(specs.front().threads)
+                                                : std::max(1, cores / ranks::local_size());
+  if (opt.log)
+    opt.log(fmt::format("sweep: {} runs over {} ranks ({} thread{} each)", specs.size(),
+                        ranks::size(), threads, threads == 1 ? "" : "s"));
+  const fs::path dir = folder / "experiments";
+  fs::create_directories(dir);
+  json mine = json::array();
+  std::size_t k = 0;  // runs still to do, so far
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    if (earlier[i].complete() ||
+        k++ % static_cast<std::size_t>(ranks::size()) != static_cast<std::size_t>(ranks::rank()))
+      continue;
+    RunResult r;
+    if (opt.interrupt && opt.interrupt->load()) {
+      r.status = "interrupted";
+      r.stop_reason = "not started: the sweep was interrupted";
+    } else {
+      r = run_on_this_rank(specs[i], earlier[i], threads, dir / specs[i].name, opt);
+    }
+    mine.push_back({{"index", i},
+                    {"folder", r.folder},
+                    {"status", r.status},
+                    {"stop_reason", r.stop_reason},
+                    {"rank", ranks::rank()}});
+  }
+  std::vector<RunResult> results(specs.size());
+  for (std::size_t i = 0; i < specs.size(); ++i)
+    if (earlier[i].complete()) results[i] = earlier[i].result;
+  for (const std::string& text : ranks::gather(mine.dump())) {
+    for (const json& o : json::parse(text)) {
+      const std::size_t i = o.at("index").get<std::size_t>();
+      const std::string run = o.at("folder").get<std::string>();
+      if (!run.empty() && fs::exists(run)) {
+        results[i] = result_of_folder(run);
+      } else {
+        results[i].status = o.at("status").get<std::string>();
+        results[i].stop_reason = o.at("stop_reason").get<std::string>();
+      }
+      if (opt.log)
+        opt.log(fmt::format("sweep: {} {} on rank {} ({})", specs[i].name, results[i].status,
+                            o.at("rank").get<int>(),
+                            results[i].status == "complete"
+                                ? fmt::format("peak q {:.2f} MPa", results[i].peak_stress * 1e-6)
+                                : results[i].stop_reason));
+    }
+  }
+  return results;
+}
+
 }  // namespace
 
 namespace {
 
 // A new sweep folder, <output.directory>/<stamp>-<name>-sweep.
+// Under mpirun root makes it and names it to the other ranks.
 fs::path make_sweep_folder(const ExperimentSpec& spec) {
-  return make_folder(spec, "-sweep");
+  return ranks::on_root([&] { return make_folder(spec, "-sweep").string(); });
 }
 
 // Runs the sweep's experiments: as parallel processes when cores allow (each with its share of
@@ -269,6 +384,7 @@ std::vector<RunResult> run_all(const ExperimentSpec& spec, const std::vector<Exp
                                const fs::path& folder, const RunOptions& opt,
                                const std::function<std::string(const ExperimentSpec&)>& describe,
                                bool resuming) {
+  if (ranks::size() > 1) return sweep_over_ranks(specs, folder, opt, resuming);
   const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   const int per_run = spec.threads > 0 ? static_cast<int>(spec.threads) : 1;
   const int jobs = opt.jobs > 0
@@ -651,17 +767,31 @@ SweepJob job_of_plan(const ExperimentSpec& spec, const json& plan, const fs::pat
 }
 
 // Runs a plan's experiments (resuming: what an earlier pass left) and writes sweep.json.
+// Under mpirun every rank runs its share, and root alone writes sweep.json and the report; the
+// other ranks learn the sweep's status from root. Root builds the job first: a strain-rate
+// sweep measures the sample, packing and caching it for the other ranks.
 SweepResult execute_plan(const ExperimentSpec& spec, json plan, const fs::path& folder,
                          const RunOptions& opt, bool resuming) {
-  const SweepJob job = job_of_plan(spec, plan, folder, opt);
+  SweepJob job;
+  ranks::on_root([&] {
+    job = job_of_plan(spec, plan, folder, opt);
+    return std::string();
+  });
+  if (!ranks::root()) job = job_of_plan(spec, plan, folder, opt);
   SweepResult out;
   out.folder = folder.string();
   out.runs = run_all(spec, job.specs, folder, opt, job.describe, resuming);
-  out.status = sweep_status(out.runs, job.specs.size());
-  json sweep = job.assemble(out.runs);
-  sweep["status"] = out.status;
-  if (plan.contains("resumed")) sweep["resumed"] = plan["resumed"];
-  finish_sweep(spec, out, sweep, opt);
+  out.status = ranks::on_root([&] {
+    const std::string status = sweep_status(out.runs, job.specs.size());
+    json sweep = job.assemble(out.runs);
+    sweep["status"] = status;
+    if (ranks::size() > 1) sweep["ranks"] = ranks::size();
+    if (plan.contains("resumed")) sweep["resumed"] = plan["resumed"];
+    SweepResult written = out;
+    written.status = status;
+    finish_sweep(spec, written, sweep, opt);
+    return status;
+  });
   return out;
 }
 
@@ -677,7 +807,7 @@ SweepResult start_sweep(const ExperimentSpec& spec, const std::string& kind, con
                   {"experiment_source", spec.source},
                   {"experiment", to_toml(spec)},
                   {"program", fmt::format("breccia {} ({})", kVersion, kCommit)}};
-  write_json(folder / kPlanFile, plan);
+  if (ranks::root()) write_json(folder / kPlanFile, plan);
   return execute_plan(spec, plan, folder, opt, false);
 }
 
@@ -771,14 +901,20 @@ SweepResult resume_sweep(const std::string& folder_name, const RunOptions& opt) 
     throw InputError(folder_name, kPlanFile, "(missing)",
                      "a sweep folder written by `breccia sweep` (sweeps from before version "
                      "0.1.0's sweep plans cannot be resumed: resume their runs one by one)");
-  json plan = read_json_object(path.string());
+  // Root reads and extends the plan; every rank gets root's copy.
+  const json plan = json::parse(ranks::on_root([&] {
+    json read = read_json_object(path.string());
+    (void)checked_plan(path, read);
+    if (!read.contains("resumed")) read["resumed"] = json::array();
+    json entry{{"when", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
+               {"program", fmt::format("breccia {} ({})", kVersion, kCommit)},
+               {"command", opt.command_line}};
+    if (ranks::size() > 1) entry["ranks"] = ranks::size();
+    read["resumed"].push_back(entry);
+    write_json(path, read);
+    return read.dump();
+  }));
   const ExperimentSpec spec = checked_plan(path, plan);
-  if (!plan.contains("resumed")) plan["resumed"] = json::array();
-  plan["resumed"].push_back(
-      json{{"when", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
-           {"program", fmt::format("breccia {} ({})", kVersion, kCommit)},
-           {"command", opt.command_line}});
-  write_json(path, plan);
   if (opt.log) opt.log("resuming the sweep in " + folder_name);
   return execute_plan(spec, plan, folder, opt, true);
 }

@@ -1,0 +1,230 @@
+#include "breccia/core/ranks.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <climits>
+#include <cstdint>
+#include <cstdlib>
+#include <exception>
+
+#ifdef BRECCIA_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace breccia::ranks {
+
+namespace {
+
+// The world as World set it up; a plain start leaves it at one rank.
+struct State {
+  int rank = 0, size = 1, local_size = 1;
+  bool mpi = false;             // MPI initialised by World
+  bool waited = false;          // a collective call has run
+  bool shared_failure = false;  // on_root passed a failure to every rank
+};
+
+State& state() noexcept {
+  static State s;
+  return s;
+}
+
+std::optional<int> env_int(const char* name) {
+  const char* v = std::getenv(name);
+  if (v == nullptr || *v == '\0') return std::nullopt;
+  char* end = nullptr;
+  const long n = std::strtol(v, &end, 10);
+  if (*end != '\0' || n < 0 || n > INT_MAX) return std::nullopt;
+  return static_cast<int>(n);
+}
+
+#ifdef BRECCIA_HAVE_MPI
+void check(int rc, const char* call) {
+  if (rc == MPI_SUCCESS) return;
+  char text[MPI_MAX_ERROR_STRING];
+  int length = 0;
+  MPI_Error_string(rc, text, &length);
+  throw std::runtime_error(fmt::format("MPI: {} failed: {}", call, std::string(text, length)));
+}
+
+int int_count(std::size_t n) {
+  if (n > static_cast<std::size_t>(INT_MAX))
+    throw std::runtime_error(fmt::format("MPI: a message of {} bytes is too long", n));
+  return static_cast<int>(n);
+}
+#endif
+
+}  // namespace
+
+Launch launch_from_environment() {
+  Launch l;
+  const std::optional<int> size =
+      env_int("OMPI_COMM_WORLD_SIZE") ? env_int("OMPI_COMM_WORLD_SIZE") : env_int("PMI_SIZE");
+  const std::optional<int> rank =
+      env_int("OMPI_COMM_WORLD_RANK") ? env_int("OMPI_COMM_WORLD_RANK") : env_int("PMI_RANK");
+  const std::optional<int> local = env_int("OMPI_COMM_WORLD_LOCAL_SIZE")
+                                       ? env_int("OMPI_COMM_WORLD_LOCAL_SIZE")
+                                       : env_int("MPI_LOCALNRANKS");
+  // Slurm's srun with PMIx names the rank only; the step's task count is the size.
+  const std::optional<int> pmix_rank = env_int("PMIX_RANK");
+  if (!size && pmix_rank) {
+    l.launched = true;
+    l.rank = *pmix_rank;
+    l.size = std::max(env_int("SLURM_STEP_NUM_TASKS").value_or(1), l.rank + 1);
+    l.local_size = std::clamp(env_int("SLURM_STEP_TASKS_PER_NODE").value_or(1), 1, l.size);
+    return l;
+  }
+  if (!size || *size < 1) return l;
+  l.launched = true;
+  l.size = *size;
+  l.rank = rank.value_or(0);
+  l.local_size = std::clamp(local.value_or(1), 1, l.size);
+  return l;
+}
+
+bool built_with_mpi() noexcept {
+#ifdef BRECCIA_HAVE_MPI
+  return true;
+#else
+  return false;
+#endif
+}
+
+std::optional<std::string> launch_refusal(const Launch& launch, bool with_mpi,
+                                          const std::string& command,
+                                          const std::vector<std::string>& spread) {
+  if (launch.size <= 1) return std::nullopt;
+  if (!with_mpi)
+    return fmt::format(
+        "this breccia was built without MPI, but a launcher started it as one of {} processes: "
+        "each would run the whole command alone. Build with MPI (install libopenmpi-dev, then "
+        "cmake -DBRECCIA_MPI=ON) or start it without mpirun",
+        launch.size);
+  if (std::find(spread.begin(), spread.end(), command) != spread.end()) return std::nullopt;
+  std::string names;
+  for (const std::string& s : spread) names += (names.empty() ? "" : ", ") + s;
+  return fmt::format(
+      "`breccia {}` runs in one process (its threads: --threads); on {} ranks it would run {} "
+      "times over. Commands that spread over ranks: {}",
+      command, launch.size, launch.size, names);
+}
+
+World::World([[maybe_unused]] int& argc, [[maybe_unused]] char**& argv) {
+#ifdef BRECCIA_HAVE_MPI
+  const Launch l = launch_from_environment();
+  if (!l.launched) return;
+  int provided = 0;
+  check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  State& s = state();
+  s.mpi = true;
+  MPI_Comm_rank(MPI_COMM_WORLD, &s.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &s.size);
+  MPI_Comm node;
+  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, s.rank, MPI_INFO_NULL, &node);
+  MPI_Comm_size(node, &s.local_size);
+  MPI_Comm_free(&node);
+#endif
+}
+
+World::~World() {
+#ifdef BRECCIA_HAVE_MPI
+  if (state().mpi) MPI_Finalize();
+  state() = State{};
+#endif
+}
+
+int rank() noexcept {
+  return state().rank;
+}
+
+int size() noexcept {
+  return state().size;
+}
+
+int local_size() noexcept {
+  return state().local_size;
+}
+
+void barrier() {
+  state().waited = true;
+#ifdef BRECCIA_HAVE_MPI
+  if (state().mpi) check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+#endif
+}
+
+std::string broadcast(const std::string& from_root) {
+  state().waited = true;
+#ifdef BRECCIA_HAVE_MPI
+  if (!state().mpi) return from_root;
+  std::uint64_t n = from_root.size();
+  check(MPI_Bcast(&n, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  std::string text = root() ? from_root : std::string(n, '\0');
+  check(MPI_Bcast(text.data(), int_count(n), MPI_CHAR, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  return text;
+#else
+  return from_root;
+#endif
+}
+
+std::vector<std::string> gather(const std::string& mine) {
+  state().waited = true;
+#ifdef BRECCIA_HAVE_MPI
+  if (!state().mpi) return {mine};
+  const int n = int_count(mine.size());
+  std::vector<int> lengths(root() ? size() : 0), offsets(lengths.size());
+  check(MPI_Gather(&n, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+  std::size_t total = 0;
+  for (std::size_t r = 0; r < lengths.size(); ++r) {
+    offsets[r] = int_count(total);
+    total += static_cast<std::size_t>(lengths[r]);
+  }
+  std::string all(total, '\0');
+  check(MPI_Gatherv(mine.data(), n, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR,
+                    0, MPI_COMM_WORLD),
+        "MPI_Gatherv");
+  std::vector<std::string> out;
+  for (std::size_t r = 0; r < lengths.size(); ++r)
+    out.push_back(
+        all.substr(static_cast<std::size_t>(offsets[r]), static_cast<std::size_t>(lengths[r])));
+  return out;
+#else
+  return {mine};
+#endif
+}
+
+std::string on_root(const std::function<std::string()>& work) {
+  if (size() == 1) return work();
+  std::string text;
+  std::exception_ptr failure;
+  if (root()) {
+    try {
+      text = work();
+    } catch (const std::exception& e) {
+      failure = std::current_exception();
+      text = e.what();
+    }
+  }
+  const std::string flagged = broadcast((failure ? "E" : "K") + text);
+  if (flagged.front() == 'E') state().shared_failure = true;
+  if (failure) std::rethrow_exception(failure);
+  if (flagged.front() == 'E') throw RootFailed(flagged.substr(1));
+  return flagged.substr(1);
+}
+
+bool failure_is_shared(bool bad_input) noexcept {
+  const State& s = state();
+  return s.size == 1 || s.shared_failure || (bad_input && !s.waited);
+}
+
+void failure_released_the_others() noexcept {
+  state().shared_failure = true;
+}
+
+void abort(int code) {
+#ifdef BRECCIA_HAVE_MPI
+  if (state().mpi) MPI_Abort(MPI_COMM_WORLD, code);
+#endif
+  std::exit(code);
+}
+
+}  // namespace breccia::ranks

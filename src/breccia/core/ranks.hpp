@@ -1,0 +1,81 @@
+#pragma once
+// The processes of an MPI launch (`mpirun -np N`, `srun`). A build without MPI, or a command
+// started without a launcher, is rank 0 of 1, and every function below then does what one
+// process alone would, so callers have one path. Only this module includes <mpi.h>.
+#include <functional>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace breccia::ranks {
+
+// What a launcher told the process through its environment, read before any MPI call: Open MPI
+// (OMPI_COMM_WORLD_*), MPICH's Hydra and Slurm's PMI (PMI_SIZE, PMI_RANK, MPI_LOCALNRANKS), and
+// PMIx under srun (PMIX_RANK, with Slurm's SLURM_STEP_NUM_TASKS for the size).
+struct Launch {
+  bool launched = false;  // started by a launcher, even as 1 process
+  int size = 1, rank = 0;
+  int local_size = 1;  // ranks on this machine
+};
+Launch launch_from_environment();
+
+// True when this build links MPI (cmake -DBRECCIA_MPI=ON, or AUTO with Open MPI installed).
+bool built_with_mpi() noexcept;
+
+// Why a command cannot run as launched (empty: it can): a build without MPI started as one of
+// several processes would run the whole command in each and write as many folders, and a command
+// that does not spread over ranks must not run N times over. `command` is the subcommand's name;
+// `spread` the commands that run on several ranks.
+std::optional<std::string> launch_refusal(const Launch& launch, bool with_mpi,
+                                          const std::string& command,
+                                          const std::vector<std::string>& spread);
+
+// Initialises MPI for the life of the command when a launcher started it (a plain start touches
+// no MPI), with one thread per rank calling MPI (the OpenMP threads never do).
+class World {
+ public:
+  World(int& argc, char**& argv);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+};
+
+int rank() noexcept;
+int size() noexcept;
+int local_size() noexcept;  // ranks on this machine, to share its cores
+inline bool root() noexcept {
+  return rank() == 0;
+}
+
+void barrier();
+// Root's text, on every rank.
+std::string broadcast(const std::string& from_root);
+// Every rank's text, in rank order, on root (empty on the others).
+std::vector<std::string> gather(const std::string& mine);
+
+// An error that root met and passed on: the other ranks raise it too, and do not print it (root
+// does).
+class RootFailed : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Runs `work` on root only and gives its text to every rank. If it throws, every rank throws:
+// root its own exception, the others RootFailed with root's message, so that no rank waits for
+// a root that has given up.
+std::string on_root(const std::function<std::string()>& work);
+
+// Whether a rank that failed may end as usual (true) or must abort the launch (false). The other
+// ranks end the same way when the failure was shared through on_root, or was a bad input met
+// before any rank waited on another (every rank read the same input); any other failure may
+// leave ranks waiting for this one forever.
+bool failure_is_shared(bool bad_input) noexcept;
+// Root, failing, has released the other ranks (told them to stop): its failure ends no rank in
+// waiting.
+void failure_released_the_others() noexcept;
+
+// Ends every rank of the launch (MPI_Abort) with `code`; a single process exits with it.
+[[noreturn]] void abort(int code);
+
+}  // namespace breccia::ranks

@@ -1,0 +1,225 @@
+// The command under mpirun (built only with MPI): a sweep's runs and a calibration's tests,
+// spread over ranks, give the folders of one process, byte for byte in every table; a sweep
+// stopped on some ranks resumes on others; SIGUSR1 to mpirun stops every rank with a checkpoint;
+// commands that run in one process and bad input are refused once, by name.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_harness.hpp"
+
+namespace fs = std::filesystem;
+using breccia::testing::last_line;
+using breccia::testing::read;
+using breccia::testing::Result;
+using breccia::testing::run;
+using breccia::testing::run_with_prefix;
+
+namespace {
+
+// Open MPI as CI runs it: as root, more ranks than cores, no cross-memory attach in containers.
+std::string mpirun(int ranks) {
+  return "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+         "OMPI_MCA_btl_vader_single_copy_mechanism=none mpirun --oversubscribe -np " +
+         std::to_string(ranks) + " ";
+}
+
+// A small UCS that breaks bonds in about a second, over three bond strengths.
+const std::string kSweep =
+    std::string(" --set sample.source=\"file\" --set sample.file=\"") + BRECCIA_SOURCE_DIR +
+    "/tests/data/ucs-small.geom\" --set engine.density_scaling=100 --set output.plot=false"
+    " --set material.preset=\"custom\" --set contact.law=\"hertz_mindlin\""
+    " --set contact.shear_modulus=29e9 --set contact.poisson_ratio=0.33"
+    " --set contact.friction=0.4 --set bond.modulus=8e9 --set bond.tensile_strength=30e6"
+    " --set bond.cohesion=300e6 --set loading.platen_speed=0.2 --set loading.max_strain=0.006"
+    " --set engine.threads=1 --over bond.tensile_strength 25e6 30e6 35e6";
+
+// Runs a shell command line; its output and exit status.
+Result shell(const std::string& command) {
+  Result r{0, {}};
+  FILE* p = popen(("sh -c '" + command + "' 2>&1").c_str(), "r");
+  char buf[4096];
+  while (std::size_t n = fread(buf, 1, sizeof buf, p)) r.out.append(buf, n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+int count(const std::string& text, const std::string& part) {
+  int n = 0;
+  for (auto at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) ++n;
+  return n;
+}
+
+// The one folder a command wrote into `out` (under mpirun the ranks' output reaches the terminal
+// in no fixed order, so the folder printed last may not be the last line).
+fs::path only_folder(const fs::path& out) {
+  EXPECT_TRUE(fs::exists(out));
+  if (!fs::exists(out) || fs::is_empty(out)) return out / "(nothing written)";
+  return fs::directory_iterator(out)->path();
+}
+
+// The sweep of one process, run once for every test here.
+const fs::path& serial_sweep() {
+  static const fs::path folder = [] {
+    const fs::path out = fs::temp_directory_path() / "breccia_mpi_serial";
+    fs::remove_all(out);
+    const Result r = run("sweep --jobs 1 --output " + out.string() + kSweep);
+    EXPECT_EQ(r.code, 0) << r.out;
+    return fs::path(last_line(r.out));
+  }();
+  return folder;
+}
+
+// Every run of sweep `b` has the tables of the same run of the one-process sweep, byte for byte,
+// and sweep.json the same results.
+void expect_as_one_process(const fs::path& b, const std::string& how) {
+  const fs::path a = serial_sweep();
+  const auto ja = nlohmann::json::parse(read(a / "sweep.json"));
+  const auto jb = nlohmann::json::parse(read(b / "sweep.json"));
+  EXPECT_EQ(jb["status"], "complete") << how;
+  ASSERT_EQ(ja["runs"].size(), 3u);
+  ASSERT_EQ(jb["runs"].size(), 3u) << how;
+  ASSERT_GT(ja["runs"][0]["cracks"].get<int>(), 10) << "the runs must break bonds";
+  for (std::size_t i = 0; i < 3; ++i) {
+    for (const char* key : {"status", "value", "cracks", "cracks_scaled", "fragments", "metrics"})
+      EXPECT_EQ(ja["runs"][i][key], jb["runs"][i][key]) << how << ": run " << i << " " << key;
+    const fs::path ra = a / ja["runs"][i]["folder"].get<std::string>();
+    const fs::path rb = b / jb["runs"][i]["folder"].get<std::string>();
+    for (const char* f : {"history.csv", "cracks.csv", "events.csv", "walls.csv", "fragments.csv",
+                          "b_value_windows.csv"})
+      EXPECT_EQ(read(ra / f), read(rb / f)) << how << ": run " << i << " " << f;
+  }
+}
+
+}  // namespace
+
+// Two ranks (one runs two of the three runs) and four (one rank has none): the folders of one
+// process; root alone writes sweep.json and prints, once.
+TEST(Mpi, ASweepOverRanksGivesTheFoldersOfOneProcess) {
+  for (int ranks : {2, 4}) {
+    const fs::path out = fs::temp_directory_path() / ("breccia_mpi_sweep_" + std::to_string(ranks));
+    fs::remove_all(out);
+    const Result r = run_with_prefix(mpirun(ranks), "sweep --output " + out.string() + kSweep);
+    ASSERT_EQ(r.code, 0) << r.out;
+    const fs::path b = only_folder(out);
+    expect_as_one_process(b, std::to_string(ranks) + " ranks");
+    EXPECT_EQ(nlohmann::json::parse(read(b / "sweep.json"))["ranks"], ranks);
+    EXPECT_EQ(count(r.out, "sweep ucs-berea (complete)"), 1) << r.out;
+    EXPECT_EQ(count(r.out, "complete on rank"), 3) << r.out;
+    for (const char* name : {"25e6", "30e6", "35e6"})
+      EXPECT_TRUE(fs::exists(b / "experiments" /
+                             ("ucs-berea-tensile_strength-" + std::string(name) + ".log")));
+    fs::remove_all(out);
+  }
+}
+
+// Stopped at a step on three ranks, resumed on two: the stopped runs continue from their
+// checkpoints on whichever rank takes them.
+TEST(Mpi, ASweepStoppedOnThreeRanksResumesOnTwo) {
+  const fs::path out = fs::temp_directory_path() / "breccia_mpi_resume";
+  fs::remove_all(out);
+  const Result cut =
+      run_with_prefix(mpirun(3), "sweep --stop-at-step 1500 --output " + out.string() + kSweep);
+  EXPECT_NE(cut.code, 0) << cut.out;
+  EXPECT_EQ(count(cut.out, "sweep ucs-berea (interrupted)"), 1) << cut.out;
+  const fs::path b = only_folder(out);
+  const auto stopped = nlohmann::json::parse(read(b / "sweep.json"));
+  for (const auto& run_entry : stopped["runs"]) {
+    EXPECT_EQ(run_entry["status"], "interrupted");
+    EXPECT_TRUE(fs::exists(b / run_entry["folder"].get<std::string>() / "checkpoint.bin"));
+  }
+  const Result resumed = run_with_prefix(mpirun(2), "resume " + b.string());
+  ASSERT_EQ(resumed.code, 0) << resumed.out;
+  expect_as_one_process(b, "resumed on 2 ranks");
+  const auto plan = nlohmann::json::parse(read(b / "sweep-plan.json"));
+  EXPECT_EQ(plan["resumed"][0]["ranks"], 2);
+  fs::remove_all(out);
+}
+
+// mpirun passes SIGUSR1 on to every rank (its SIGINT and SIGTERM kill them a second later): the
+// runs stop with checkpoints, the sweep says interrupted, and resume finishes it.
+TEST(Mpi, Usr1ToMpirunStopsEveryRankWithACheckpoint) {
+  const fs::path out = fs::temp_directory_path() / "breccia_mpi_usr1";
+  fs::remove_all(out);
+  // Signalled once both ranks' runs have written their first rows; the slow platen keeps them
+  // running for about ten seconds more.
+  const Result r =
+      shell(mpirun(2) + BRECCIA_CLI + " sweep --output " + out.string() + kSweep +
+            " --set loading.platen_speed=0.02 & pid=$!; until [ $(ls " + out.string() +
+            "/*/2*/history.csv 2>/dev/null | wc -l) -ge 2 ]; do sleep 0.1; done; sleep 0.5; "
+            "kill -USR1 $pid; wait $pid");
+  const fs::path b = only_folder(out);
+  ASSERT_TRUE(fs::exists(b / "sweep.json")) << r.out;
+  const auto j = nlohmann::json::parse(read(b / "sweep.json"));
+  EXPECT_EQ(j["status"], "interrupted") << r.out;
+  int checkpoints = 0;
+  for (const auto& e : j["runs"])
+    if (!e["folder"].get<std::string>().empty() &&
+        fs::exists(b / e["folder"].get<std::string>() / "checkpoint.bin"))
+      ++checkpoints;
+  EXPECT_EQ(checkpoints, 2) << r.out;
+  fs::remove_all(out);
+}
+
+// A command that runs in one process is refused under mpirun, and bad input is named once.
+TEST(Mpi, OneProcessCommandsAndBadInputAreRefusedOnce) {
+  const Result r = run_with_prefix(mpirun(2), "run --set engine.threads=1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_EQ(count(r.out, "`breccia run` runs in one process"), 1) << r.out;
+  const Result bad = run_with_prefix(mpirun(2), "sweep --set bond.no_such_key=1" + kSweep);
+  EXPECT_NE(bad.code, 0);
+  EXPECT_EQ(count(bad.out, "unknown key"), 1) << bad.out;
+  const Result jobs = run_with_prefix(mpirun(2), "sweep --jobs 2" + kSweep);
+  EXPECT_NE(jobs.code, 0);
+  EXPECT_EQ(count(jobs.out, "'--jobs' = 2"), 1) << jobs.out;
+}
+
+namespace {
+
+// trials.jsonl without what depends on the machine (the folder's time stamp, the wall time).
+std::vector<nlohmann::json> trial_records(const fs::path& file) {
+  std::vector<nlohmann::json> out;
+  std::istringstream lines(read(file));
+  for (std::string line; std::getline(lines, line);) {
+    nlohmann::json j = nlohmann::json::parse(line);
+    j.erase("folder");
+    j.erase("wall_seconds");
+    out.push_back(j);
+  }
+  return out;
+}
+
+}  // namespace
+
+// A calibration on two ranks runs each batch of tests (here the three packings of the
+// verification) at once, one process per test, and records what one process records: the same
+// tests, numbered alike, measuring the same properties, and the same parameters.
+TEST(Mpi, ACalibrationOverRanksRecordsTheTestsOfOneProcess) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_mpi_calibration";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "c.toml")
+      << "[calibration]\nname = \"t\"\ntrials_per_stage = 1\npasses = 1\n"
+         "verify_seeds = [2, 3, 4]\n[targets]\nyoungs_modulus = 8e9\n[free]\n"
+         "\"bond.modulus\" = [2e9, 60e9]\n"
+      << breccia::testing::kTinyCalibrationExperiment;
+  const std::string args = "calibrate " + (dir / "c.toml").string() + " --output ";
+  const Result one = run(args + (dir / "one").string());
+  ASSERT_EQ(one.code, 0) << one.out;
+  const Result two = run_with_prefix(mpirun(2), args + (dir / "two").string());
+  ASSERT_EQ(two.code, 0) << two.out;
+  EXPECT_EQ(count(two.out, "calibration complete"), 1) << two.out;
+  const auto a = trial_records(dir / "one" / "t" / "trials.jsonl");
+  const auto b = trial_records(dir / "two" / "t" / "trials.jsonl");
+  ASSERT_EQ(a.size(), 4u) << "a trial and three verification tests";
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(read(dir / "one" / "t" / "material.toml"), read(dir / "two" / "t" / "material.toml"));
+  fs::remove_all(dir);
+}
