@@ -3,6 +3,7 @@
 // stopped on some ranks resumes on others; SIGUSR1 to mpirun stops every rank with a checkpoint;
 // commands that run in one process and bad input are refused once, by name.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -65,16 +66,22 @@ fs::path only_folder(const fs::path& out) {
   return fs::directory_iterator(out)->path();
 }
 
-// The sweep of one process, run once for every test here.
+// The sweep of one process, run once per test process (ctest runs the tests here in processes of
+// their own, side by side: each has its own folder, removed when it ends).
 const fs::path& serial_sweep() {
-  static const fs::path folder = [] {
-    const fs::path out = fs::temp_directory_path() / "breccia_mpi_serial";
-    fs::remove_all(out);
-    const Result r = run("sweep --jobs 1 --output " + out.string() + kSweep);
-    EXPECT_EQ(r.code, 0) << r.out;
-    return fs::path(last_line(r.out));
-  }();
-  return folder;
+  struct Sweep {
+    fs::path out = fs::temp_directory_path() / ("breccia_mpi_serial_" + std::to_string(getpid()));
+    fs::path folder;
+    Sweep() {
+      fs::remove_all(out);
+      const Result r = run("sweep --jobs 1 --output " + out.string() + kSweep);
+      EXPECT_EQ(r.code, 0) << r.out;
+      folder = last_line(r.out);
+    }
+    ~Sweep() { fs::remove_all(out); }
+  };
+  static const Sweep sweep;
+  return sweep.folder;
 }
 
 // Every run of sweep `b` has the tables of the same run of the one-process sweep, byte for byte,
