@@ -192,6 +192,48 @@ std::vector<std::string> gather(const std::string& mine) {
 #endif
 }
 
+std::vector<std::string> exchange(const std::vector<std::string>& outgoing) {
+  state().waited = true;
+  if (outgoing.size() != static_cast<std::size_t>(size()))
+    throw std::logic_error(
+        fmt::format("ranks::exchange: {} messages for {} ranks", outgoing.size(), size()));
+#ifdef BRECCIA_HAVE_MPI
+  if (!state().mpi) return outgoing;
+  const std::size_t n = outgoing.size();
+  std::vector<int> send_counts(n), send_offsets(n), recv_counts(n), recv_offsets(n);
+  std::string sent;
+  for (std::size_t r = 0; r < n; ++r) {
+    send_counts[r] = int_count(outgoing[r].size());
+    send_offsets[r] = int_count(sent.size());
+    sent += outgoing[r];
+  }
+  check(
+      MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, MPI_COMM_WORLD),
+      "MPI_Alltoall");
+  std::size_t total = 0;
+  for (std::size_t r = 0; r < n; ++r) {
+    recv_offsets[r] = int_count(total);
+    total += static_cast<std::size_t>(recv_counts[r]);
+  }
+  std::string received(total, '\0');
+  check(
+      MPI_Alltoallv(sent.data(), send_counts.data(), send_offsets.data(), MPI_CHAR, received.data(),
+                    recv_counts.data(), recv_offsets.data(), MPI_CHAR, MPI_COMM_WORLD),
+      "MPI_Alltoallv");
+  std::vector<std::string> incoming;
+  for (std::size_t r = 0; r < n; ++r)
+    incoming.push_back(received.substr(static_cast<std::size_t>(recv_offsets[r]),
+                                       static_cast<std::size_t>(recv_counts[r])));
+  return incoming;
+#else
+  return outgoing;
+#endif
+}
+
+std::vector<std::string> all_gather(const std::string& mine) {
+  return exchange(std::vector<std::string>(static_cast<std::size_t>(size()), mine));
+}
+
 std::string on_root(const std::function<std::string()>& work) {
   if (size() == 1) return work();
   std::string text;

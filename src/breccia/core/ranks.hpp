@@ -54,6 +54,12 @@ std::string broadcast(const std::string& from_root);
 // Every rank's text, in rank order, on root (empty on the others).
 std::vector<std::string> gather(const std::string& mine);
 
+// Every rank sends outgoing[r] to rank r and gets what each rank sent it, in rank order (one
+// MPI_Alltoallv). outgoing must hold size() entries; a rank's entry to itself comes back as it is.
+std::vector<std::string> exchange(const std::vector<std::string>& outgoing);
+// Every rank's text, in rank order, on every rank.
+std::vector<std::string> all_gather(const std::string& mine);
+
 // An error that root met and passed on: the other ranks raise it too, and do not print it (root
 // does).
 class RootFailed : public std::runtime_error {
