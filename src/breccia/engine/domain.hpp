@@ -6,10 +6,15 @@
 // keeps its ghosts: the particles of later ranks that its own can touch, in index order, so that
 // its local order is the global order. Particles of earlier ranks it needs no copy of: a pair
 // belongs to the block of its first (lower) particle, whose rank sends the share of the second.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <string>
+#include <type_traits>
 #include <vector>
 
+#include "breccia/core/ranks.hpp"
 #include "breccia/state/pair_list.hpp"
 #include "breccia/state/particle_store.hpp"
 
@@ -57,5 +62,79 @@ struct GhostPlan {
 // sender which.
 GhostPlan plan_ghosts(const std::vector<PosRad>& own_particles,
                       const std::vector<IndexRange>& ranges, double skin);
+
+// The ghosts' values from their owners, in the plan's order (collective): each rank sends the
+// values of its particles in plan.send[r] to rank r. `own` holds this rank's particles' values.
+template <class T>
+std::vector<T> ghost_values(const GhostPlan& plan, const std::vector<T>& own) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  std::vector<std::string> out(plan.send.size());
+  for (std::size_t r = 0; r < out.size(); ++r) {
+    out[r].resize(plan.send[r].size() * sizeof(T));
+    for (std::size_t k = 0; k < plan.send[r].size(); ++k)
+      std::memcpy(out[r].data() + k * sizeof(T), &own[plan.send[r][k]], sizeof(T));
+  }
+  std::vector<T> ghosts;
+  ghosts.reserve(plan.ghosts.size());
+  for (const std::string& from : ranks::exchange(out))  // later ranks, in rank order
+    for (std::size_t at = 0; at + sizeof(T) <= from.size(); at += sizeof(T)) {
+      T v;
+      std::memcpy(&v, from.data() + at, sizeof(T));
+      ghosts.push_back(v);
+    }
+  return ghosts;
+}
+
+// A load a rank computed for a particle another rank owns (the second particle of a pair whose
+// first is its own): the particle's global index and the value.
+template <class T>
+struct Share {
+  std::uint32_t particle = 0;
+  T value{};
+};
+
+// The shares each own particle received, in rank order and, from each rank, in the order that
+// rank computed them: particle k's (k local) are values[offsets[k] ... offsets[k + 1]). Ranks
+// own ascending index ranges and walk their pairs in pair order, so this is the order of the
+// cross slots that one process adds for the same pairs.
+template <class T>
+struct IncomingShares {
+  std::vector<std::uint32_t> offsets;
+  std::vector<T> values;
+};
+
+// Sends every share to the rank owning its particle (collective); `shares` in the order this
+// rank computed them.
+template <class T>
+IncomingShares<T> return_shares(const std::vector<IndexRange>& ranges,
+                                const std::vector<Share<T>>& shares) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  std::vector<std::string> out(ranges.size());
+  for (const Share<T>& s : shares) {
+    const auto owner =
+        std::upper_bound(ranges.begin(), ranges.end(), s.particle,
+                         [](std::uint32_t g, const IndexRange& r) { return g < r.end; }) -
+        ranges.begin();
+    std::string& to = out[static_cast<std::size_t>(owner)];
+    to.append(reinterpret_cast<const char*>(&s), sizeof(Share<T>));
+  }
+  const std::vector<std::string> in = ranks::exchange(out);
+  const IndexRange own = ranges[static_cast<std::size_t>(ranks::rank())];
+  std::vector<Share<T>> all;
+  for (const std::string& from : in)
+    for (std::size_t at = 0; at + sizeof(Share<T>) <= from.size(); at += sizeof(Share<T>)) {
+      Share<T> s;
+      std::memcpy(&s, from.data() + at, sizeof(Share<T>));
+      all.push_back(s);
+    }
+  IncomingShares<T> r;
+  r.offsets.assign(own.size() + 1, 0);
+  for (const Share<T>& s : all) ++r.offsets[s.particle - own.begin + 1];
+  for (std::size_t k = 0; k < own.size(); ++k) r.offsets[k + 1] += r.offsets[k];
+  r.values.resize(all.size());
+  std::vector<std::uint32_t> fill(r.offsets.begin(), r.offsets.end() - 1);
+  for (const Share<T>& s : all) r.values[fill[s.particle - own.begin]++] = s.value;
+  return r;
+}
 
 }  // namespace breccia
