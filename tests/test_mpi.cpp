@@ -118,6 +118,12 @@ TEST(Mpi, ASweepOverRanksGivesTheFoldersOfOneProcess) {
     const fs::path b = only_folder(out);
     expect_as_one_process(b, std::to_string(ranks) + " ranks");
     EXPECT_EQ(nlohmann::json::parse(read(b / "sweep.json"))["ranks"], ranks);
+    // Each run's manifest says where it ran.
+    const auto first_run = nlohmann::json::parse(read(b / "sweep.json"))["runs"][0]["folder"];
+    const auto manifest =
+        nlohmann::json::parse(read(b / first_run.get<std::string>() / "manifest.json"));
+    EXPECT_EQ(manifest["mpi"]["ranks"], ranks);
+    EXPECT_EQ(manifest["mpi"]["sample_split_over_ranks"], false);
     EXPECT_EQ(count(r.out, "sweep ucs-berea (complete)"), 1) << r.out;
     EXPECT_EQ(count(r.out, "complete on rank"), 3) << r.out;
     for (const char* name : {"25e6", "30e6", "35e6"})

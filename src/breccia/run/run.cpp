@@ -20,6 +20,7 @@
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
 #include "breccia/core/parallel.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/core/text_file.hpp"
 #include "breccia/io/json_view.hpp"
 #include "breccia/io/run_folder.hpp"
@@ -634,25 +635,35 @@ json material_provenance(const ExperimentSpec& spec) {
   return m;
 }
 
+// Where a run ran in an MPI launch (a sweep's or a calibration's run, on one rank with the whole
+// sample); nothing in a single process.
+void add_launch(json& j) {
+  if (ranks::size() > 1)
+    j["mpi"] = {
+        {"ranks", ranks::size()}, {"rank", ranks::rank()}, {"sample_split_over_ranks", false}};
+}
+
 // manifest.json as a run starts: what made it, on what, from which experiment, "running".
 json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptions& opt) {
-  return {{"program", "breccia"},
-          {"version", kVersion},
-          {"commit", kCommit},
-          {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
-          {"command", opt.command_line},
-          {"experiment_source", spec.source},
-          {"seed", spec.engine.seed},
-          {"threads", max_threads()},
-          {"machine", machine_description()},
-          {"status", "running"},
-          {"density_scaling", spec.density_scaling},
-          {"grain_density_kg_m3", spec.density},
-          {"simulated_density_kg_m3", spec.density * spec.density_scaling},
-          {"bar_wave_speed_m_s", b.bar_wave_speed},
-          {"sample", b.sample_report},
-          {"material", material_provenance(spec)},
-          {"resolved_experiment", to_toml(spec)}};
+  json m = {{"program", "breccia"},
+            {"version", kVersion},
+            {"commit", kCommit},
+            {"created", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
+            {"command", opt.command_line},
+            {"experiment_source", spec.source},
+            {"seed", spec.engine.seed},
+            {"threads", max_threads()},
+            {"machine", machine_description()},
+            {"status", "running"},
+            {"density_scaling", spec.density_scaling},
+            {"grain_density_kg_m3", spec.density},
+            {"simulated_density_kg_m3", spec.density * spec.density_scaling},
+            {"bar_wave_speed_m_s", b.bar_wave_speed},
+            {"sample", b.sample_report},
+            {"material", material_provenance(spec)},
+            {"resolved_experiment", to_toml(spec)}};
+  add_launch(m);
+  return m;
 }
 
 }  // namespace
@@ -778,6 +789,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
              {"command", opt.command_line},
              {"threads", max_threads()},
              {"machine", machine_description()}};
+  add_launch(entry);
   if (!manifest.contains("resumed")) manifest["resumed"] = json::array();
   manifest["resumed"].push_back(entry);
   manifest["status"] = "running";
