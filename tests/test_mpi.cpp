@@ -24,10 +24,12 @@ using breccia::testing::run_with_prefix;
 
 namespace {
 
-// Open MPI as CI runs it: as root, more ranks than cores, no cross-memory attach in containers.
+// Open MPI as CI runs it: as root, more ranks than cores, on one machine (shared memory only, no
+// network), with no cross-memory attach (containers forbid it).
 std::string mpirun(int ranks) {
   return "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-         "OMPI_MCA_btl_vader_single_copy_mechanism=none mpirun --oversubscribe -np " +
+         "OMPI_MCA_btl=self,vader OMPI_MCA_btl_vader_single_copy_mechanism=none mpirun "
+         "--oversubscribe -np " +
          std::to_string(ranks) + " ";
 }
 
