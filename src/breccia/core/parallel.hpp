@@ -2,7 +2,9 @@
 // Deterministic parallel helpers. Work is cut into fixed-size blocks that do not depend on the
 // thread count; partial sums are kept per block and added in block order, so every reduction is
 // bitwise identical for any number of threads (ARCHITECTURE.md, "Determinism without atomics").
+#include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #ifdef _OPENMP
@@ -55,6 +57,32 @@ void for_each_item(std::size_t n, Body&& body) {
   const std::ptrdiff_t count = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel for schedule(dynamic, 1) if (count > 1)
   for (std::ptrdiff_t k = 0; k < count; ++k) body(static_cast<std::size_t>(k));
+}
+
+// Where each block of kBlock particles begins in a list of items sorted by the particle that owns
+// them (a bond's or a pair's first grain, a wall contact's grain): block b's items are
+// [starts[b], starts[b + 1]). A sum over such a list is grouped by these blocks, so that a rank
+// that owns whole blocks of particles forms the same partials alone (ARCHITECTURE.md, "Ranks
+// (MPI)").
+inline std::vector<std::size_t> particle_block_starts(const std::vector<std::uint32_t>& owner,
+                                                      std::size_t particles) {
+  const std::size_t blocks = block_count(particles);
+  std::vector<std::size_t> starts(blocks + 1, owner.size());
+  for (std::size_t b = 0; b < blocks; ++b)
+    starts[b] = static_cast<std::size_t>(
+        std::lower_bound(owner.begin(), owner.end(), static_cast<std::uint32_t>(b * kBlock)) -
+        owner.begin());
+  return starts;
+}
+
+// Calls body(begin, end, block) for each block's items (particle_block_starts), in parallel.
+template <class Body>
+void for_item_blocks(const std::vector<std::size_t>& starts, Body&& body) {
+  const std::ptrdiff_t nb = static_cast<std::ptrdiff_t>(starts.size()) - 1;
+#pragma omp parallel for schedule(dynamic, 4) if (nb > 1)
+  for (std::ptrdiff_t b = 0; b < nb; ++b)
+    body(starts[static_cast<std::size_t>(b)], starts[static_cast<std::size_t>(b) + 1],
+         static_cast<std::size_t>(b));
 }
 
 // Adds per-block partials in block order.

@@ -15,14 +15,18 @@ namespace breccia {
 
 using namespace engine_detail;
 
+// Every sum is grouped by blocks of particles (a bond's or pair's first grain, a wall contact's
+// grain) and the blocks' partials added in block order (parallel.hpp, particle_block_starts).
 template <class CL>
 void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
+  const std::size_t n = p_.size();
   BondEnergy bond;
   std::apply(
       [&](auto&... sets) {
         auto one = [&]<class Law>(BondSet<Law>& s) {
-          std::vector<BondEnergy> part(block_count(s.size()));
-          for_blocks(s.size(), [&](std::size_t b, std::size_t e, std::size_t blk) {
+          const std::vector<std::size_t> starts = particle_block_starts(s.pairs.first, n);
+          std::vector<BondEnergy> part(starts.size() - 1);
+          for_item_blocks(starts, [&](std::size_t b, std::size_t e, std::size_t blk) {
             BondEnergy acc;
             for (std::size_t k = b; k < e; ++k)
               if (s.intact[k])
@@ -36,29 +40,44 @@ void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
       },
       bonds_);
   // In pair order (where a state lies in its block's array is no part of any result).
-  std::vector<double> part(block_count(c.pairs.size()));
-  for_blocks(c.pairs.size(), [&](std::size_t b, std::size_t e, std::size_t blk) {
+  std::vector<std::size_t> starts(block_count(n) + 1);
+  for (std::size_t b = 0; b < starts.size(); ++b)
+    starts[b] = c.pairs.offsets.empty() ? 0 : c.pairs.offsets[std::min(n, b * kBlock)];
+  std::vector<double> part(starts.size() - 1);
+  for_item_blocks(starts, [&](std::size_t b, std::size_t e, std::size_t blk) {
     double acc = 0.0;
     for (std::size_t k = b; k < e; ++k)
       if (c.history[k] != kNoHistory) acc += CL::stored_energy(c.params, c.state(k));
     part[blk] = acc;
   });
   double contact = ordered_sum(part);
-  for (const auto& wc : std::get<std::vector<WallContacts<CL>>>(wall_contacts_))
-    for (const auto& st : wc.state) contact += CL::stored_energy(c.wall_params, st);
+  for (const auto& wc : std::get<std::vector<WallContacts<CL>>>(wall_contacts_)) {
+    const std::vector<std::size_t> at = particle_block_starts(wc.particle, n);
+    std::vector<double> wall_part(at.size() - 1);
+    for (std::size_t blk = 0; blk + 1 < at.size(); ++blk)
+      for (std::size_t k = at[blk]; k < at[blk + 1]; ++k)
+        wall_part[blk] += CL::stored_energy(c.wall_params, wc.state[k]);
+    contact += ordered_sum(wall_part);
+  }
   // Joints: a bonded joint's springs are bond energy by component, an unbonded joint's are
   // contact energy (it replaces a contact).
   std::apply(
       [&](auto&... sets) {
         auto one = [&]<class JL>(BondSet<JL>& s) {
-          for (std::size_t k = 0; k < s.size(); ++k) {
-            const BondEnergy e =
-                JL::energy(s.params, s.state[k], bond_radii(s.pairs.first[k], s.pairs.second[k]));
-            if (JL::is_bonded(s.state[k]))
-              bond += e;
-            else
-              contact += e.total();
-          }
+          const std::vector<std::size_t> at = particle_block_starts(s.pairs.first, n);
+          std::vector<BondEnergy> bonded(at.size() - 1);
+          std::vector<double> unbonded(at.size() - 1);
+          for (std::size_t blk = 0; blk + 1 < at.size(); ++blk)
+            for (std::size_t k = at[blk]; k < at[blk + 1]; ++k) {
+              const BondEnergy e =
+                  JL::energy(s.params, s.state[k], bond_radii(s.pairs.first[k], s.pairs.second[k]));
+              if (JL::is_bonded(s.state[k]))
+                bonded[blk] += e;
+              else
+                unbonded[blk] += e.total();
+            }
+          bond += ordered_sum(bonded);
+          contact += ordered_sum(unbonded);
         };
         (one(sets), ...);
       },

@@ -15,6 +15,38 @@ namespace breccia {
 
 using namespace engine_detail;
 
+namespace {
+
+// A wall's resultant over its contacts: force, normal force, touching contacts and stiffness.
+struct WallResultant {
+  Vec3 force;
+  double radial = 0.0, stiffness = 0.0;
+  std::size_t touching = 0;
+  WallResultant& operator+=(const WallResultant& o) noexcept {
+    force += o.force;
+    radial += o.radial;
+    stiffness += o.stiffness;
+    touching += o.touching;
+    return *this;
+  }
+};
+
+// The resultant summed per block of the particles touched, then in block order.
+template <class Contacts>
+WallResultant wall_resultant(const Contacts& wc, const std::vector<std::size_t>& starts) {
+  std::vector<WallResultant> part(starts.size() - 1);
+  for (std::size_t blk = 0; blk + 1 < starts.size(); ++blk)
+    for (std::size_t k = starts[blk]; k < starts[blk + 1]; ++k) {
+      part[blk].force += wc.force[k];
+      part[blk].radial += wc.normal_force[k];
+      part[blk].touching += wc.normal_force[k] != 0.0 ? 1 : 0;
+      part[blk].stiffness += wc.stiffness[k];
+    }
+  return ordered_sum(part);
+}
+
+}  // namespace
+
 template <class CL>
 void Simulation::compute_walls_for(ContactSet<CL>& c) {
   auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
@@ -23,9 +55,11 @@ void Simulation::compute_walls_for(ContactSet<CL>& c) {
     Wall& w = walls_[wi];
     WallContacts<CL>& wc = wall_sets[wi];
     const std::size_t n = wc.particle.size();
-    const std::size_t nb = block_count(n);
+    // Grouped by blocks of the particles they touch (parallel.hpp, particle_block_starts).
+    const std::vector<std::size_t> starts = particle_block_starts(wc.particle, p_.size());
+    const std::size_t nb = starts.size() - 1;
     block_dis_.assign(nb, PairDissipation{});
-    for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
+    for_item_blocks(starts, [&](std::size_t begin, std::size_t end, std::size_t blk) {
       PairDissipation dis;
       for (std::size_t k = begin; k < end; ++k) {
         const std::uint32_t i = wc.particle[k];
@@ -65,18 +99,14 @@ void Simulation::compute_walls_for(ContactSet<CL>& c) {
       block_dis_[blk] = dis;
     });
     d_pairs_ += ordered_sum(block_dis_);
-    Vec3 total;
-    double radial = 0.0, stiffness = 0.0;
-    std::size_t touching = 0;
     for (std::size_t k = 0; k < n; ++k) {
       const std::uint32_t i = wc.particle[k];
       p_.force[i] += wc.force[k];  // after the pair pass's sum, in wall and particle order
       p_.torque[i] += wc.torque[k];
-      total += wc.force[k];
-      radial += wc.normal_force[k];
-      touching += wc.normal_force[k] != 0.0 ? 1 : 0;
-      stiffness += wc.stiffness[k];
     }
+    const WallResultant sum = wall_resultant(wc, starts);
+    const Vec3 total = sum.force;
+    const double radial = sum.radial;
     // Trapezoidal work over the wall's last displacement (matches the leapfrog kinetic energy):
     // the motion that made it, not the one a servo has set for the next step.
     const double dw = w.shape != WallShape::Cylinder
@@ -88,8 +118,8 @@ void Simulation::compute_walls_for(ContactSet<CL>& c) {
     w.radial_force = radial;
     w.force_prev = total;
     w.radial_force_prev = radial;
-    w.contacts = touching;
-    w.contact_stiffness = stiffness;
+    w.contacts = sum.touching;
+    w.contact_stiffness = sum.stiffness;
   }
 }
 
