@@ -63,15 +63,21 @@ void for_each_item(std::size_t n, Body&& body) {
 // them (a bond's or a pair's first grain, a wall contact's grain): block b's items are
 // [starts[b], starts[b + 1]). A sum over such a list is grouped by these blocks, so that a rank
 // that owns whole blocks of particles forms the same partials alone (ARCHITECTURE.md, "Ranks
-// (MPI)").
-inline std::vector<std::size_t> particle_block_starts(const std::vector<std::uint32_t>& owner,
-                                                      std::size_t particles) {
+// (MPI)"). The first form fills `starts` in the room it has (the per-step passes allocate
+// nothing).
+inline void particle_block_starts(const std::vector<std::uint32_t>& owner, std::size_t particles,
+                                  std::vector<std::size_t>& starts) {
   const std::size_t blocks = block_count(particles);
-  std::vector<std::size_t> starts(blocks + 1, owner.size());
+  starts.assign(blocks + 1, owner.size());
   for (std::size_t b = 0; b < blocks; ++b)
     starts[b] = static_cast<std::size_t>(
         std::lower_bound(owner.begin(), owner.end(), static_cast<std::uint32_t>(b * kBlock)) -
         owner.begin());
+}
+inline std::vector<std::size_t> particle_block_starts(const std::vector<std::uint32_t>& owner,
+                                                      std::size_t particles) {
+  std::vector<std::size_t> starts;
+  particle_block_starts(owner, particles, starts);
   return starts;
 }
 

@@ -196,7 +196,7 @@ void Simulation::transfer(Archive& a) {
   // are saved by law, so a new law needs nothing here.
   static_assert(sizeof(Simulation) - sizeof(ContactModel) - sizeof(wall_contacts_) -
                         sizeof(BondSets) - sizeof(JointSets) ==
-                    1728,
+                    1752,
                 "Simulation changed: update engine/checkpoint.cpp");
   a.label("simulation");
   if constexpr (Archive::reading)

@@ -15,31 +15,32 @@ namespace breccia {
 
 using namespace engine_detail;
 
-// Every sum is grouped by blocks of particles (a bond's or pair's first grain, a wall contact's
-// grain) and the blocks' partials added in block order (parallel.hpp, particle_block_starts).
+// Every sum below is grouped by blocks of particles (a bond's or pair's first grain, a wall
+// contact's grain), the blocks' partials added in block order (parallel.hpp,
+// particle_block_starts).
+namespace {
+
+// The intact bonds' stored energy, by component.
+template <class Law>
+BondEnergy bond_energy(const BondSet<Law>& s, const Simulation& sim) {
+  const std::vector<std::size_t> starts =
+      particle_block_starts(s.pairs.first, sim.particles().size());
+  std::vector<BondEnergy> part(starts.size() - 1);
+  for_item_blocks(starts, [&](std::size_t b, std::size_t e, std::size_t blk) {
+    BondEnergy acc;
+    for (std::size_t k = b; k < e; ++k)
+      if (s.intact[k])
+        acc +=
+            Law::energy(s.params, s.state[k], sim.bond_radii(s.pairs.first[k], s.pairs.second[k]));
+    part[blk] = acc;
+  });
+  return ordered_sum(part);
+}
+
+// The particle contacts' stored energy, in pair order (where a state lies in its block's array is
+// no part of any result).
 template <class CL>
-void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
-  const std::size_t n = p_.size();
-  BondEnergy bond;
-  std::apply(
-      [&](auto&... sets) {
-        auto one = [&]<class Law>(BondSet<Law>& s) {
-          const std::vector<std::size_t> starts = particle_block_starts(s.pairs.first, n);
-          std::vector<BondEnergy> part(starts.size() - 1);
-          for_item_blocks(starts, [&](std::size_t b, std::size_t e, std::size_t blk) {
-            BondEnergy acc;
-            for (std::size_t k = b; k < e; ++k)
-              if (s.intact[k])
-                acc += Law::energy(s.params, s.state[k],
-                                   bond_radii(s.pairs.first[k], s.pairs.second[k]));
-            part[blk] = acc;
-          });
-          bond += ordered_sum(part);
-        };
-        (one(sets), ...);
-      },
-      bonds_);
-  // In pair order (where a state lies in its block's array is no part of any result).
+double pair_contact_energy(const ContactSet<CL>& c, std::size_t n) {
   std::vector<std::size_t> starts(block_count(n) + 1);
   for (std::size_t b = 0; b < starts.size(); ++b)
     starts[b] = c.pairs.offsets.empty() ? 0 : c.pairs.offsets[std::min(n, b * kBlock)];
@@ -50,38 +51,61 @@ void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
       if (c.history[k] != kNoHistory) acc += CL::stored_energy(c.params, c.state(k));
     part[blk] = acc;
   });
-  double contact = ordered_sum(part);
-  for (const auto& wc : std::get<std::vector<WallContacts<CL>>>(wall_contacts_)) {
-    const std::vector<std::size_t> at = particle_block_starts(wc.particle, n);
-    std::vector<double> wall_part(at.size() - 1);
-    for (std::size_t blk = 0; blk + 1 < at.size(); ++blk)
-      for (std::size_t k = at[blk]; k < at[blk + 1]; ++k)
-        wall_part[blk] += CL::stored_energy(c.wall_params, wc.state[k]);
-    contact += ordered_sum(wall_part);
+  return ordered_sum(part);
+}
+
+// One wall's contacts' stored energy.
+template <class CL>
+double wall_contact_energy(const WallContacts<CL>& wc, const typename CL::Params& params,
+                           std::size_t n) {
+  const std::vector<std::size_t> at = particle_block_starts(wc.particle, n);
+  double sum = 0.0;
+  for (std::size_t blk = 0; blk + 1 < at.size(); ++blk) {
+    double acc = 0.0;
+    for (std::size_t k = at[blk]; k < at[blk + 1]; ++k)
+      acc += CL::stored_energy(params, wc.state[k]);
+    sum += acc;
   }
-  // Joints: a bonded joint's springs are bond energy by component, an unbonded joint's are
-  // contact energy (it replaces a contact).
-  std::apply(
-      [&](auto&... sets) {
-        auto one = [&]<class JL>(BondSet<JL>& s) {
-          const std::vector<std::size_t> at = particle_block_starts(s.pairs.first, n);
-          std::vector<BondEnergy> bonded(at.size() - 1);
-          std::vector<double> unbonded(at.size() - 1);
-          for (std::size_t blk = 0; blk + 1 < at.size(); ++blk)
-            for (std::size_t k = at[blk]; k < at[blk + 1]; ++k) {
-              const BondEnergy e =
-                  JL::energy(s.params, s.state[k], bond_radii(s.pairs.first[k], s.pairs.second[k]));
-              if (JL::is_bonded(s.state[k]))
-                bonded[blk] += e;
-              else
-                unbonded[blk] += e.total();
-            }
-          bond += ordered_sum(bonded);
-          contact += ordered_sum(unbonded);
-        };
-        (one(sets), ...);
-      },
-      joints_);
+  return sum;
+}
+
+// A joint law's springs: a bonded joint's are bond energy by component, an unbonded joint's are
+// contact energy (it replaces a contact).
+template <class JL>
+void add_joint_energy(const BondSet<JL>& s, const Simulation& sim, BondEnergy& bond,
+                      double& contact) {
+  const std::vector<std::size_t> at = particle_block_starts(s.pairs.first, sim.particles().size());
+  BondEnergy bonded;
+  double unbonded = 0.0;
+  for (std::size_t blk = 0; blk + 1 < at.size(); ++blk) {
+    BondEnergy bonded_block;
+    double unbonded_block = 0.0;
+    for (std::size_t k = at[blk]; k < at[blk + 1]; ++k) {
+      const BondEnergy e =
+          JL::energy(s.params, s.state[k], sim.bond_radii(s.pairs.first[k], s.pairs.second[k]));
+      if (JL::is_bonded(s.state[k]))
+        bonded_block += e;
+      else
+        unbonded_block += e.total();
+    }
+    bonded += bonded_block;
+    unbonded += unbonded_block;
+  }
+  bond += bonded;
+  contact += unbonded;
+}
+
+}  // namespace
+
+template <class CL>
+void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
+  BondEnergy bond;
+  std::apply([&](const auto&... sets) { ((bond += bond_energy(sets, *this)), ...); }, bonds_);
+  double contact = pair_contact_energy(c, p_.size());
+  for (const auto& wc : std::get<std::vector<WallContacts<CL>>>(wall_contacts_))
+    contact += wall_contact_energy(wc, c.wall_params, p_.size());
+  std::apply([&](const auto&... sets) { (add_joint_energy(sets, *this, bond, contact), ...); },
+             joints_);
 
   EnergyLedger& L = ledger_;
   L.step = step_;

@@ -220,6 +220,7 @@ void Simulation::retire_interactions() {
   block_dis_ = {};
   block_joint_dis_ = {};
   block_int_ = {};
+  wall_block_starts_ = {};
   block_failures_ = {};
   retired_ = true;
 }

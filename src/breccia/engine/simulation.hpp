@@ -529,6 +529,7 @@ class Simulation {
   // Per-block scratch (reused every step; no allocation in steady state).
   std::vector<PairDissipation> block_dis_, block_joint_dis_;
   std::vector<IntegrateBlock> block_int_;
+  std::vector<std::size_t> wall_block_starts_;  // a wall's contacts per particle block
   struct Failure {
     std::uint32_t law;  // position in BondLaws, then BondLaws::size + position in JointLaws
     std::uint32_t bond;

@@ -34,15 +34,18 @@ struct WallResultant {
 // The resultant summed per block of the particles touched, then in block order.
 template <class Contacts>
 WallResultant wall_resultant(const Contacts& wc, const std::vector<std::size_t>& starts) {
-  std::vector<WallResultant> part(starts.size() - 1);
-  for (std::size_t blk = 0; blk + 1 < starts.size(); ++blk)
+  WallResultant total;
+  for (std::size_t blk = 0; blk + 1 < starts.size(); ++blk) {
+    WallResultant block;
     for (std::size_t k = starts[blk]; k < starts[blk + 1]; ++k) {
-      part[blk].force += wc.force[k];
-      part[blk].radial += wc.normal_force[k];
-      part[blk].touching += wc.normal_force[k] != 0.0 ? 1 : 0;
-      part[blk].stiffness += wc.stiffness[k];
+      block.force += wc.force[k];
+      block.radial += wc.normal_force[k];
+      block.touching += wc.normal_force[k] != 0.0 ? 1 : 0;
+      block.stiffness += wc.stiffness[k];
     }
-  return ordered_sum(part);
+    total += block;
+  }
+  return total;
 }
 
 }  // namespace
@@ -56,7 +59,8 @@ void Simulation::compute_walls_for(ContactSet<CL>& c) {
     WallContacts<CL>& wc = wall_sets[wi];
     const std::size_t n = wc.particle.size();
     // Grouped by blocks of the particles they touch (parallel.hpp, particle_block_starts).
-    const std::vector<std::size_t> starts = particle_block_starts(wc.particle, p_.size());
+    std::vector<std::size_t>& starts = wall_block_starts_;
+    particle_block_starts(wc.particle, p_.size(), starts);
     const std::size_t nb = starts.size() - 1;
     block_dis_.assign(nb, PairDissipation{});
     for_item_blocks(starts, [&](std::size_t begin, std::size_t end, std::size_t blk) {
