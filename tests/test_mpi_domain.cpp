@@ -4,8 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <string>
 
+#include "block_fixture.hpp"
+#include "breccia/core/parallel.hpp"
 #include "breccia/core/ranks.hpp"
 #include "breccia/engine/domain.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
@@ -175,6 +178,92 @@ TEST(MpiDomain, PairLoadsOverRanksAreThoseOfOneProcessToTheBit) {
   for (std::size_t k = 0; k < ours.size(); ++k)
     if (!(ours[k] == reference[own.begin + k])) ++differ;
   EXPECT_EQ(differ, 0u) << "rank " << ranks::rank() << " of " << ranks::size();
+}
+
+namespace {
+
+template <class T>
+std::size_t differing(const std::vector<T>& a, const std::vector<T>& b) {
+  if (a.size() != b.size()) return std::max(a.size(), b.size());
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < a.size(); ++k) n += std::memcmp(&a[k], &b[k], sizeof(T)) != 0 ? 1 : 0;
+  return n;
+}
+
+// A split simulation against one process stepping the same sample: every particle's state and
+// loads, the walls, the ledger and the crack catalogue, to the bit.
+void expect_same_state(Simulation& split, const Simulation& reference) {
+  split.gather_particles();
+  const ParticleStore& a = split.particles();
+  const ParticleStore& b = reference.particles();
+  const std::string where = "rank " + std::to_string(ranks::rank()) + " of " +
+                            std::to_string(ranks::size()) + ", step " +
+                            std::to_string(split.step_count());
+  EXPECT_EQ(differing(a.pos_rad, b.pos_rad), 0u) << where;
+  EXPECT_EQ(differing(a.vel, b.vel), 0u) << where;
+  EXPECT_EQ(differing(a.angvel, b.angvel), 0u) << where;
+  EXPECT_EQ(differing(a.force, b.force), 0u) << where;
+  EXPECT_EQ(differing(a.torque, b.torque), 0u) << where;
+  EXPECT_EQ(differing(a.orientation, b.orientation), 0u) << where;
+  EXPECT_EQ(differing(a.displacement, b.displacement), 0u) << where;
+  ASSERT_EQ(split.walls().size(), reference.walls().size());
+  for (std::size_t w = 0; w < split.walls().size(); ++w) {
+    EXPECT_EQ(split.walls()[w].force, reference.walls()[w].force) << where;
+    EXPECT_EQ(split.walls()[w].work, reference.walls()[w].work) << where;
+    EXPECT_EQ(split.walls()[w].contacts, reference.walls()[w].contacts) << where;
+  }
+  EXPECT_EQ(std::memcmp(&split.ledger(), &reference.ledger(), sizeof(EnergyLedger)), 0) << where;
+  ASSERT_EQ(split.cracks().size(), reference.cracks().size()) << where;
+  for (std::size_t k = 0; k < split.cracks().size(); ++k) {
+    const CrackRecord x = split.cracks()[k], y = reference.cracks()[k];
+    EXPECT_EQ(x.bond_tag, y.bond_tag) << where;
+    EXPECT_EQ(x.law, y.law) << where;
+    EXPECT_EQ(x.position, y.position) << where;
+    EXPECT_EQ(x.energy.total(), y.energy.total()) << where;
+  }
+}
+
+}  // namespace
+
+// A bonded block crushed between two platens until thousands of bonds break and the lists are
+// rebuilt (at about step 1,000), split over the ranks from its start: the state is that of one
+// process at every check (each rank steps a one-process copy beside it). 2,000 grains are two
+// kDomainGrain grains: at 3 and 4 ranks the first ranks own none.
+TEST(MpiDomain, EngineStepsOverRanksAreThoseOfOneProcessToTheBit) {
+  set_threads(1);
+  Simulation reference = test::compressed_block(5, 5, 20, 8.0, 3e6);
+  Simulation split = test::compressed_block(5, 5, 20, 8.0, 3e6);
+  split.split_over_ranks();
+  EXPECT_EQ(split.split(), ranks::size() > 1);
+  for (int s = 1; s <= 1100; ++s) {
+    reference.step();
+    split.step();
+    if (s == 400) expect_same_state(split, reference);
+  }
+  ASSERT_GT(reference.cracks().size(), 1000u) << "the test must break bonds";
+  ASSERT_GT(reference.neighbour_rebuilds(), 1u) << "the test must rebuild the lists";
+  expect_same_state(split, reference);
+}
+
+// A split made in mid-run, between two rebuilds, keeps the lists of the last one: the run goes
+// on as one process's, through the next rebuild. 4,096 grains: one kDomainGrain grain for each of
+// 4 ranks.
+TEST(MpiDomain, ASplitInMidRunGoesOnAsOneProcess) {
+  set_threads(1);
+  Simulation reference = test::compressed_block(8, 8, 16, 8.0, 3e6);
+  Simulation split = test::compressed_block(8, 8, 16, 8.0, 3e6);
+  for (int s = 0; s < 333; ++s) {
+    reference.step();
+    split.step();
+  }
+  ASSERT_GT(reference.cracks().size(), 0u) << "the split must come after bonds broke";
+  split.split_over_ranks();
+  for (int s = 333; s < 1050; ++s) {
+    reference.step();
+    split.step();
+  }
+  ASSERT_GT(reference.neighbour_rebuilds(), 1u) << "the test must rebuild the lists";
+  expect_same_state(split, reference);
 }
 
 int main(int argc, char** argv) {

@@ -38,16 +38,23 @@ inline void set_threads(int n) noexcept {
 // Calls body(begin, end, block) for each block of [0, n) in parallel. Blocks are handed out
 // dynamically (a thread slowed by the machine does not hold the others at the barrier); results
 // stay bitwise reproducible because each block's output depends only on the block. A single
-// block runs on the calling thread: small systems pay no fork-join cost.
+// block runs on the calling thread: small systems pay no fork-join cost. for_blocks_in walks
+// blocks [first, last) of [0, n) only (the blocks of one rank's particles).
+template <class Body>
+void for_blocks_in(std::size_t first, std::size_t last, std::size_t n, Body&& body) {
+  const std::ptrdiff_t nb = static_cast<std::ptrdiff_t>(last - first);
+#pragma omp parallel for schedule(dynamic, 4) if (nb > 1)
+  for (std::ptrdiff_t k = 0; k < nb; ++k) {
+    const std::size_t b = first + static_cast<std::size_t>(k);
+    const std::size_t begin = b * kBlock;
+    const std::size_t end = begin + kBlock < n ? begin + kBlock : n;
+    body(begin, end, b);
+  }
+}
+
 template <class Body>
 void for_blocks(std::size_t n, Body&& body) {
-  const std::ptrdiff_t nb = static_cast<std::ptrdiff_t>(block_count(n));
-#pragma omp parallel for schedule(dynamic, 4) if (nb > 1)
-  for (std::ptrdiff_t b = 0; b < nb; ++b) {
-    const std::size_t begin = static_cast<std::size_t>(b) * kBlock;
-    const std::size_t end = begin + kBlock < n ? begin + kBlock : n;
-    body(begin, end, static_cast<std::size_t>(b));
-  }
+  for_blocks_in(0, block_count(n), n, body);
 }
 
 // Calls body(k) for each k in [0, n) in parallel, one at a time: for items that are blocks of work

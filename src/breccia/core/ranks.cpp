@@ -192,9 +192,15 @@ std::vector<std::string> gather(const std::string& mine) {
 #endif
 }
 
-std::vector<std::string> exchange(const std::vector<std::string>& outgoing) {
+namespace {
+
+// The exchange itself; `expected` holds the sizes of the incoming messages when the receiver
+// knows them (one collective then), or is empty (they are sent first).
+std::vector<std::string> exchange_messages(const std::vector<std::string>& outgoing,
+                                           const std::vector<std::size_t>& expected) {
   state().waited = true;
-  if (outgoing.size() != static_cast<std::size_t>(size()))
+  if (outgoing.size() != static_cast<std::size_t>(size()) ||
+      (!expected.empty() && expected.size() != outgoing.size()))
     throw std::logic_error(
         fmt::format("ranks::exchange: {} messages for {} ranks", outgoing.size(), size()));
 #ifdef BRECCIA_HAVE_MPI
@@ -207,9 +213,12 @@ std::vector<std::string> exchange(const std::vector<std::string>& outgoing) {
     send_offsets[r] = int_count(sent.size());
     sent += outgoing[r];
   }
-  check(
-      MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, MPI_COMM_WORLD),
-      "MPI_Alltoall");
+  if (expected.empty())
+    check(MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT,
+                       MPI_COMM_WORLD),
+          "MPI_Alltoall");
+  else
+    for (std::size_t r = 0; r < n; ++r) recv_counts[r] = int_count(expected[r]);
   std::size_t total = 0;
   for (std::size_t r = 0; r < n; ++r) {
     recv_offsets[r] = int_count(total);
@@ -230,8 +239,24 @@ std::vector<std::string> exchange(const std::vector<std::string>& outgoing) {
 #endif
 }
 
+}  // namespace
+
+std::vector<std::string> exchange(const std::vector<std::string>& outgoing) {
+  return exchange_messages(outgoing, {});
+}
+
+std::vector<std::string> exchange(const std::vector<std::string>& outgoing,
+                                  const std::vector<std::size_t>& expected) {
+  return exchange_messages(outgoing, expected);
+}
+
 std::vector<std::string> all_gather(const std::string& mine) {
   return exchange(std::vector<std::string>(static_cast<std::size_t>(size()), mine));
+}
+
+std::vector<std::string> all_gather(const std::string& mine,
+                                    const std::vector<std::size_t>& expected) {
+  return exchange(std::vector<std::string>(static_cast<std::size_t>(size()), mine), expected);
 }
 
 std::string on_root(const std::function<std::string()>& work) {

@@ -57,8 +57,14 @@ std::vector<std::string> gather(const std::string& mine);
 // Every rank sends outgoing[r] to rank r and gets what each rank sent it, in rank order (one
 // MPI_Alltoallv). outgoing must hold size() entries; a rank's entry to itself comes back as it is.
 std::vector<std::string> exchange(const std::vector<std::string>& outgoing);
-// Every rank's text, in rank order, on every rank.
+// The same when the receiver knows the size of each incoming message (`expected`, per rank): one
+// collective instead of two. A message of another size is an error of the caller.
+std::vector<std::string> exchange(const std::vector<std::string>& outgoing,
+                                  const std::vector<std::size_t>& expected);
+// Every rank's text, in rank order, on every rank (`expected`: their sizes, when known).
 std::vector<std::string> all_gather(const std::string& mine);
+std::vector<std::string> all_gather(const std::string& mine,
+                                    const std::vector<std::size_t>& expected);
 
 // An error that root met and passed on: the other ranks raise it too, and do not print it (root
 // does).

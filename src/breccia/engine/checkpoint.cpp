@@ -196,7 +196,7 @@ void Simulation::transfer(Archive& a) {
   // are saved by law, so a new law needs nothing here.
   static_assert(sizeof(Simulation) - sizeof(ContactModel) - sizeof(wall_contacts_) -
                         sizeof(BondSets) - sizeof(JointSets) ==
-                    1752,
+                    1784,
                 "Simulation changed: update engine/checkpoint.cpp");
   a.label("simulation");
   if constexpr (Archive::reading)
@@ -260,6 +260,10 @@ void Simulation::transfer(Archive& a) {
 void Simulation::save_state(ArchiveWriter& a) const {
   if (retired_)
     throw std::logic_error("Simulation::save_state: the simulation's interactions are retired");
+  if (split_)
+    throw std::logic_error(
+        "Simulation::save_state: a sample split over ranks is saved by gathering it first (not yet "
+        "supported)");
   const_cast<Simulation*>(this)->transfer(a);  // the writer only reads the fields
 }
 

@@ -148,12 +148,38 @@ std::vector<std::uint32_t> ghosts_of(const std::vector<PosRad>& all, IndexRange 
   return out;
 }
 
+namespace {
+
+// The requests of `required` to their owners (collective): per rank, the local indexes of this
+// rank's particles that it must offer to that rank whatever their place, ascending.
+std::vector<std::vector<std::uint32_t>> requested_of_me(const std::vector<std::uint32_t>& required,
+                                                        const std::vector<IndexRange>& ranges) {
+  std::vector<std::string> asks(ranges.size());
+  std::size_t r = 0;
+  for (const std::uint32_t g : required) {
+    while (r < ranges.size() && !ranges[r].contains(g)) ++r;
+    if (r == ranges.size()) break;
+    put(asks[r], g);
+  }
+  const std::vector<std::string> asked = ranks::exchange(asks);
+  const IndexRange own = ranges[static_cast<std::size_t>(ranks::rank())];
+  std::vector<std::vector<std::uint32_t>> out(ranges.size());
+  for (std::size_t s = 0; s < asked.size(); ++s)
+    for (std::size_t at = 0; at < asked[s].size();)
+      out[s].push_back(static_cast<std::uint32_t>(take<std::uint32_t>(asked[s], at) - own.begin));
+  return out;
+}
+
+}  // namespace
+
 GhostPlan plan_ghosts(const std::vector<PosRad>& own_particles,
-                      const std::vector<IndexRange>& ranges, double skin) {
+                      const std::vector<IndexRange>& ranges, double skin,
+                      const std::vector<std::uint32_t>& required) {
   const auto n_ranks = static_cast<std::size_t>(ranks::size());
   const auto me = static_cast<std::size_t>(ranks::rank());
   GhostPlan plan;
   plan.send.resize(n_ranks);
+  const std::vector<std::vector<std::uint32_t>> requested = requested_of_me(required, ranges);
   // Every rank's extent, and the widest reach any pair can have.
   std::string mine;
   put(mine, extent_of(own_particles));
@@ -170,12 +196,16 @@ GhostPlan plan_ghosts(const std::vector<PosRad>& own_particles,
   std::vector<std::vector<std::uint32_t>> offered(n_ranks);
   for (std::size_t r = 0; r < me; ++r) {
     if (extents[r].empty) continue;
-    for (std::size_t k = 0; k < own_particles.size(); ++k)
-      if (inside(extents[r], own_particles[k].x, reach)) {
-        offered[r].push_back(static_cast<std::uint32_t>(k));
-        put(offers[r], static_cast<std::uint32_t>(ranges[me].begin + k));
-        put(offers[r], own_particles[k]);
-      }
+    auto ask = requested[r].begin();
+    for (std::size_t k = 0; k < own_particles.size(); ++k) {
+      const bool asked = ask != requested[r].end() && *ask == k;
+      if (asked) ++ask;
+      if (!asked && !inside(extents[r], own_particles[k].x, reach)) continue;
+      offered[r].push_back(static_cast<std::uint32_t>(k));
+      put(offers[r], static_cast<std::uint32_t>(ranges[me].begin + k));
+      put(offers[r], static_cast<std::uint8_t>(asked));
+      put(offers[r], own_particles[k]);
+    }
   }
   const std::vector<std::string> received = ranks::exchange(offers);
   // Keep what lies within reach of an own particle; later ranks in order keep the index order.
@@ -186,8 +216,9 @@ GhostPlan plan_ghosts(const std::vector<PosRad>& own_particles,
       std::size_t at = 0;
       for (std::uint32_t position = 0; at < received[s].size(); ++position) {
         const auto global = take<std::uint32_t>(received[s], at);
+        const auto asked = take<std::uint8_t>(received[s], at);
         const auto q = take<PosRad>(received[s], at);
-        if (!grid.touches(q, skin)) continue;
+        if (!asked && !grid.touches(q, skin)) continue;
         plan.ghosts.push_back(global);
         plan.ghost_pos_rad.push_back(q);
         put(kept[s], position);

@@ -59,9 +59,11 @@ struct GhostPlan {
 // `own_particles` are those of ranges[rank()]. Each rank sends every earlier rank the particles
 // whose centres lie in that rank's bounding box widened by 2 R_max + skin; the receiver keeps
 // those within reach of one of its own (a cell grid over its own particles) and tells each
-// sender which.
+// sender which. `required` (global indexes of later ranks' particles, ascending) are kept
+// wherever they lie: the partners of bonds stretched beyond the reach.
 GhostPlan plan_ghosts(const std::vector<PosRad>& own_particles,
-                      const std::vector<IndexRange>& ranges, double skin);
+                      const std::vector<IndexRange>& ranges, double skin,
+                      const std::vector<std::uint32_t>& required = {});
 
 // The ghosts' values from their owners, in the plan's order (collective): each rank sends the
 // values of its particles in plan.send[r] to rank r. `own` holds this rank's particles' values.
@@ -85,6 +87,38 @@ std::vector<T> ghost_values(const GhostPlan& plan, const std::vector<T>& own) {
   return ghosts;
 }
 
+// The blocks of `block_size` particles that a rank owns: those whose first particle it owns.
+inline IndexRange owned_blocks(IndexRange own, std::size_t block_size) noexcept {
+  return {(own.begin + block_size - 1) / block_size, (own.end + block_size - 1) / block_size};
+}
+
+// Per-block partial sums, each rank having filled those of its own blocks, made whole on every
+// rank (collective): `partials` holds `segments` runs of the same blocks one after the other
+// (one per wall, say). Every rank then adds all the blocks in block order, as one process does.
+template <class T>
+void complete_block_partials(std::vector<T>& partials, std::size_t block_size,
+                             const std::vector<IndexRange>& ranges, std::size_t segments = 1) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  if (ranges.size() < 2) return;
+  const std::size_t blocks = partials.size() / segments;
+  const auto slice = [&](std::size_t r) { return owned_blocks(ranges[r], block_size); };
+  const IndexRange mine = slice(static_cast<std::size_t>(ranks::rank()));
+  std::string out;
+  out.reserve(segments * mine.size() * sizeof(T));
+  for (std::size_t s = 0; s < segments; ++s)
+    out.append(reinterpret_cast<const char*>(partials.data() + s * blocks + mine.begin),
+               mine.size() * sizeof(T));
+  std::vector<std::size_t> sizes(ranges.size());
+  for (std::size_t r = 0; r < sizes.size(); ++r) sizes[r] = segments * slice(r).size() * sizeof(T);
+  const std::vector<std::string> all = ranks::all_gather(out, sizes);
+  for (std::size_t r = 0; r < all.size(); ++r) {
+    const IndexRange theirs = slice(r);
+    for (std::size_t s = 0; s < segments; ++s)
+      std::memcpy(partials.data() + s * blocks + theirs.begin,
+                  all[r].data() + s * theirs.size() * sizeof(T), theirs.size() * sizeof(T));
+  }
+}
+
 // A load a rank computed for a particle another rank owns (the second particle of a pair whose
 // first is its own): the particle's global index and the value.
 template <class T>
@@ -103,6 +137,9 @@ struct IncomingShares {
   std::vector<T> values;
 };
 
+template <class T>
+void arrange_shares(IndexRange own, const std::vector<Share<T>>& all, IncomingShares<T>& r);
+
 // Sends every share to the rank owning its particle (collective); `shares` in the order this
 // rank computed them.
 template <class T>
@@ -119,7 +156,6 @@ IncomingShares<T> return_shares(const std::vector<IndexRange>& ranges,
     to.append(reinterpret_cast<const char*>(&s), sizeof(Share<T>));
   }
   const std::vector<std::string> in = ranks::exchange(out);
-  const IndexRange own = ranges[static_cast<std::size_t>(ranks::rank())];
   std::vector<Share<T>> all;
   for (const std::string& from : in)
     for (std::size_t at = 0; at + sizeof(Share<T>) <= from.size(); at += sizeof(Share<T>)) {
@@ -128,13 +164,19 @@ IncomingShares<T> return_shares(const std::vector<IndexRange>& ranges,
       all.push_back(s);
     }
   IncomingShares<T> r;
+  arrange_shares(ranges[static_cast<std::size_t>(ranks::rank())], all, r);
+  return r;
+}
+
+// The shares received (`all`, in the order they came) arranged by the own particle they load.
+template <class T>
+void arrange_shares(IndexRange own, const std::vector<Share<T>>& all, IncomingShares<T>& r) {
   r.offsets.assign(own.size() + 1, 0);
   for (const Share<T>& s : all) ++r.offsets[s.particle - own.begin + 1];
   for (std::size_t k = 0; k < own.size(); ++k) r.offsets[k + 1] += r.offsets[k];
   r.values.resize(all.size());
   std::vector<std::uint32_t> fill(r.offsets.begin(), r.offsets.end() - 1);
   for (const Share<T>& s : all) r.values[fill[s.particle - own.begin]++] = s.value;
-  return r;
 }
 
 }  // namespace breccia

@@ -17,12 +17,20 @@ using namespace engine_detail;
 
 // Every sum below is grouped by blocks of particles (a bond's or pair's first grain, a wall
 // contact's grain), the blocks' partials added in block order (parallel.hpp,
-// particle_block_starts).
+// particle_block_starts); on a split sample each rank fills its own blocks' and the partials are
+// made whole first (`ranges`, empty on one rank).
 namespace {
+
+template <class T>
+T blocks_total(std::vector<T>& partials, const std::vector<IndexRange>& ranges) {
+  complete_block_partials(partials, kBlock, ranges);
+  return ordered_sum(partials);
+}
 
 // The intact bonds' stored energy, by component.
 template <class Law>
-BondEnergy bond_energy(const BondSet<Law>& s, const Simulation& sim) {
+BondEnergy bond_energy(const BondSet<Law>& s, const Simulation& sim,
+                       const std::vector<IndexRange>& ranges) {
   const std::vector<std::size_t> starts =
       particle_block_starts(s.pairs.first, sim.particles().size());
   std::vector<BondEnergy> part(starts.size() - 1);
@@ -34,13 +42,14 @@ BondEnergy bond_energy(const BondSet<Law>& s, const Simulation& sim) {
             Law::energy(s.params, s.state[k], sim.bond_radii(s.pairs.first[k], s.pairs.second[k]));
     part[blk] = acc;
   });
-  return ordered_sum(part);
+  return blocks_total(part, ranges);
 }
 
 // The particle contacts' stored energy, in pair order (where a state lies in its block's array is
 // no part of any result).
 template <class CL>
-double pair_contact_energy(const ContactSet<CL>& c, std::size_t n) {
+double pair_contact_energy(const ContactSet<CL>& c, std::size_t n,
+                           const std::vector<IndexRange>& ranges) {
   std::vector<std::size_t> starts(block_count(n) + 1);
   for (std::size_t b = 0; b < starts.size(); ++b)
     starts[b] = c.pairs.offsets.empty() ? 0 : c.pairs.offsets[std::min(n, b * kBlock)];
@@ -51,61 +60,68 @@ double pair_contact_energy(const ContactSet<CL>& c, std::size_t n) {
       if (c.history[k] != kNoHistory) acc += CL::stored_energy(c.params, c.state(k));
     part[blk] = acc;
   });
-  return ordered_sum(part);
+  return blocks_total(part, ranges);
 }
 
 // One wall's contacts' stored energy.
 template <class CL>
 double wall_contact_energy(const WallContacts<CL>& wc, const typename CL::Params& params,
-                           std::size_t n) {
+                           std::size_t n, const std::vector<IndexRange>& ranges) {
   const std::vector<std::size_t> at = particle_block_starts(wc.particle, n);
-  double sum = 0.0;
+  std::vector<double> part(at.size() - 1);
   for (std::size_t blk = 0; blk + 1 < at.size(); ++blk) {
     double acc = 0.0;
     for (std::size_t k = at[blk]; k < at[blk + 1]; ++k)
       acc += CL::stored_energy(params, wc.state[k]);
-    sum += acc;
+    part[blk] = acc;
   }
-  return sum;
+  return blocks_total(part, ranges);
 }
 
 // A joint law's springs: a bonded joint's are bond energy by component, an unbonded joint's are
 // contact energy (it replaces a contact).
-template <class JL>
-void add_joint_energy(const BondSet<JL>& s, const Simulation& sim, BondEnergy& bond,
-                      double& contact) {
-  const std::vector<std::size_t> at = particle_block_starts(s.pairs.first, sim.particles().size());
+struct JointEnergy {
   BondEnergy bonded;
   double unbonded = 0.0;
-  for (std::size_t blk = 0; blk + 1 < at.size(); ++blk) {
-    BondEnergy bonded_block;
-    double unbonded_block = 0.0;
+  JointEnergy& operator+=(const JointEnergy& o) noexcept {
+    bonded += o.bonded;
+    unbonded += o.unbonded;
+    return *this;
+  }
+};
+template <class JL>
+void add_joint_energy(const BondSet<JL>& s, const Simulation& sim,
+                      const std::vector<IndexRange>& ranges, BondEnergy& bond, double& contact) {
+  const std::vector<std::size_t> at = particle_block_starts(s.pairs.first, sim.particles().size());
+  std::vector<JointEnergy> part(at.size() - 1);
+  for (std::size_t blk = 0; blk + 1 < at.size(); ++blk)
     for (std::size_t k = at[blk]; k < at[blk + 1]; ++k) {
       const BondEnergy e =
           JL::energy(s.params, s.state[k], sim.bond_radii(s.pairs.first[k], s.pairs.second[k]));
       if (JL::is_bonded(s.state[k]))
-        bonded_block += e;
+        part[blk].bonded += e;
       else
-        unbonded_block += e.total();
+        part[blk].unbonded += e.total();
     }
-    bonded += bonded_block;
-    unbonded += unbonded_block;
-  }
-  bond += bonded;
-  contact += unbonded;
+  const JointEnergy total = blocks_total(part, ranges);
+  bond += total.bonded;
+  contact += total.unbonded;
 }
 
 }  // namespace
 
 template <class CL>
 void Simulation::sample_stored_energy_for(ContactSet<CL>& c) {
+  const std::vector<IndexRange>& ranges = rank_ranges();
   BondEnergy bond;
-  std::apply([&](const auto&... sets) { ((bond += bond_energy(sets, *this)), ...); }, bonds_);
-  double contact = pair_contact_energy(c, p_.size());
+  std::apply([&](const auto&... sets) { ((bond += bond_energy(sets, *this, ranges)), ...); },
+             bonds_);
+  double contact = pair_contact_energy(c, p_.size(), ranges);
   for (const auto& wc : std::get<std::vector<WallContacts<CL>>>(wall_contacts_))
-    contact += wall_contact_energy(wc, c.wall_params, p_.size());
-  std::apply([&](const auto&... sets) { (add_joint_energy(sets, *this, bond, contact), ...); },
-             joints_);
+    contact += wall_contact_energy(wc, c.wall_params, p_.size(), ranges);
+  std::apply(
+      [&](const auto&... sets) { (add_joint_energy(sets, *this, ranges, bond, contact), ...); },
+      joints_);
 
   EnergyLedger& L = ledger_;
   L.step = step_;

@@ -73,6 +73,15 @@ inline void kick_driven(bool fixed, const Vec3& drive_v, const Vec3& drive_w, bo
   td_prev = td;
 }
 
+// Adds the shares particle k (local) received from earlier ranks, in the order they came.
+inline void add_shares(const IncomingShares<CrossSlot>& in, std::size_t k, Vec3& force,
+                       Vec3& torque) noexcept {
+  for (std::uint32_t m = in.offsets[k]; m < in.offsets[k + 1]; ++m) {
+    force += in.values[m].force;
+    torque += in.values[m].torque;
+  }
+}
+
 // How many particles ahead the integrator asks for the cross slots it will gather.
 constexpr std::size_t kCrossAhead = 4;
 
@@ -94,6 +103,24 @@ IntegrateBlock sum_blocks(const std::vector<IntegrateBlock>& blocks) {
 
 }  // namespace
 
+// Particle i's loads of the step, kept as its totals: its pair and wall sums, the shares of
+// pairs owned by earlier ranks, then the cross slots of its earlier own blocks (in one process
+// all of these are cross slots, in this order), then its external load (f_user, cleared).
+void Simulation::total_loads(const PairList& pairs, std::size_t i, bool has_user_force, Vec3& f,
+                             Vec3& t, Vec3& f_user) {
+  f = p_.force[i];
+  t = p_.torque[i];
+  if (split_) add_shares(split_->incoming, i - split_->own.begin, f, t);
+  gather_cross(pairs, cross_slots_, i, f, t);
+  if (has_user_force) {
+    f_user = user_force_[i];
+    user_force_[i] = {};
+    f += f_user;
+  }
+  p_.force[i] = f;
+  p_.torque[i] = t;
+}
+
 template <class CL>
 void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
   const std::size_t n = p_.size();
@@ -106,20 +133,13 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
   const Vec3 gravity = cfg_.gravity;
   const bool planar = p_.planar();
   const bool turning = !central_forces_only(c);
-  for_blocks(n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
+  const IndexRange own = owned_blocks(owned_particles(), kBlock);
+  for_blocks_in(own.begin, own.end, n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
     IntegrateBlock acc;
     for (std::size_t i = begin; i < end; ++i) {
       if (i + kCrossAhead < end) prefetch_cross(c.pairs, cross_slots_, i + kCrossAhead);
-      Vec3 f = p_.force[i], t = p_.torque[i];
-      gather_cross(c.pairs, cross_slots_, i, f, t);
-      Vec3 f_user;
-      if (has_user_force) {
-        f_user = user_force_[i];
-        user_force_[i] = {};
-        f += f_user;
-      }
-      p_.force[i] = f;
-      p_.torque[i] = t;
+      Vec3 f, t, f_user;
+      total_loads(c.pairs, i, has_user_force, f, t, f_user);
       const double m = p_.mass[i], inertia = p_.inertia[i];
       f += gravity * m;
       if (planar) {
@@ -161,6 +181,7 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
     }
     block_int_[blk] = acc;
   });
+  if (split_) complete_block_partials(block_int_, kBlock, split_->ranges);
   const IntegrateBlock total = sum_blocks(block_int_);
   d_local_ += total.local_damping;
   w_gravity_ += total.gravity;

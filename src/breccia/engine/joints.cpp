@@ -8,6 +8,7 @@
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 #include "breccia/core/parallel.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/engine/pair_lists.hpp"
 #include "breccia/engine/simulation.hpp"
 
@@ -104,9 +105,22 @@ void Simulation::assign_joints_for(ContactSet<CL>& c) {
       const std::uint32_t i = c.pairs.first[k], j = c.pairs.second[k];
       const int plane = cutting_plane(i, j);
       if (plane < 0) continue;
-      add.emplace_back(i, j, take_bond_tag(),
+      add.emplace_back(i, j, BondTag{0},
                        JL::install(set.params, geometry(i, j), joint_planes_[plane].normal, false));
     }
+    // Tags in pair order, over the ranks of a split sample in rank order.
+    std::size_t before = 0, total = add.size();
+    if (split_) {
+      const std::vector<std::string> counts = ranks::all_gather(std::to_string(add.size()));
+      total = 0;
+      for (std::size_t r = 0; r < counts.size(); ++r) {
+        if (r == static_cast<std::size_t>(ranks::rank())) before = total;
+        total += std::stoull(counts[r]);
+      }
+    }
+    next_bond_tag_ += before;
+    for (auto& element : add) std::get<2>(element) = take_bond_tag();
+    next_bond_tag_ += total - before - add.size();
     if (add.empty()) return;
     insert_sorted(set, add);
     map_bonds_to_pairs(set, c.pairs);

@@ -71,7 +71,7 @@ Grid make_grid(const std::vector<PosRad>& p, double skin, bool planar) {
 }  // namespace
 
 void build_neighbour_pairs(const std::vector<PosRad>& p, double skin, bool planar, PairList& out,
-                           PairIndex index) {
+                           PairIndex index, std::size_t firsts) {
   const std::size_t n = p.size();
   out.first.clear();
   out.second.clear();
@@ -104,7 +104,7 @@ void build_neighbour_pairs(const std::vector<PosRad>& p, double skin, bool plana
   // Two passes (count, then fill) so that each particle writes its own range: deterministic for
   // any thread count and free of atomics.
   std::vector<std::uint32_t> count(n + 1, 0);
-  const std::ptrdiff_t sn = static_cast<std::ptrdiff_t>(n);
+  const std::ptrdiff_t sn = static_cast<std::ptrdiff_t>(std::min(n, firsts));
 #pragma omp parallel for schedule(dynamic, 256) if (sn > 4096)
   for (std::ptrdiff_t i = 0; i < sn; ++i) {
     std::uint32_t c = 0;

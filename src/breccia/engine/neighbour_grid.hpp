@@ -14,7 +14,10 @@ namespace breccia {
 enum class PairIndex { Full, OffsetsOnly };
 
 // Fills `out.first/second` (sorted) with all pairs within R_i + R_j + skin and builds its index.
+// Only pairs whose first particle lies below `firsts` are listed (a rank's own particles, before
+// its ghosts).
 void build_neighbour_pairs(const std::vector<PosRad>& particles, double skin, bool planar,
-                           PairList& out, PairIndex index = PairIndex::Full);
+                           PairList& out, PairIndex index = PairIndex::Full,
+                           std::size_t firsts = static_cast<std::size_t>(-1));
 
 }  // namespace breccia

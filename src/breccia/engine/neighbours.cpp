@@ -80,7 +80,10 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::vector<std::uint32_t> old_history = std::move(contacts.history);
   std::vector<std::vector<typename CL::State>> old_stores = std::move(contacts.stores);
   contacts.pairs = PairList{};
-  build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs, PairIndex::OffsetsOnly);
+  if (split_)
+    build_own_pairs(contacts.pairs);
+  else
+    build_neighbour_pairs(p_.pos_rad, skin_, p_.planar(), contacts.pairs, PairIndex::OffsetsOnly);
   // Every intact bond must be an interacting pair even if it stretched beyond the search range.
   std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, bonds_);
   std::apply([&](auto&... set) { (add_missing_pairs(set.pairs, contacts.pairs), ...); }, joints_);
@@ -95,15 +98,18 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, bonds_);
   std::apply([&](auto&... set) { (map_bonds_to_pairs(set, contacts.pairs), ...); }, joints_);
   assign_joints();
+  if (split_) note_bonds_anywhere();
   keep_pair_forces_ = pair_forces_needed(contacts);
   if (keep_pair_forces_) contacts.kept_force.assign(contacts.pairs.size(), Vec3{});
-  // Wall candidates: particles within the skin of each wall, history carried by particle index.
+  // Wall candidates: the rank's particles within the skin of each wall, history carried by
+  // particle index.
   auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
+  const IndexRange own = owned_particles();
   for (std::size_t wi = 0; wi < walls_.size(); ++wi) {
     WallContacts<CL>& wc = wall_sets[wi];
     WallContacts<CL> fresh;
     std::size_t a = 0;
-    for (std::uint32_t i = 0; i < p_.size(); ++i) {
+    for (auto i = static_cast<std::uint32_t>(own.begin); i < own.end; ++i) {
       Vec3 nrm;
       if (walls_[wi].gap(p_.pos_rad[i].x, p_.pos_rad[i].r, nrm) >= skin_) continue;
       fresh.particle.push_back(i);
@@ -119,7 +125,7 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
     walls_[wi].moved = 0.0;
   }
   x_at_build_.resize(p_.size());
-  for (std::size_t i = 0; i < p_.size(); ++i) x_at_build_[i] = p_.pos_rad[i].x;
+  for (std::size_t i = own.begin; i < own.end; ++i) x_at_build_[i] = p_.pos_rad[i].x;
   max_disp2_ = 0.0;
   radius_growth_ = 0.0;
   ++rebuilds_;

@@ -392,6 +392,7 @@ template <class CL>
 void Simulation::compute_pairs_for(ContactSet<CL>& c) {
   const std::size_t n = p_.size();
   const std::size_t nb = (n + kParticleBlock - 1) / kParticleBlock;
+  const IndexRange own = owned_blocks(owned_particles(), kParticleBlock);
   block_dis_.assign(nb, PairDissipation{});
   block_joint_dis_.assign(nb, PairDissipation{});
   if (block_failures_.size() < nb) block_failures_.resize(nb);
@@ -401,7 +402,8 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
     std::vector<Vec3>().swap(c.kept_force);
   else if (c.kept_force.size() != c.pairs.size())
     c.kept_force.assign(c.pairs.size(), Vec3{});
-  for_each_item(nb, [&](std::size_t blk) {
+  for_each_item(own.size(), [&](std::size_t k) {
+    const std::size_t blk = own.begin + k;
     const std::size_t begin = blk * kParticleBlock, end = std::min(n, begin + kParticleBlock);
     std::fill(p_.force.begin() + static_cast<std::ptrdiff_t>(begin),
               p_.force.begin() + static_cast<std::ptrdiff_t>(end), Vec3{});
@@ -423,16 +425,21 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
     block_dis_[blk] = dis;
     block_joint_dis_[blk] = joint_dis;
   });
+  process_failures(own.begin, own.end);
+  // A split sample adds the sums once the wall pass has exchanged the partials.
+  if (!split_) add_pair_dissipation();
+}
+
+void Simulation::add_pair_dissipation() {
   d_pairs_ += ordered_sum(block_dis_);
   const PairDissipation joint_dis = ordered_sum(block_joint_dis_);
   d_pairs_ += joint_dis;
   d_joint_slip_ += joint_dis.slip;
-  process_failures(nb);
 }
 
 // Breaks are processed as one batch in pair order (independent of the thread count).
-void Simulation::process_failures(std::size_t blocks) {
-  for (std::size_t blk = 0; blk < blocks; ++blk)
+void Simulation::process_failures(std::size_t first_block, std::size_t last_block) {
+  for (std::size_t blk = first_block; blk < last_block; ++blk)
     for (const Failure& f : block_failures_[blk]) {
       std::uint32_t law_index = 0;
       std::apply(
@@ -491,6 +498,10 @@ void Simulation::record_crack(const BondSet<Law>& set, std::uint32_t bond,
   r.ratio_t = info.ratio_t;
   r.ratio_s = info.ratio_s;
   r.energy = info.energy;
+  if (split_) {
+    split_->cracks.push_back(r);  // shared in pair order with the other ranks' (share_cracks)
+    return;
+  }
   released_ += info.energy;
   cracks_.push_back(r);
 }

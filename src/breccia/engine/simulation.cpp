@@ -187,7 +187,10 @@ void Simulation::step() {
   if (retired_)
     throw std::logic_error("Simulation::step: the simulation's interactions are retired");
   if (!initialised_) initialise();
-  if (needs_rebuild()) rebuild();
+  if (needs_rebuild())
+    rebuild();  // on a split sample, with the ghosts' values
+  else if (split_)
+    refresh_ghosts();
   const bool sample =
       sample_requested_ || (cfg_.energy_interval > 0 && step_ % cfg_.energy_interval == 0);
   compute_pairs();
@@ -221,6 +224,7 @@ void Simulation::retire_interactions() {
   block_joint_dis_ = {};
   block_int_ = {};
   wall_block_starts_ = {};
+  wall_blocks_ = {};
   block_failures_ = {};
   retired_ = true;
 }

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -14,6 +15,7 @@
 
 #include "breccia/boundary/wall.hpp"
 #include "breccia/engine/crack_catalogue.hpp"
+#include "breccia/engine/domain.hpp"
 #include "breccia/engine/events.hpp"
 #include "breccia/law/registry.hpp"
 #include "breccia/state/bond_set.hpp"
@@ -132,6 +134,31 @@ struct IntegrateBlock {
   double damping_boundary = 0.0, external_boundary = 0.0;
 };
 
+// Per-block partial sums of the wall pass, for one wall (kept in a member: no allocation per step).
+struct WallBlock {
+  PairDissipation dissipation;
+  Vec3 force;                            // on the grains
+  double radial = 0.0, stiffness = 0.0;  // normal force, contact stiffness
+  std::size_t touching = 0;
+};
+
+// A sample split over the ranks of an MPI launch (engine/rank_split.cpp; ARCHITECTURE.md, "Ranks
+// (MPI)"): every rank keeps the whole particle store, but steps only its own particles, keeps
+// only the bonds, pairs and wall contacts whose first grain is its own, and keeps its ghosts (the
+// later ranks' grains its pairs reach) current from their owners every step. The other grains'
+// entries are stale between gathers (Simulation::gather_particles).
+struct RankSplit {
+  std::vector<IndexRange> ranges;  // every rank's particles
+  IndexRange own;
+  GhostPlan plan;  // at the last neighbour rebuild
+  // Loads received for the own grains from pairs of earlier ranks (in the order they came, then
+  // by grain).
+  std::vector<Share<CrossSlot>> received;
+  IncomingShares<CrossSlot> incoming;
+  std::vector<CrackRecord> cracks;  // this rank's cracks of the step, in pair order
+  bool bonds_anywhere = false;      // a bond or joint on some rank (central_forces_only)
+};
+
 // Stress carried by the pair forces (docs/physics.md §6.5): the sum over interacting pairs of l (x)
 // F, with l = x2 - x1 and F the force on particle 2, so a repulsion counts compression-positive.
 // Divide by the sample volume for the average stress tensor.
@@ -220,6 +247,21 @@ class Simulation {
   // The engine's own arrays per particle besides the store (run/memory_budget.cpp): positions at
   // the last rebuild and the pair list's two offsets (driver loads only with driven grains).
   static constexpr std::size_t kScratchBytesPerParticle = sizeof(Vec3) + 2 * sizeof(std::uint32_t);
+
+  // --- ranks (engine/rank_split.cpp) ---
+  // Splits the sample over the ranks of the launch (collective; nothing with one rank): from now
+  // on each rank steps its own particles (split_indexes) with the results of one process to the
+  // bit. Between steps the particle store is current for the own particles and the ghosts only;
+  // counts and views of bonds, contacts and pairs cover the own ones. Initialises first.
+  void split_over_ranks();
+  bool split() const noexcept { return split_ != nullptr; }
+  // The particles this rank steps (all of them when the sample is not split).
+  IndexRange owned_particles() const noexcept {
+    return split_ ? split_->own : IndexRange{0, p_.size()};
+  }
+  // Makes every rank's particle store whole and current (collective): positions, velocities,
+  // orientations, displacements and the last step's loads.
+  void gather_particles();
 
   // --- views ---
   const ParticleStore& particles() const noexcept { return p_; }
@@ -342,6 +384,22 @@ class Simulation {
   // (integrator.cpp) and the ledger's stored energies (energy_ledger.cpp). Each dispatches once on
   // the contact law in use and runs its loops for that law (`*_for`), without virtual calls.
   void rebuild();
+  // The rank's pairs: its own grains' pairs with its own grains and its ghosts, by global index
+  // (a new ghost plan, the ghosts' values sent).
+  void build_own_pairs(PairList& out);
+  std::vector<std::uint32_t> bond_partners_beyond() const;
+  void refresh_ghosts();
+  // After the pair and wall passes (collective): the shares of cross pairs to their grains'
+  // owners, and every rank's block partials of the two passes and cracks of the step to all.
+  void exchange_step_loads(const PairList& pairs);
+  void add_pair_dissipation();
+  // Whether this rank, or any rank, holds a bond or joint element (bonds_anywhere is noted at
+  // every rebuild, where the sets change).
+  bool bonds_here() const noexcept;
+  bool bonds_anywhere() const noexcept;
+  void note_bonds_anywhere();
+  // Every rank's ranges (empty when the sample is not split): the block sums' owners.
+  const std::vector<IndexRange>& rank_ranges() const noexcept;
   void compute_pairs();
   void compute_walls();
   void integrate(bool sample);
@@ -353,7 +411,7 @@ class Simulation {
   void compute_pairs_for(ContactSet<CL>& contacts);
   template <class CL>
   class PairWalk;  // one block's walk of the pair pass (pair_pass.cpp)
-  void process_failures(std::size_t blocks);
+  void process_failures(std::size_t first_block, std::size_t last_block);
   template <class Law>
   void process_failure(BondSet<Law>& set, std::uint32_t bond, const BondFailure& info);
   template <class Law>
@@ -374,6 +432,9 @@ class Simulation {
   void compute_walls_for(ContactSet<CL>& contacts);
   template <class CL>
   void integrate_for(ContactSet<CL>& contacts, bool sample);
+  [[gnu::always_inline]] inline void total_loads(const PairList& pairs, std::size_t i,
+                                                 bool has_user_force, Vec3& f, Vec3& t,
+                                                 Vec3& f_user);
   // Central forces only: no bond or joint, no driven grain, and contacts with grains and walls
   // that read only the pair's shape, whose forces act along the line through the centres. Their
   // torques are zero but for rounding, so the pair pass leaves them out and the integrator
@@ -384,10 +445,7 @@ class Simulation {
     if (contact_needs_motion<CL>(c.params) || contact_needs_motion<CL>(c.wall_params) ||
         p_.has_drives())
       return false;
-    bool none = true;
-    std::apply([&](const auto&... set) { ((none = none && set.size() == 0), ...); }, bonds_);
-    std::apply([&](const auto&... set) { ((none = none && set.size() == 0), ...); }, joints_);
-    return none;
+    return !bonds_anywhere();
   }
   // Whether the pair pass must keep the array of pair forces: a law in use whose state does not
   // give its force back, bond dashpots, or the reference path asked for.
@@ -530,6 +588,8 @@ class Simulation {
   std::vector<PairDissipation> block_dis_, block_joint_dis_;
   std::vector<IntegrateBlock> block_int_;
   std::vector<std::size_t> wall_block_starts_;  // a wall's contacts per particle block
+  std::vector<WallBlock> wall_blocks_;          // every wall's, wall after wall
+  std::unique_ptr<RankSplit> split_;            // null: one rank steps every particle
   struct Failure {
     std::uint32_t law;  // position in BondLaws, then BondLaws::size + position in JointLaws
     std::uint32_t bond;

@@ -17,111 +17,110 @@ using namespace engine_detail;
 
 namespace {
 
-// A wall's resultant over its contacts: force, normal force, touching contacts and stiffness.
-struct WallResultant {
-  Vec3 force;
-  double radial = 0.0, stiffness = 0.0;
-  std::size_t touching = 0;
-  WallResultant& operator+=(const WallResultant& o) noexcept {
-    force += o.force;
-    radial += o.radial;
-    stiffness += o.stiffness;
-    touching += o.touching;
-    return *this;
+// Wall contact k's loads on its grain of this step (zero for an open contact without history).
+template <class CL>
+void load_wall_contact(const Wall& w, const ParticleStore& p, const typename CL::Params& params,
+                       double dt, WallContacts<CL>& wc, std::size_t k, PairDissipation& dis) {
+  const std::uint32_t i = wc.particle[k];
+  const PosRad& q = p.pos_rad[i];
+  Vec3 nrm;
+  const double gap = w.gap(q.x, q.r, nrm);
+  if (gap >= 0.0 && !has_history(wc.state[k].n_old)) {
+    wc.force[k] = {};
+    wc.torque[k] = {};
+    wc.normal_force[k] = 0.0;
+    wc.stiffness[k] = 0.0;
+    return;
   }
-};
-
-// The resultant summed per block of the particles touched, then in block order.
-template <class Contacts>
-WallResultant wall_resultant(const Contacts& wc, const std::vector<std::size_t>& starts) {
-  WallResultant total;
-  for (std::size_t blk = 0; blk + 1 < starts.size(); ++blk) {
-    WallResultant block;
-    for (std::size_t k = starts[blk]; k < starts[blk + 1]; ++k) {
-      block.force += wc.force[k];
-      block.radial += wc.normal_force[k];
-      block.touching += wc.normal_force[k] != 0.0 ? 1 : 0;
-      block.stiffness += wc.stiffness[k];
-    }
-    total += block;
-  }
-  return total;
+  PairGeometry g;
+  g.n = nrm;
+  g.delta = -gap;
+  g.d = q.r - g.delta;
+  g.r2 = nrm * -(q.r - 0.5 * g.delta);
+  g.r1 = {};
+  g.vc = p.vel[i] + cross(p.angvel[i], g.r2) - w.surface_velocity(nrm);
+  g.w1 = {};
+  g.w2 = p.angvel[i];
+  g.R1 = w.convex_radius(p.planar());
+  g.R2 = q.r;
+  g.m2 = p.mass[i];
+  g.wall = true;
+  g.planar = p.planar();
+  g.thickness = p.thickness();
+  const PairForce pf = CL::compute(params, wc.state[k], g, dt, dis);
+  wc.force[k] = pf.force;
+  wc.torque[k] = cross(g.r2, pf.force) + pf.couple;
+  wc.normal_force[k] = dot(pf.force, nrm);
+  double kn = 0.0, ks = 0.0;
+  if (g.delta > 0.0) CL::timestep_stiffness(params, g, kn, ks);
+  wc.stiffness[k] = kn;
 }
 
 }  // namespace
 
+// Each wall's contacts first, their partial sums kept per block of the particles touched
+// (parallel.hpp, particle_block_starts); then, wall after wall, the sums in block order, the
+// loads on the grains and the wall's work.
 template <class CL>
 void Simulation::compute_walls_for(ContactSet<CL>& c) {
   auto& wall_sets = std::get<std::vector<WallContacts<CL>>>(wall_contacts_);
   const double dt = dt_;
+  const std::size_t nb = block_count(p_.size());
+  wall_blocks_.assign(walls_.size() * nb, WallBlock{});
   for (std::size_t wi = 0; wi < walls_.size(); ++wi) {
-    Wall& w = walls_[wi];
+    const Wall& w = walls_[wi];
     WallContacts<CL>& wc = wall_sets[wi];
-    const std::size_t n = wc.particle.size();
-    // Grouped by blocks of the particles they touch (parallel.hpp, particle_block_starts).
     std::vector<std::size_t>& starts = wall_block_starts_;
     particle_block_starts(wc.particle, p_.size(), starts);
-    const std::size_t nb = starts.size() - 1;
-    block_dis_.assign(nb, PairDissipation{});
+    WallBlock* const blocks = wall_blocks_.data() + wi * nb;
     for_item_blocks(starts, [&](std::size_t begin, std::size_t end, std::size_t blk) {
-      PairDissipation dis;
+      WallBlock sum;
       for (std::size_t k = begin; k < end; ++k) {
-        const std::uint32_t i = wc.particle[k];
-        const PosRad& q = p_.pos_rad[i];
-        Vec3 nrm;
-        const double gap = w.gap(q.x, q.r, nrm);
-        if (gap >= 0.0 && !has_history(wc.state[k].n_old)) {
-          wc.force[k] = {};
-          wc.torque[k] = {};
-          wc.normal_force[k] = 0.0;
-          wc.stiffness[k] = 0.0;
-          continue;
-        }
-        PairGeometry g;
-        g.n = nrm;
-        g.delta = -gap;
-        g.d = q.r - g.delta;
-        g.r2 = nrm * -(q.r - 0.5 * g.delta);
-        g.r1 = {};
-        g.vc = p_.vel[i] + cross(p_.angvel[i], g.r2) - w.surface_velocity(nrm);
-        g.w1 = {};
-        g.w2 = p_.angvel[i];
-        g.R1 = w.convex_radius(p_.planar());
-        g.R2 = q.r;
-        g.m2 = p_.mass[i];
-        g.wall = true;
-        g.planar = p_.planar();
-        g.thickness = p_.thickness();
-        const PairForce pf = CL::compute(c.wall_params, wc.state[k], g, dt, dis);
-        wc.force[k] = pf.force;
-        wc.torque[k] = cross(g.r2, pf.force) + pf.couple;
-        wc.normal_force[k] = dot(pf.force, nrm);
-        double kn = 0.0, ks = 0.0;
-        if (g.delta > 0.0) CL::timestep_stiffness(c.wall_params, g, kn, ks);
-        wc.stiffness[k] = kn;
+        load_wall_contact(w, p_, c.wall_params, dt, wc, k, sum.dissipation);
+        sum.force += wc.force[k];
+        sum.radial += wc.normal_force[k];
+        sum.touching += wc.normal_force[k] != 0.0 ? 1 : 0;
+        sum.stiffness += wc.stiffness[k];
       }
-      block_dis_[blk] = dis;
+      blocks[blk] = sum;
     });
-    d_pairs_ += ordered_sum(block_dis_);
-    for (std::size_t k = 0; k < n; ++k) {
+  }
+  if (split_) {
+    // One exchange for the step's loads (the pair pass's shares, dissipation and cracks, and the
+    // walls' sums), then the pair pass's sums, which come first in one process.
+    exchange_step_loads(c.pairs);
+    add_pair_dissipation();
+  }
+  for (std::size_t wi = 0; wi < walls_.size(); ++wi) {
+    Wall& w = walls_[wi];
+    const WallContacts<CL>& wc = wall_sets[wi];
+    const WallBlock* const blocks = wall_blocks_.data() + wi * nb;
+    PairDissipation dissipation;
+    for (std::size_t blk = 0; blk < nb; ++blk) dissipation += blocks[blk].dissipation;
+    d_pairs_ += dissipation;
+    for (std::size_t k = 0; k < wc.particle.size(); ++k) {
       const std::uint32_t i = wc.particle[k];
       p_.force[i] += wc.force[k];  // after the pair pass's sum, in wall and particle order
       p_.torque[i] += wc.torque[k];
     }
-    const WallResultant sum = wall_resultant(wc, starts);
-    const Vec3 total = sum.force;
-    const double radial = sum.radial;
+    WallBlock sum;
+    for (std::size_t blk = 0; blk < nb; ++blk) {
+      sum.force += blocks[blk].force;
+      sum.radial += blocks[blk].radial;
+      sum.stiffness += blocks[blk].stiffness;
+      sum.touching += blocks[blk].touching;
+    }
     // Trapezoidal work over the wall's last displacement (matches the leapfrog kinetic energy):
     // the motion that made it, not the one a servo has set for the next step.
     const double dw = w.shape != WallShape::Cylinder
-                          ? 0.5 * dot(w.force_prev + total, w.advanced_velocity) * dt
-                          : 0.5 * (w.radial_force_prev + radial) * w.advanced_radial_speed * dt;
+                          ? 0.5 * dot(w.force_prev + sum.force, w.advanced_velocity) * dt
+                          : 0.5 * (w.radial_force_prev + sum.radial) * w.advanced_radial_speed * dt;
     w.work += dw;
     w_walls_ += dw;
-    w.force = total;
-    w.radial_force = radial;
-    w.force_prev = total;
-    w.radial_force_prev = radial;
+    w.force = sum.force;
+    w.radial_force = sum.radial;
+    w.force_prev = sum.force;
+    w.radial_force_prev = sum.radial;
     w.contacts = sum.touching;
     w.contact_stiffness = sum.stiffness;
   }

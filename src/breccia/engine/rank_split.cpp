@@ -1,0 +1,358 @@
+// One sample split over the ranks of an MPI launch (ARCHITECTURE.md, "Ranks (MPI)"). Each rank
+// steps the particles of its index range (engine/domain.hpp) and the pairs, bonds and wall
+// contacts whose first grain is its own; its ghosts come from their owners every step, the loads
+// of its pairs on other ranks' grains go back to them as shares, and every per-block partial sum
+// is made whole on every rank before it is added in block order. The ranks thus walk the blocks
+// and pairs one process walks, and add the same numbers in the same order: the results are those
+// of one process to the bit.
+#include <algorithm>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include "breccia/core/ranks.hpp"
+#include "breccia/core/type_list.hpp"
+#include "breccia/engine/neighbour_grid.hpp"
+#include "breccia/engine/pair_lists.hpp"
+#include "breccia/engine/simulation.hpp"
+
+namespace breccia {
+
+using namespace engine_detail;
+
+namespace {
+
+// What a pair pass reads of a ghost.
+struct GhostState {
+  PosRad pos_rad;
+  Vec3 vel, angvel;
+  Quat orientation;
+  double angle = 0.0;
+};
+
+// The bond and joint laws by their position (a crack names its law by a pointer to static
+// storage, which differs from process to process: ranks send the position).
+std::vector<std::string_view> law_names() {
+  std::vector<std::string_view> names;
+  for_each_type<BondLaws>([&]<class L>() { names.push_back(L::name); });
+  for_each_type<JointLaws>([&]<class L>() { names.push_back(L::name); });
+  return names;
+}
+
+// Keeps the elements of a bond-layout set whose first grain is in `own`, in their order.
+template <class Law>
+void keep_own_elements(BondSet<Law>& set, IndexRange own) {
+  std::size_t w = 0, broken = 0;
+  for (std::size_t k = 0; k < set.size(); ++k) {
+    if (!own.contains(set.pairs.first[k])) continue;
+    set.pairs.first[w] = set.pairs.first[k];
+    set.pairs.second[w] = set.pairs.second[k];
+    set.tag[w] = set.tag[k];
+    set.state[w] = set.state[k];
+    set.intact[w] = set.intact[k];
+    broken += set.intact[k] ? 0 : 1;
+    ++w;
+  }
+  set.pairs.first.resize(w);
+  set.pairs.second.resize(w);
+  set.tag.resize(w);
+  set.state.resize(w);
+  set.intact.resize(w);
+  set.broken_since_compaction = broken;
+  set.bond_of_pair.clear();
+}
+
+// Keeps the pairs of a contact set whose first grain is in `own`, with their histories (kept in
+// their blocks' stores, which are the own blocks'); the other blocks' stores are freed.
+template <class CL>
+void keep_own_pairs(ContactSet<CL>& c, IndexRange own, std::size_t particles) {
+  PairList kept;
+  std::vector<std::uint32_t> history;
+  std::vector<Vec3> forces;
+  for (std::size_t k = 0; k < c.pairs.size(); ++k) {
+    if (!own.contains(c.pairs.first[k])) continue;
+    kept.first.push_back(c.pairs.first[k]);
+    kept.second.push_back(c.pairs.second[k]);
+    history.push_back(c.history[k]);
+    if (!c.kept_force.empty()) forces.push_back(c.kept_force[k]);
+  }
+  const IndexRange blocks = owned_blocks(own, kParticleBlock);
+  for (std::size_t b = 0; b < c.stores.size(); ++b)
+    if (!blocks.contains(b)) std::vector<typename CL::State>().swap(c.stores[b]);
+  kept.build_offsets(particles);
+  kept.build_cross_index(particles);
+  c.pairs = std::move(kept);
+  c.history = std::move(history);
+  c.kept_force = std::move(forces);
+}
+
+// Keeps a wall's contacts with grains in `own`.
+template <class CL>
+void keep_own_wall_contacts(WallContacts<CL>& wc, IndexRange own) {
+  WallContacts<CL> kept;
+  for (std::size_t k = 0; k < wc.particle.size(); ++k) {
+    if (!own.contains(wc.particle[k])) continue;
+    kept.particle.push_back(wc.particle[k]);
+    kept.state.push_back(wc.state[k]);
+    kept.force.push_back(wc.force[k]);
+    kept.torque.push_back(wc.torque[k]);
+    kept.normal_force.push_back(wc.normal_force[k]);
+    kept.stiffness.push_back(wc.stiffness[k]);
+  }
+  wc = std::move(kept);
+}
+
+// Every rank's values of its own particles, on every rank (collective).
+template <class T>
+void complete_particle_values(std::vector<T>& values, const std::vector<IndexRange>& ranges) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  if (values.empty()) return;
+  const IndexRange own = ranges[static_cast<std::size_t>(ranks::rank())];
+  const std::string mine(reinterpret_cast<const char*>(values.data() + own.begin),
+                         own.size() * sizeof(T));
+  std::vector<std::size_t> sizes(ranges.size());
+  for (std::size_t r = 0; r < sizes.size(); ++r) sizes[r] = ranges[r].size() * sizeof(T);
+  const std::vector<std::string> all = ranks::all_gather(mine, sizes);
+  for (std::size_t r = 0; r < all.size(); ++r)
+    std::memcpy(values.data() + ranges[r].begin, all[r].data(), ranges[r].size() * sizeof(T));
+}
+
+}  // namespace
+
+// The split keeps the lists of the last rebuild, each rank its own part of them, so that the
+// next steps (and the next rebuild) are those of one process whenever the split is made.
+void Simulation::split_over_ranks() {
+  if (ranks::size() < 2 || split_) return;
+  if (retired_)
+    throw std::logic_error(
+        "Simulation::split_over_ranks: the simulation's interactions are retired");
+  if (!initialised_) initialise();
+  split_ = std::make_unique<RankSplit>();
+  RankSplit& s = *split_;
+  s.ranges = split_indexes(p_.size(), ranks::size());
+  s.own = s.ranges[static_cast<std::size_t>(ranks::rank())];
+  std::apply([&](auto&... set) { (keep_own_elements(set, s.own), ...); }, bonds_);
+  std::apply([&](auto&... set) { (keep_own_elements(set, s.own), ...); }, joints_);
+  std::visit(
+      [&]<class CL>(ContactSet<CL>& c) {
+        keep_own_pairs(c, s.own, p_.size());
+        std::apply([&](auto&... set) { (map_bonds_to_pairs(set, c.pairs), ...); }, bonds_);
+        std::apply([&](auto&... set) { (map_bonds_to_pairs(set, c.pairs), ...); }, joints_);
+        for (auto& wc : std::get<std::vector<WallContacts<CL>>>(wall_contacts_))
+          keep_own_wall_contacts(wc, s.own);
+        // Every ghost the kept pairs reach, planned from the positions of the last rebuild.
+        std::vector<std::uint32_t> reached;
+        for (const std::uint32_t j : c.pairs.second)
+          if (j >= s.own.end) reached.push_back(j);
+        std::sort(reached.begin(), reached.end());
+        reached.erase(std::unique(reached.begin(), reached.end()), reached.end());
+        std::vector<PosRad> built(s.own.size());
+        for (std::size_t k = 0; k < built.size(); ++k)
+          built[k] = {x_at_build_[s.own.begin + k], p_.pos_rad[s.own.begin + k].r};
+        s.plan = plan_ghosts(built, s.ranges, skin_, reached);
+      },
+      contact_);
+  cross_slots_.clear();
+  std::vector<std::vector<Failure>>().swap(block_failures_);
+  note_bonds_anywhere();
+  refresh_ghosts();
+}
+
+bool Simulation::bonds_here() const noexcept {
+  bool any = false;
+  std::apply([&](const auto&... set) { ((any = any || set.size() > 0), ...); }, bonds_);
+  std::apply([&](const auto&... set) { ((any = any || set.size() > 0), ...); }, joints_);
+  return any;
+}
+
+bool Simulation::bonds_anywhere() const noexcept {
+  return split_ ? split_->bonds_anywhere : bonds_here();
+}
+
+void Simulation::note_bonds_anywhere() {
+  const std::vector<std::string> all = ranks::all_gather(bonds_here() ? "1" : "0");
+  split_->bonds_anywhere = std::find(all.begin(), all.end(), "1") != all.end();
+}
+
+const std::vector<IndexRange>& Simulation::rank_ranges() const noexcept {
+  static const std::vector<IndexRange> none;
+  return split_ ? split_->ranges : none;
+}
+
+std::vector<std::uint32_t> Simulation::bond_partners_beyond() const {
+  std::vector<std::uint32_t> out;
+  const auto add = [&](const auto& set) {
+    for (const std::uint32_t j : set.pairs.second)
+      if (j >= split_->own.end) out.push_back(j);
+  };
+  std::apply([&](const auto&... set) { (add(set), ...); }, bonds_);
+  std::apply([&](const auto&... set) { (add(set), ...); }, joints_);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+void Simulation::build_own_pairs(PairList& out) {
+  RankSplit& s = *split_;
+  std::vector<PosRad> local(p_.pos_rad.begin() + static_cast<std::ptrdiff_t>(s.own.begin),
+                            p_.pos_rad.begin() + static_cast<std::ptrdiff_t>(s.own.end));
+  s.plan = plan_ghosts(local, s.ranges, skin_, bond_partners_beyond());
+  refresh_ghosts();
+  local.insert(local.end(), s.plan.ghost_pos_rad.begin(), s.plan.ghost_pos_rad.end());
+  PairList found;
+  build_neighbour_pairs(local, skin_, p_.planar(), found, PairIndex::OffsetsOnly, s.own.size());
+  // Local order is global order (the ghosts lie past the own range, ascending): the list stays
+  // sorted.
+  const auto n_own = static_cast<std::uint32_t>(s.own.size());
+  const auto global = [&](std::uint32_t k) {
+    return k < n_own ? static_cast<std::uint32_t>(s.own.begin + k) : s.plan.ghosts[k - n_own];
+  };
+  out = PairList{};
+  out.first.resize(found.size());
+  out.second.resize(found.size());
+  for (std::size_t k = 0; k < found.size(); ++k) {
+    out.first[k] = global(found.first[k]);
+    out.second[k] = global(found.second[k]);
+  }
+}
+
+void Simulation::refresh_ghosts() {
+  const RankSplit& s = *split_;
+  const bool turns = !p_.orientation.empty(), angles = !p_.angle.empty();
+  std::vector<std::string> out(s.plan.send.size());
+  for (std::size_t r = 0; r < out.size(); ++r) {
+    out[r].resize(s.plan.send[r].size() * sizeof(GhostState));
+    for (std::size_t k = 0; k < s.plan.send[r].size(); ++k) {
+      const std::size_t i = s.own.begin + s.plan.send[r][k];
+      GhostState g{p_.pos_rad[i], p_.vel[i], p_.angvel[i], turns ? p_.orientation[i] : Quat{},
+                   angles ? p_.angle[i] : 0.0};
+      std::memcpy(out[r].data() + k * sizeof(GhostState), &g, sizeof(GhostState));
+    }
+  }
+  std::vector<std::size_t> expected(out.size(), 0);
+  std::size_t owner = 0;
+  for (const std::uint32_t g : s.plan.ghosts) {
+    while (!s.ranges[owner].contains(g)) ++owner;
+    expected[owner] += sizeof(GhostState);
+  }
+  std::size_t next = 0;
+  for (const std::string& from : ranks::exchange(out, expected))
+    for (std::size_t at = 0; at + sizeof(GhostState) <= from.size(); at += sizeof(GhostState)) {
+      GhostState g;
+      std::memcpy(&g, from.data() + at, sizeof(GhostState));
+      const std::uint32_t i = s.plan.ghosts[next++];
+      p_.pos_rad[i] = g.pos_rad;
+      p_.vel[i] = g.vel;
+      p_.angvel[i] = g.angvel;
+      if (turns) p_.orientation[i] = g.orientation;
+      if (angles) p_.angle[i] = g.angle;
+    }
+}
+
+namespace {
+
+template <class T>
+void put(std::string& out, const T& v) {
+  out.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+template <class T>
+void put_range(std::string& out, const T* from, std::size_t count) {
+  out.append(reinterpret_cast<const char*>(from), count * sizeof(T));
+}
+template <class T>
+T take(const std::string& in, std::size_t& at) {
+  T v;
+  std::memcpy(&v, in.data() + at, sizeof(T));
+  at += sizeof(T);
+  return v;
+}
+template <class T>
+void take_range(const std::string& in, std::size_t& at, T* to, std::size_t count) {
+  std::memcpy(to, in.data() + at, count * sizeof(T));
+  at += count * sizeof(T);
+}
+
+}  // namespace
+
+// To each rank: the cross slots of this rank's pairs whose second grain it owns (grain by grain,
+// each grain's in slot order), then, the same to all, this rank's block partials of the pair and
+// wall passes and its cracks of the step. A receiver takes the shares in rank order (pair order),
+// fills the others' blocks, and records every rank's cracks in rank order (pair order).
+void Simulation::exchange_step_loads(const PairList& pairs) {
+  RankSplit& s = *split_;
+  static const std::vector<std::string_view> names = law_names();
+  const std::size_t n_ranks = s.ranges.size(), walls = walls_.size();
+  const std::size_t wall_nb = walls > 0 ? wall_blocks_.size() / walls : 0;
+  const auto pair_blocks = [&](std::size_t r) { return owned_blocks(s.ranges[r], kParticleBlock); };
+  const auto wall_blocks = [&](std::size_t r) { return owned_blocks(s.ranges[r], kBlock); };
+  // What every rank gets.
+  std::string common;
+  const IndexRange pb = pair_blocks(static_cast<std::size_t>(ranks::rank()));
+  const IndexRange wb = wall_blocks(static_cast<std::size_t>(ranks::rank()));
+  put_range(common, block_dis_.data() + pb.begin, pb.size());
+  put_range(common, block_joint_dis_.data() + pb.begin, pb.size());
+  for (std::size_t w = 0; w < walls; ++w)
+    put_range(common, wall_blocks_.data() + w * wall_nb + wb.begin, wb.size());
+  put(common, static_cast<std::uint64_t>(s.cracks.size()));
+  for (CrackRecord r : s.cracks) {
+    put(common,
+        static_cast<std::uint32_t>(std::find(names.begin(), names.end(), r.law) - names.begin()));
+    r.law = {};
+    put(common, r);
+  }
+  s.cracks.clear();
+  // The shares, by owner.
+  std::vector<std::string> out(n_ranks);
+  std::size_t owner = 0;
+  std::vector<std::uint64_t> count(n_ranks, 0);
+  for (const std::uint32_t g : s.plan.ghosts) {
+    while (!s.ranges[owner].contains(g)) ++owner;
+    for (std::uint32_t m = pairs.cross_in_offsets[g]; m < pairs.cross_in_offsets[g + 1]; ++m) {
+      put(out[owner], Share<CrossSlot>{g, cross_slots_[pairs.cross_in[m]]});
+      ++count[owner];
+    }
+  }
+  for (std::size_t r = 0; r < n_ranks; ++r) {
+    std::string head;
+    put(head, count[r]);
+    out[r] = head + out[r] + common;
+  }
+  const std::vector<std::string> in = ranks::exchange(out);
+  std::vector<Share<CrossSlot>>& shares = s.received;
+  shares.clear();
+  for (std::size_t r = 0; r < n_ranks; ++r) {
+    const std::string& from = in[r];
+    std::size_t at = 0;
+    for (auto k = take<std::uint64_t>(from, at); k > 0; --k)
+      shares.push_back(take<Share<CrossSlot>>(from, at));
+    const IndexRange their_pb = pair_blocks(r), their_wb = wall_blocks(r);
+    take_range(from, at, block_dis_.data() + their_pb.begin, their_pb.size());
+    take_range(from, at, block_joint_dis_.data() + their_pb.begin, their_pb.size());
+    for (std::size_t w = 0; w < walls; ++w)
+      take_range(from, at, wall_blocks_.data() + w * wall_nb + their_wb.begin, their_wb.size());
+    for (auto k = take<std::uint64_t>(from, at); k > 0; --k) {
+      const auto law = take<std::uint32_t>(from, at);
+      CrackRecord record = take<CrackRecord>(from, at);
+      record.law = names.at(law);
+      released_ += record.energy;
+      cracks_.push_back(record);
+    }
+  }
+  arrange_shares(s.own, shares, s.incoming);
+}
+
+void Simulation::gather_particles() {
+  if (!split_) return;
+  const std::vector<IndexRange>& ranges = split_->ranges;
+  complete_particle_values(p_.pos_rad, ranges);
+  complete_particle_values(p_.vel, ranges);
+  complete_particle_values(p_.angvel, ranges);
+  complete_particle_values(p_.force, ranges);
+  complete_particle_values(p_.torque, ranges);
+  complete_particle_values(p_.orientation, ranges);
+  complete_particle_values(p_.angle, ranges);
+  complete_particle_values(p_.displacement, ranges);
+}
+
+}  // namespace breccia
