@@ -184,48 +184,6 @@ TEST(Checkpoint, TruncatedOrForeignDataIsRefusedWithAClearError) {
 
 namespace {
 
-// A block bonded with law BL (example parameters) and touching through CL, squeezed by two
-// platens: spheres in an FCC block, or disks in a hexagonal one for a law made for 2D.
-template <class CL, class BL>
-Simulation law_block(bool keep_pair_forces = false) {
-  const double R = 0.5e-3;
-  ParticleStore ps =
-      planar_only_law<BL> ? hex_block(6, 10, R, 2650, 1e-3) : fcc_block(2, 2, 4, R, 2650);
-  for (std::size_t i = 0; i < ps.size(); ++i)
-    ps.vel[i] = Vec3{1e-3 * std::sin(1.7 * static_cast<double>(i)),
-                     1e-3 * std::cos(0.3 * static_cast<double>(i)),
-                     planar_only_law<BL> ? 0.0 : 1e-3 * std::sin(0.9 * static_cast<double>(i))};
-  EngineConfig cfg;
-  cfg.energy_interval = 20;
-  cfg.keep_pair_forces = keep_pair_forces;
-  // A contact layout with the rolling moments runs with rolling and twisting resistance on.
-  typename CL::Params cp = CL::example_params();
-  if constexpr (CL::rolling) {
-    cp.rolling_friction = 0.2;
-    cp.twisting_friction = 0.1;
-    cp.rolling_damping_ratio = 0.3;
-  }
-  Simulation sim(std::move(ps), cfg, make_contact_model<CL>(cp, cp));
-  sim.set_bond_params<BL>(BL::example_params());
-  sim.bond_touching_pairs<BL>(1e-9);
-  const int axis = planar_only_law<BL> ? 1 : 2;
-  double top = 0.0;
-  for (const auto& q : sim.particles().pos_rad) top = std::max(top, q.x[axis] + q.r);
-  Vec3 up{}, down{}, at_top{};
-  up[axis] = 1.0;
-  down[axis] = -1.0;
-  at_top[axis] = top;
-  Wall bottom = Wall::plane("bottom", {}, up);
-  Wall lid = Wall::plane("top", at_top, down);
-  bottom.target_velocity = up * 0.5;
-  lid.target_velocity = down * 0.5;
-  bottom.ramp = lid.ramp = {0.0, 1e-5};
-  sim.add_wall(bottom);
-  sim.add_wall(lid);
-  sim.initialise();
-  return sim;
-}
-
 // Saves a simulation mid-run, restores it, and runs both on: they must stay bitwise equal.
 void expect_exact_continuation(Simulation& a) {
   a.run(300);
@@ -290,11 +248,11 @@ TYPED_TEST_SUITE(CheckpointOfEveryContactLaw, test::GTypes<EngineContactLaws>::t
 // Every registered law goes through a checkpoint and comes back exactly: its sets are saved under
 // its name, so a new law is covered here without a format change by hand.
 TYPED_TEST(CheckpointOfEveryBondLaw, RestoredSimulationContinuesBitwiseEqual) {
-  Simulation a = law_block<LinearContact, TypeParam>();
+  Simulation a = test::law_block<LinearContact, TypeParam>();
   expect_exact_continuation(a);
 }
 TYPED_TEST(CheckpointOfEveryContactLaw, RestoredSimulationContinuesBitwiseEqual) {
-  Simulation a = law_block<TypeParam, ParallelBond>();
+  Simulation a = test::law_block<TypeParam, ParallelBond>();
   expect_exact_continuation(a);
 }
 
@@ -317,14 +275,14 @@ TEST(PairForces, ReadFromTheStatesAreThePassForcesToTheBit) {
 // the engine keeps the array where it does not (beams, laws judged on the interface, rolling
 // layouts included); the forces read are the pass's either way.
 TYPED_TEST(CheckpointOfEveryBondLaw, PairForcesReadBackAreThePassForces) {
-  Simulation kept = law_block<LinearContact, TypeParam>(true);
-  Simulation read = law_block<LinearContact, TypeParam>();
+  Simulation kept = test::law_block<LinearContact, TypeParam>(true);
+  Simulation read = test::law_block<LinearContact, TypeParam>();
   EXPECT_GT(expect_same_pair_forces(kept, read, 4, 100), 0u);
   EXPECT_EQ(read.keeps_pair_forces(), !has_state_force<TypeParam>);
 }
 TYPED_TEST(CheckpointOfEveryContactLaw, PairForcesReadBackAreThePassForces) {
-  Simulation kept = law_block<TypeParam, ParallelBond>(true);
-  Simulation read = law_block<TypeParam, ParallelBond>();
+  Simulation kept = test::law_block<TypeParam, ParallelBond>(true);
+  Simulation read = test::law_block<TypeParam, ParallelBond>();
   EXPECT_GT(expect_same_pair_forces(kept, read, 4, 100), 0u);
   EXPECT_EQ(read.keeps_pair_forces(), !has_state_force<TypeParam>);
 }
