@@ -30,6 +30,7 @@
 
 #include "breccia/core/allocator.hpp"
 #include "breccia/core/parallel.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/io/run_folder.hpp"
@@ -109,7 +110,19 @@ void bond_sample(Simulation& sim, bool broken, double gap_tolerance) {
 
 }  // namespace
 
+namespace {
+
+// A count summed over the ranks (every rank's own part of a split sample).
+std::size_t over_ranks(std::size_t mine) {
+  std::size_t total = 0;
+  for (const std::string& s : ranks::all_gather(std::to_string(mine))) total += std::stoull(s);
+  return total;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  const ranks::World world(argc, argv);
   breccia::configure_allocator();
   CLI::App app{"Breccia engine benchmark"};
   int dim = 3, threads = 1, steps = 200, repeats = 3, warmup = 200;
@@ -131,6 +144,9 @@ int main(int argc, char** argv) {
   app.add_flag("--keep-pair-forces", keep_pair_forces,
                "keep every pair's force in an array even where the laws' states give it back "
                "(the reference path, for comparison)");
+  bool split = false;
+  app.add_flag("--split", split,
+               "under mpirun: split the sample over the ranks (each steps its own particles)");
   CLI11_PARSE(app, argc, argv);
   if (sample == "cylinder" && dim != 3) {
     std::fprintf(stderr, "bench_engine: --sample cylinder is 3D only (got --dim %d)\n", dim);
@@ -172,6 +188,7 @@ int main(int argc, char** argv) {
   ls.ramp_time = 1e-12;
   PlatenCompression platens(sim, ls);
   sim.initialise();
+  if (split) sim.split_over_ranks();
   // Crack records as a run keeps them: the newest in memory, the older ones in a file.
   const std::filesystem::path crack_file = std::filesystem::temp_directory_path() /
                                            fmt::format("bench-engine-cracks-{}.bin", ::getpid());
@@ -182,24 +199,42 @@ int main(int argc, char** argv) {
   } remove_crack_file{crack_file};
   const double setup_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_setup).count();
-  const std::size_t bonds0 = sim.intact_bonds();
+  const std::size_t bonds0 = over_ranks(sim.intact_bonds());
   sim.run(static_cast<std::uint64_t>(warmup));
 
   std::vector<double> rates;
   std::size_t bond_steps_total = 0;
-  std::vector<double> bond_rates;
+  std::vector<double> bond_rates, exchange_shares;
   for (int r = 0; r < repeats; ++r) {
-    const std::size_t bonds_before = sim.intact_bonds();
+    const std::size_t bonds_before = over_ranks(sim.intact_bonds());
+    ranks::barrier();
     const auto t0 = std::chrono::steady_clock::now();
+    const double exchanged0 = ranks::exchange_seconds();
     sim.run(static_cast<std::uint64_t>(steps));
+    const double exchanged = ranks::exchange_seconds() - exchanged0;
+    ranks::barrier();
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    exchange_shares.push_back(exchanged / s);
     rates.push_back(static_cast<double>(sim.particles().size()) * steps / s);
     // Bond-steps: intact bonds evaluated per step (mean of the bounds of the repeat).
-    const double mean_bonds = 0.5 * static_cast<double>(bonds_before + sim.intact_bonds());
+    const double mean_bonds =
+        0.5 * static_cast<double>(bonds_before + over_ranks(sim.intact_bonds()));
     bond_rates.push_back(mean_bonds * steps / s);
     bond_steps_total += static_cast<std::size_t>(mean_bonds * steps);
   }
   std::sort(rates.begin(), rates.end());
+  std::sort(exchange_shares.begin(), exchange_shares.end());
+  const double exchange_share = exchange_shares[exchange_shares.size() / 2];
+  const int n_ranks = ranks::size();
+  const std::size_t intact_end = over_ranks(sim.intact_bonds());
+  const std::size_t contacts_end = over_ranks(sim.active_contacts());
+  const std::size_t pairs_end = over_ranks(sim.neighbour_pairs());
+  const std::size_t cross_end = over_ranks(sim.cross_block_pairs());
+  std::size_t peak_rss = 0;  // the largest rank's
+  for (const std::string& r : ranks::all_gather(std::to_string(peak_rss_bytes())))
+    peak_rss = std::max<std::size_t>(peak_rss, std::stoull(r));
+  if (!ranks::root()) return 0;
+  const int cores = n_ranks * threads;
   std::sort(bond_rates.begin(), bond_rates.end());
   const double rate = rates[rates.size() / 2], bond_rate = bond_rates[bond_rates.size() / 2];
   // Block and parallel-bond cases keep their historical names ("3d-99k-elastic").
@@ -208,14 +243,16 @@ int main(int argc, char** argv) {
   if (bond == "brittle_beam") name += "-beam";
   if (bond == "quaternion_bond") name += "-quat";
   if (keep_pair_forces) name += "-kept";
+  if (n_ranks > 1) name += fmt::format("-{}ranks{}", n_ranks, sim.split() ? "" : "-unsplit");
   std::fprintf(stderr,
-               "%-16s threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts, %zu pairs "
-               "(%zu across blocks); "
-               "%.3g particle-steps/s (%.3g per thread), %.3g bond-steps/s, %.0f B/particle peak\n",
-               name.c_str(), threads, sim.particles().size(), sim.intact_bonds(), bonds0,
-               sim.active_contacts(), sim.neighbour_pairs(), sim.cross_block_pairs(), rate,
-               rate / threads, bond_rate,
-               static_cast<double>(peak_rss_bytes()) / static_cast<double>(sim.particles().size()));
+               "%-16s ranks %d x threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts, "
+               "%zu pairs (%zu across blocks); %.3g particle-steps/s (%.3g per core), %.3g "
+               "bond-steps/s, %.0f%% of the time in exchanges, %.0f B/particle peak (largest "
+               "rank)\n",
+               name.c_str(), n_ranks, threads, sim.particles().size(), intact_end, bonds0,
+               contacts_end, pairs_end, cross_end, rate, rate / cores, bond_rate,
+               100.0 * exchange_share,
+               static_cast<double>(peak_rss) / static_cast<double>(sim.particles().size()));
   nlohmann::json j{{"case", name},
                    {"dim", dim},
                    {"phase", phase},
@@ -225,22 +262,25 @@ int main(int argc, char** argv) {
                    {"pack_s", pack_s},
                    {"particles", sim.particles().size()},
                    {"bonds", bonds0},
-                   {"bonds_intact_end", sim.intact_bonds()},
-                   {"contacts_end", sim.active_contacts()},
-                   {"neighbour_pairs_end", sim.neighbour_pairs()},
-                   {"cross_block_pairs_end", sim.cross_block_pairs()},
+                   {"bonds_intact_end", intact_end},
+                   {"contacts_end", contacts_end},
+                   {"neighbour_pairs_end", pairs_end},
+                   {"cross_block_pairs_end", cross_end},
+                   {"ranks", n_ranks},
+                   {"split", sim.split()},
                    {"threads", threads},
                    {"steps", steps},
                    {"repeats", repeats},
                    {"particle_steps_per_s", rate},
-                   {"particle_steps_per_s_per_thread", rate / threads},
+                   {"particle_steps_per_s_per_thread", rate / cores},
                    {"bond_steps_per_s", bond_rate},
-                   {"bond_steps_per_s_per_thread", bond_rate / threads},
+                   {"bond_steps_per_s_per_thread", bond_rate / cores},
                    {"all_particle_steps_per_s", rates},
+                   {"exchange_share", exchange_share},
                    {"setup_s", setup_s},
-                   {"peak_rss_bytes", peak_rss_bytes()},
-                   {"peak_rss_bytes_per_particle", static_cast<double>(peak_rss_bytes()) /
-                                                       static_cast<double>(sim.particles().size())},
+                   {"peak_rss_bytes", peak_rss},
+                   {"peak_rss_bytes_per_particle",
+                    static_cast<double>(peak_rss) / static_cast<double>(sim.particles().size())},
                    {"version", kVersion},
                    {"machine", machine_description()}};
   std::printf("%s\n", j.dump().c_str());

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <climits>
 #include <cstdint>
 #include <cstdlib>
@@ -19,9 +20,10 @@ namespace {
 // The world as World set it up; a plain start leaves it at one rank.
 struct State {
   int rank = 0, size = 1, local_size = 1;
-  bool mpi = false;             // MPI initialised by World
-  bool waited = false;          // a collective call has run
-  bool shared_failure = false;  // on_root passed a failure to every rank
+  bool mpi = false;               // MPI initialised by World
+  bool waited = false;            // a collective call has run
+  bool shared_failure = false;    // on_root passed a failure to every rank
+  double exchange_seconds = 0.0;  // wall time inside exchange() (exchange_seconds())
 };
 
 State& state() noexcept {
@@ -242,12 +244,20 @@ std::vector<std::string> exchange_messages(const std::vector<std::string>& outgo
 }  // namespace
 
 std::vector<std::string> exchange(const std::vector<std::string>& outgoing) {
-  return exchange_messages(outgoing, {});
+  return exchange(outgoing, {});
 }
 
 std::vector<std::string> exchange(const std::vector<std::string>& outgoing,
                                   const std::vector<std::size_t>& expected) {
-  return exchange_messages(outgoing, expected);
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::string> in = exchange_messages(outgoing, expected);
+  state().exchange_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return in;
+}
+
+double exchange_seconds() noexcept {
+  return state().exchange_seconds;
 }
 
 std::vector<std::string> all_gather(const std::string& mine) {

@@ -61,6 +61,9 @@ std::vector<std::string> exchange(const std::vector<std::string>& outgoing);
 // collective instead of two. A message of another size is an error of the caller.
 std::vector<std::string> exchange(const std::vector<std::string>& outgoing,
                                   const std::vector<std::size_t>& expected);
+// Wall time this rank has spent in exchange() and all_gather() so far, waiting included: the
+// communication share of a split run (bench/bench_engine.cpp).
+double exchange_seconds() noexcept;
 // Every rank's text, in rank order, on every rank (`expected`: their sizes, when known).
 std::vector<std::string> all_gather(const std::string& mine);
 std::vector<std::string> all_gather(const std::string& mine,
