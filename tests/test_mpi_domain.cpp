@@ -265,6 +265,11 @@ TEST(MpiDomain, ASplitInMidRunGoesOnAsOneProcess) {
   }
   ASSERT_GT(reference.neighbour_rebuilds(), 1u) << "the test must rebuild the lists";
   expect_same_state(split, reference);
+  // Packing's changes read every grain: refused on a split sample, on every rank alike.
+  if (split.split()) {
+    EXPECT_THROW(split.scale_radii(1.01), std::logic_error);
+    EXPECT_THROW(split.displace_particle(0, {1e-6, 0, 0}), std::logic_error);
+  }
 }
 
 // An inclined bonded joint across the crushed block: its joints break and slide on every rank

@@ -93,6 +93,14 @@ std::size_t Simulation::add_wall(Wall w) {
   return walls_.size() - 1;
 }
 
+// The set-up changes of packing read and change every particle (and the time step from every
+// contact); a split sample holds its own part of those only.
+void Simulation::refuse_on_split_sample(const char* what) const {
+  if (split_)
+    throw std::logic_error(std::string("Simulation::") + what +
+                           ": not on a sample split over ranks (packing runs in one process)");
+}
+
 void Simulation::set_local_damping(double alpha) {
   if (!(alpha >= 0.0 && alpha < 1.0))
     throw InputError("simulation", "local_damping", num(alpha), "allowed: 0 <= value < 1");
@@ -322,6 +330,7 @@ std::size_t Simulation::active_contacts() const noexcept {
 }
 
 void Simulation::scale_radii(double factor) {
+  refuse_on_split_sample("scale_radii");
   if (!(factor > 0.0) || !std::isfinite(factor))
     throw InputError("radius scaling", "factor", num(factor), "must be a finite number > 0");
   if (intact_bonds() > 0)
@@ -341,6 +350,7 @@ void Simulation::scale_radii(double factor) {
 }
 
 void Simulation::set_radius(std::size_t i, double radius) {
+  refuse_on_split_sample("set_radius");
   if (!(radius > 0.0) || !std::isfinite(radius) || i >= p_.size())
     throw InputError("radius change", "radius", num(radius), "must be a finite number > 0");
   if (intact_bonds() > 0)
@@ -364,6 +374,7 @@ void Simulation::place_particle(std::size_t i, const Vec3& position, double radi
 }
 
 void Simulation::displace_particle(std::size_t i, const Vec3& dx) {
+  refuse_on_split_sample("displace_particle");
   if (i >= p_.size() || !std::isfinite(norm2(dx)))
     throw InputError("particle displacement", "displacement", num(norm(dx)),
                      "must be finite, for a particle of the sample");

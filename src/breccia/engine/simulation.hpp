@@ -395,6 +395,7 @@ class Simulation {
   void add_pair_dissipation();
   // Whether this rank, or any rank, holds a bond or joint element (bonds_anywhere is noted at
   // every rebuild, where the sets change).
+  void refuse_on_split_sample(const char* what) const;
   bool bonds_here() const noexcept;
   bool bonds_anywhere() const noexcept;
   void note_bonds_anywhere();

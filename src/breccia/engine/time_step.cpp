@@ -118,6 +118,7 @@ void Simulation::estimate_time_step() {
 }
 
 void Simulation::refresh_time_step() {
+  refuse_on_split_sample("refresh_time_step");
   if (intact_bonds() > 0)
     throw InputError("time step", "bonds", std::to_string(intact_bonds()),
                      "the time step is only re-estimated before bonds are installed");
