@@ -233,6 +233,8 @@ int main(int argc, char** argv) {
   std::size_t peak_rss = 0;  // the largest rank's
   for (const std::string& r : ranks::all_gather(std::to_string(peak_rss_bytes())))
     peak_rss = std::max<std::size_t>(peak_rss, std::stoull(r));
+  const Simulation::SplitTraffic traffic = sim.split_traffic();
+  const std::size_t ghosts = over_ranks(traffic.ghosts), shares = over_ranks(traffic.shares_sent);
   if (!ranks::root()) return 0;
   const int cores = n_ranks * threads;
   std::sort(bond_rates.begin(), bond_rates.end());
@@ -247,11 +249,11 @@ int main(int argc, char** argv) {
   std::fprintf(stderr,
                "%-16s ranks %d x threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts, "
                "%zu pairs (%zu across blocks); %.3g particle-steps/s (%.3g per core), %.3g "
-               "bond-steps/s, %.0f%% of the time in exchanges, %.0f B/particle peak (largest "
-               "rank)\n",
+               "bond-steps/s, %.0f%% of the time in exchanges (%zu ghosts, %zu shares a step), "
+               "%.0f B/particle peak (largest rank)\n",
                name.c_str(), n_ranks, threads, sim.particles().size(), intact_end, bonds0,
                contacts_end, pairs_end, cross_end, rate, rate / cores, bond_rate,
-               100.0 * exchange_share,
+               100.0 * exchange_share, ghosts, shares,
                static_cast<double>(peak_rss) / static_cast<double>(sim.particles().size()));
   nlohmann::json j{{"case", name},
                    {"dim", dim},
@@ -277,6 +279,8 @@ int main(int argc, char** argv) {
                    {"bond_steps_per_s_per_thread", bond_rate / cores},
                    {"all_particle_steps_per_s", rates},
                    {"exchange_share", exchange_share},
+                   {"ghosts", ghosts},
+                   {"shares_per_step", shares},
                    {"setup_s", setup_s},
                    {"peak_rss_bytes", peak_rss},
                    {"peak_rss_bytes_per_particle",

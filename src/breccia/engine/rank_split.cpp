@@ -313,7 +313,9 @@ void Simulation::exchange_step_loads(const PairList& pairs) {
       ++count[owner];
     }
   }
+  s.shares_sent = 0;
   for (std::size_t r = 0; r < n_ranks; ++r) {
+    s.shares_sent += count[r];
     std::string head;
     put(head, count[r]);
     out[r] = head + out[r] + common;

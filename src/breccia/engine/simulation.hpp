@@ -154,6 +154,7 @@ struct RankSplit {
   // Loads received for the own grains from pairs of earlier ranks (in the order they came, then
   // by grain).
   std::vector<Share<CrossSlot>> received;
+  std::size_t shares_sent = 0;  // in the last step
   IncomingShares<CrossSlot> incoming;
   std::vector<CrackRecord> cracks;  // this rank's cracks of the step, in pair order
   bool bonds_anywhere = false;      // a bond or joint on some rank (central_forces_only)
@@ -255,6 +256,15 @@ class Simulation {
   // counts and views of bonds, contacts and pairs cover the own ones. Initialises first.
   void split_over_ranks();
   bool split() const noexcept { return split_ != nullptr; }
+  // What this rank exchanges each step (zeros when not split): its ghosts, and the shares of the
+  // last step it sent and received.
+  struct SplitTraffic {
+    std::size_t ghosts = 0, shares_sent = 0, shares_received = 0;
+  };
+  SplitTraffic split_traffic() const noexcept {
+    if (!split_) return {};
+    return {split_->plan.ghosts.size(), split_->shares_sent, split_->received.size()};
+  }
   // The particles this rank steps (all of them when the sample is not split).
   IndexRange owned_particles() const noexcept {
     return split_ ? split_->own : IndexRange{0, p_.size()};
