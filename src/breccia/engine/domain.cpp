@@ -8,25 +8,15 @@
 #include <string>
 #include <type_traits>
 
+#include "breccia/core/byte_text.hpp"
 #include "breccia/core/ranks.hpp"
 
 namespace breccia {
 
 namespace {
 
-template <class T>
-void put(std::string& out, const T& v) {
-  static_assert(std::is_trivially_copyable_v<T>);
-  out.append(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-
-template <class T>
-T take(const std::string& in, std::size_t& at) {
-  T v;
-  std::memcpy(&v, in.data() + at, sizeof(T));
-  at += sizeof(T);
-  return v;
-}
+using bytes::put;
+using bytes::take;
 
 // A rank's particles in brief: the box of their centres and their largest radius.
 struct Extent {

@@ -11,6 +11,7 @@
 #include <string>
 #include <type_traits>
 
+#include "breccia/core/byte_text.hpp"
 #include "breccia/core/ranks.hpp"
 #include "breccia/core/type_list.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
@@ -250,30 +251,10 @@ void Simulation::refresh_ghosts() {
     }
 }
 
-namespace {
-
-template <class T>
-void put(std::string& out, const T& v) {
-  out.append(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-template <class T>
-void put_range(std::string& out, const T* from, std::size_t count) {
-  out.append(reinterpret_cast<const char*>(from), count * sizeof(T));
-}
-template <class T>
-T take(const std::string& in, std::size_t& at) {
-  T v;
-  std::memcpy(&v, in.data() + at, sizeof(T));
-  at += sizeof(T);
-  return v;
-}
-template <class T>
-void take_range(const std::string& in, std::size_t& at, T* to, std::size_t count) {
-  std::memcpy(to, in.data() + at, count * sizeof(T));
-  at += count * sizeof(T);
-}
-
-}  // namespace
+using bytes::put;
+using bytes::put_range;
+using bytes::take;
+using bytes::take_range;
 
 // To each rank: the cross slots of this rank's pairs whose second grain it owns (grain by grain,
 // each grain's in slot order), then, the same to all, this rank's block partials of the pair and
