@@ -191,6 +191,14 @@ std::size_t differing(const std::vector<T>& a, const std::vector<T>& b) {
   return n;
 }
 
+// Steps the one-process copy and the split simulation side by side.
+void step_both(Simulation& reference, Simulation& split, int steps) {
+  for (int s = 0; s < steps; ++s) {
+    reference.step();
+    split.step();
+  }
+}
+
 // A split simulation against one process stepping the same sample: every particle's state and
 // loads, the walls, the ledger and the crack catalogue, to the bit.
 void expect_same_state(Simulation& split, const Simulation& reference) {
@@ -236,11 +244,9 @@ TEST(MpiDomain, EngineStepsOverRanksAreThoseOfOneProcessToTheBit) {
   Simulation split = test::compressed_block(5, 5, 20, 8.0, 3e6);
   split.split_over_ranks();
   EXPECT_EQ(split.split(), ranks::size() > 1);
-  for (int s = 1; s <= 1100; ++s) {
-    reference.step();
-    split.step();
-    if (s == 400) expect_same_state(split, reference);
-  }
+  step_both(reference, split, 400);
+  expect_same_state(split, reference);
+  step_both(reference, split, 700);
   ASSERT_GT(reference.cracks().size(), 1000u) << "the test must break bonds";
   ASSERT_GT(reference.neighbour_rebuilds(), 1u) << "the test must rebuild the lists";
   expect_same_state(split, reference);
@@ -253,16 +259,10 @@ TEST(MpiDomain, ASplitInMidRunGoesOnAsOneProcess) {
   set_threads(1);
   Simulation reference = test::compressed_block(8, 8, 16, 8.0, 3e6);
   Simulation split = test::compressed_block(8, 8, 16, 8.0, 3e6);
-  for (int s = 0; s < 333; ++s) {
-    reference.step();
-    split.step();
-  }
+  step_both(reference, split, 333);
   ASSERT_GT(reference.cracks().size(), 0u) << "the split must come after bonds broke";
   split.split_over_ranks();
-  for (int s = 333; s < 1050; ++s) {
-    reference.step();
-    split.step();
-  }
+  step_both(reference, split, 1050 - 333);
   ASSERT_GT(reference.neighbour_rebuilds(), 1u) << "the test must rebuild the lists";
   expect_same_state(split, reference);
   // Packing's changes read every grain: refused on a split sample, on every rank alike.
@@ -294,10 +294,7 @@ TEST(MpiDomain, JointedBlockOverRanksIsThatOfOneProcess) {
   Simulation split = test::compressed_block(5, 5, 20, 8.0, 3e6, 0.7, with_joint);
   ASSERT_GT(reference.bonded_joints(), 0u);
   split.split_over_ranks();
-  for (int s = 0; s < 1100; ++s) {
-    reference.step();
-    split.step();
-  }
+  step_both(reference, split, 1100);
   ASSERT_GT(reference.neighbour_rebuilds(), 1u);
   expect_same_state(split, reference);
 }
@@ -313,10 +310,7 @@ void expect_law_block_over_ranks() {
   Simulation reference = test::law_block<CL, BL>(false, size);
   Simulation split = test::law_block<CL, BL>(false, size);
   split.split_over_ranks();
-  for (int s = 0; s < 300; ++s) {
-    reference.step();
-    split.step();
-  }
+  step_both(reference, split, 300);
   ASSERT_GT(reference.intact_bonds(), 0u);
   expect_same_state(split, reference);
 }
