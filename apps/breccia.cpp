@@ -158,10 +158,15 @@ Command add_run(CLI::App& app, const std::string& command_line) {
             breccia::RunOptions opt;
             opt.command_line = command_line;
             opt.interrupt = &breccia::interrupt_flag();
-            opt.show_progress = !o->quiet && spec.progress && isatty(fileno(stderr));
-            if (!o->quiet) opt.log = log_to_stderr;
+            // Under mpirun the ranks step one sample split between them; root speaks for them.
+            opt.split_over_ranks = breccia::ranks::size() > 1;
+            const bool speaks = breccia::ranks::root();
+            opt.show_progress = speaks && !o->quiet && spec.progress && isatty(fileno(stderr));
+            if (speaks && !o->quiet) opt.log = log_to_stderr;
             opt.stop_at_step = static_cast<std::uint64_t>(o->stop_at_step);
-            return finish_run(breccia::run_experiment(spec, opt), o->quiet);
+            const breccia::RunResult result = breccia::run_experiment(spec, opt);
+            if (!speaks) return result.status == "complete" ? 0 : 130;
+            return finish_run(result, o->quiet);
           }};
 }
 
@@ -231,15 +236,17 @@ Command add_resume(CLI::App& app, const std::string& command_line) {
               opt.executable = own_executable();
               return finish_sweep(breccia::resume_sweep(o->folder, opt));
             }
-            if (breccia::ranks::size() > 1)
-              throw breccia::InputError(
-                  "resume", "folder", o->folder,
-                  fmt::format("a run resumes in one process (its threads: --threads); on {} "
-                              "ranks it would run {} times over. Under mpirun: resume a sweep "
-                              "folder, whose runs the ranks share",
-                              breccia::ranks::size(), breccia::ranks::size()));
-            return finish_run(
-                breccia::resume_run(o->folder, breccia::ResumeOptions{o->threads}, opt), o->quiet);
+            // A run resumes split over the ranks, whatever split (or none) it stopped in.
+            opt.split_over_ranks = breccia::ranks::size() > 1;
+            const bool speaks = breccia::ranks::root();
+            if (!speaks) {
+              opt.log = nullptr;
+              opt.show_progress = false;
+            }
+            const breccia::RunResult result =
+                breccia::resume_run(o->folder, breccia::ResumeOptions{o->threads}, opt);
+            if (!speaks) return result.status == "complete" ? 0 : 130;
+            return finish_run(result, o->quiet);
           }};
 }
 
@@ -524,7 +531,7 @@ int main(int argc, char** argv) {
   // one process must not run once per rank.
   if (const auto refusal = breccia::ranks::launch_refusal(
           breccia::ranks::launch_from_environment(), breccia::ranks::built_with_mpi(),
-          command_word(argc, argv), {"sweep", "resume", "calibrate"})) {
+          command_word(argc, argv), {"run", "sweep", "resume", "calibrate"})) {
     if (breccia::ranks::launch_from_environment().rank == 0)
       std::cerr << "error: " << *refusal << "\n";
     return 2;

@@ -265,20 +265,26 @@ TEST(App, BadInputOnTheCommandLineWritesNoRunFolder) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-// Started by a launcher as one of two processes (its environment says so), `run` refuses before
-// it writes anything: without MPI each process would run the whole test, and with MPI a run is
-// one process's. Either way the refusal names what to do.
-TEST(App, ARunLaunchedAsOneOfSeveralProcessesIsRefused) {
-  const fs::path out = fs::temp_directory_path() / "breccia_app_two_ranks";
+// Started by a launcher as one of two processes (its environment says so), a command that runs
+// in one process (`generate`) refuses before it writes anything, and so does any command of a
+// build without MPI: each process would do the whole work. Either way the refusal names what to
+// do.
+TEST(App, AOneProcessCommandLaunchedAsOneOfSeveralProcessesIsRefused) {
+  const fs::path out = fs::temp_directory_path() / "breccia_app_two_ranks.csv";
   fs::remove_all(out);
   const Result r = run_with_prefix("OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=0 ",
-                                   "run --quiet --output " + out.string());
+                                   "generate --output " + out.string());
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_NE(r.out.find(breccia::ranks::built_with_mpi() ? "`breccia run` runs in one process"
+  EXPECT_NE(r.out.find(breccia::ranks::built_with_mpi() ? "`breccia generate` runs in one process"
                                                         : "built without MPI"),
             std::string::npos)
       << r.out;
   EXPECT_FALSE(fs::exists(out));
+  if (breccia::ranks::built_with_mpi()) return;
+  const Result run = run_with_prefix("OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=0 ",
+                                     "run --quiet --output " + out.string());
+  EXPECT_EQ(run.code, 2) << run.out;
+  EXPECT_NE(run.out.find("built without MPI"), std::string::npos) << run.out;
 }
 
 TEST(App, DocsListEveryKey) {

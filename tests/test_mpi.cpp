@@ -185,15 +185,114 @@ TEST(Mpi, Usr1ToMpirunStopsEveryRankWithACheckpoint) {
 
 // A command that runs in one process is refused under mpirun, and bad input is named once.
 TEST(Mpi, OneProcessCommandsAndBadInputAreRefusedOnce) {
-  const Result r = run_with_prefix(mpirun(2), "run --set engine.threads=1");
+  const Result r = run_with_prefix(mpirun(2), "generate --output x.csv");
   EXPECT_NE(r.code, 0);
-  EXPECT_EQ(count(r.out, "`breccia run` runs in one process"), 1) << r.out;
+  EXPECT_EQ(count(r.out, "`breccia generate` runs in one process"), 1) << r.out;
   const Result bad = run_with_prefix(mpirun(2), "sweep --set bond.no_such_key=1" + kSweep);
   EXPECT_NE(bad.code, 0);
   EXPECT_EQ(count(bad.out, "unknown key"), 1) << bad.out;
   const Result jobs = run_with_prefix(mpirun(2), "sweep --jobs 2" + kSweep);
   EXPECT_NE(jobs.code, 0);
   EXPECT_EQ(count(jobs.out, "'--jobs' = 2"), 1) << jobs.out;
+}
+
+namespace {
+
+// The small UCS of the sweep, alone (its first strength).
+std::string small_ucs() {
+  return kSweep.substr(0, kSweep.find(" --over"));
+}
+
+// summary.json without what depends on the machine (wall times, the folder, the launch).
+nlohmann::json results_of(const fs::path& summary) {
+  nlohmann::json j = nlohmann::json::parse(read(summary));
+  for (const char* key : {"wall_seconds", "loading_loop", "particle_steps_per_second", "resumed"})
+    j.erase(key);
+  return j;
+}
+
+// A file's text without the lines that name the output folder (the resolved experiment's).
+std::string without_output_folder(const std::string& text) {
+  std::istringstream in(text);
+  std::string out;
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("directory = ", 0) != 0) out += line + "\n";
+  return out;
+}
+
+// Every file of run folder `b` is that of `a`, byte for byte, but the manifest (the launch, the
+// clock) and summary.json's timings.
+void expect_same_run_files(const fs::path& a, const fs::path& b, const std::string& how) {
+  std::size_t compared = 0;
+  for (const auto& e : fs::recursive_directory_iterator(a)) {
+    if (!e.is_regular_file()) continue;
+    const fs::path rel = fs::relative(e.path(), a);
+    if (rel == "manifest.json") continue;
+    ASSERT_TRUE(fs::exists(b / rel)) << how << ": " << rel;
+    if (rel == "summary.json")
+      EXPECT_EQ(results_of(a / rel), results_of(b / rel)) << how;
+    else if (rel == "experiment.toml")
+      EXPECT_EQ(without_output_folder(read(a / rel)), without_output_folder(read(b / rel))) << how;
+    else
+      EXPECT_TRUE(read(a / rel) == read(b / rel)) << how << ": " << rel << " differs";
+    ++compared;
+  }
+  EXPECT_GT(compared, 8u) << how;
+}
+
+}  // namespace
+
+// One sample split over 2 and 3 ranks (one rank owns no grain at 3: the sample has under 2,048)
+// writes the run folder of one process, every table and snapshot byte for byte; root alone
+// writes and prints, and the manifest records the split.
+TEST(Mpi, ARunSplitOverRanksWritesTheFilesOfOneProcess) {
+  const fs::path out =
+      fs::temp_directory_path() / ("breccia_mpi_split_" + std::to_string(getpid()));
+  fs::remove_all(out);
+  const std::string args = small_ucs() + " --set output.snapshot_strain_interval=0.002";
+  const Result one = run("run --output " + (out / "one").string() + args);
+  ASSERT_EQ(one.code, 0) << one.out;
+  const fs::path a = last_line(one.out);
+  ASSERT_GT(nlohmann::json::parse(read(a / "summary.json"))["bonds_broken"].get<int>(), 10)
+      << "the run must break bonds";
+  for (int ranks : {2, 3}) {
+    const fs::path dir = out / std::to_string(ranks);
+    const Result split =
+        run_with_prefix(mpirun(ranks), "run --quiet --output " + dir.string() + args);
+    ASSERT_EQ(split.code, 0) << split.out;
+    EXPECT_EQ(count(split.out, dir.string()), 1) << split.out;  // root alone prints the folder
+    const fs::path b = only_folder(dir);
+    expect_same_run_files(a, b, std::to_string(ranks) + " ranks");
+    const auto m = nlohmann::json::parse(read(b / "manifest.json"));
+    EXPECT_EQ(m["mpi"]["ranks"], ranks);
+    EXPECT_EQ(m["mpi"]["sample_split_over_ranks"], true);
+  }
+  fs::remove_all(out);
+}
+
+// A split run stopped at a step writes the checkpoint of one process: stopped on 3 ranks, resumed
+// and stopped again on 2, then finished in one process, it gives the files of the uninterrupted
+// run.
+TEST(Mpi, ASplitRunResumesAtAnotherRankCount) {
+  const fs::path out = fs::temp_directory_path() / ("breccia_mpi_stop_" + std::to_string(getpid()));
+  fs::remove_all(out);
+  const Result one = run("run --output " + (out / "one").string() + small_ucs());
+  ASSERT_EQ(one.code, 0) << one.out;
+  const Result stopped = run_with_prefix(
+      mpirun(3), "run --stop-at-step 300 --output " + (out / "three").string() + small_ucs());
+  EXPECT_EQ(stopped.code, 130) << stopped.out;
+  const fs::path b = only_folder(out / "three");
+  ASSERT_TRUE(fs::exists(b / "checkpoint.bin")) << stopped.out;
+  const Result again = run_with_prefix(mpirun(2), "resume --stop-at-step 600 " + b.string());
+  EXPECT_EQ(again.code, 130) << again.out;
+  EXPECT_EQ(count(again.out, "resuming"), 1) << again.out;
+  const Result resumed = run("resume " + b.string());
+  ASSERT_EQ(resumed.code, 0) << resumed.out;
+  expect_same_run_files(last_line(one.out), b, "stopped on 3 ranks and on 2, finished in one");
+  const auto m = nlohmann::json::parse(read(b / "manifest.json"));
+  ASSERT_EQ(m["resumed"].size(), 2u);
+  EXPECT_EQ(m["resumed"][0]["mpi"]["ranks"], 2);
+  fs::remove_all(out);
 }
 
 namespace {

@@ -154,6 +154,18 @@ void barrier() {
 #endif
 }
 
+std::uint32_t any_flags(std::uint32_t mine) {
+  state().waited = true;
+#ifdef BRECCIA_HAVE_MPI
+  if (!state().mpi) return mine;
+  std::uint32_t all = 0;
+  check(MPI_Allreduce(&mine, &all, 1, MPI_UINT32_T, MPI_BOR, MPI_COMM_WORLD), "MPI_Allreduce");
+  return all;
+#else
+  return mine;
+#endif
+}
+
 std::string broadcast(const std::string& from_root) {
   state().waited = true;
 #ifdef BRECCIA_HAVE_MPI

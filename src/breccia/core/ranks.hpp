@@ -2,6 +2,7 @@
 // The processes of an MPI launch (`mpirun -np N`, `srun`). A build without MPI, or a command
 // started without a launcher, is rank 0 of 1, and every function below then does what one
 // process alone would, so callers have one path. Only this module includes <mpi.h>.
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <stdexcept>
@@ -49,6 +50,9 @@ inline bool root() noexcept {
 }
 
 void barrier();
+// The flags any rank set (a bitwise or over the ranks), on every rank: decisions that every rank
+// must take at the same point, such as stopping on a signal that reached some ranks first.
+std::uint32_t any_flags(std::uint32_t mine);
 // Root's text, on every rank.
 std::string broadcast(const std::string& from_root);
 // Every rank's text, in rank order, on root (empty on the others).

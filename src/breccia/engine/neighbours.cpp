@@ -12,6 +12,7 @@
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 #include "breccia/core/parallel.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/engine/neighbour_grid.hpp"
 #include "breccia/engine/pair_lists.hpp"
 #include "breccia/engine/simulation.hpp"
@@ -100,6 +101,8 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
   assign_joints();
   if (split_) note_bonds_anywhere();
   keep_pair_forces_ = pair_forces_needed(contacts);
+  // A split sample decides as one process would: a bond law somewhere needs them.
+  if (split_) keep_pair_forces_ = ranks::any_flags(keep_pair_forces_ ? 1 : 0) != 0;
   if (keep_pair_forces_) contacts.kept_force.assign(contacts.pairs.size(), Vec3{});
   // Wall candidates: the rank's particles within the skin of each wall, history carried by
   // particle index.

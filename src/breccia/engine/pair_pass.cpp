@@ -397,7 +397,9 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
   block_joint_dis_.assign(nb, PairDissipation{});
   if (block_failures_.size() < nb) block_failures_.resize(nb);
   cross_slots_.resize(c.pairs.cross_slots());
-  keep_pair_forces_ = pair_forces_needed(c);
+  // A split sample keeps the whole sample's decision of its last rebuild (the sets change there
+  // only); one process decides each step.
+  if (!split_) keep_pair_forces_ = pair_forces_needed(c);
   if (!keep_pair_forces_)
     std::vector<Vec3>().swap(c.kept_force);
   else if (c.kept_force.size() != c.pairs.size())

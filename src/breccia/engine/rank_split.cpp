@@ -119,6 +119,91 @@ void complete_particle_values(std::vector<T>& values, const std::vector<IndexRan
     std::memcpy(values.data() + ranges[r].begin, all[r].data(), ranges[r].size() * sizeof(T));
 }
 
+// Every rank's values, concatenated in rank order, on every rank (collective).
+template <class T>
+std::vector<T> concatenated(const std::vector<T>& mine) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  std::string out;
+  bytes::put_range(out, mine.data(), mine.size());
+  std::vector<T> all;
+  for (const std::string& from : ranks::all_gather(out)) {
+    const std::size_t at = all.size(), n = from.size() / sizeof(T);
+    all.resize(at + n);
+    if (n > 0) std::memcpy(static_cast<void*>(all.data() + at), from.data(), n * sizeof(T));
+  }
+  return all;
+}
+
+// A bond-layout set made whole: every rank's elements in rank order are one process's order (a
+// set is sorted by pair, and the ranks own ascending grain ranges). The pair index is made anew
+// from the whole list, as one process made it.
+template <class Law>
+void concatenate_elements(BondSet<Law>& set) {
+  std::size_t broken = 0;
+  for (const std::string& b : ranks::all_gather(std::to_string(set.broken_since_compaction)))
+    broken += std::stoull(b);
+  set.pairs.first = concatenated(set.pairs.first);
+  set.pairs.second = concatenated(set.pairs.second);
+  set.tag = concatenated(set.tag);
+  set.state = concatenated(set.state);
+  set.intact = concatenated(set.intact);
+  set.broken_since_compaction = broken;
+  set.bond_of_pair.clear();
+}
+
+template <class Law>
+void gather_elements(BondSet<Law>& set, const PairList& pairs) {
+  concatenate_elements(set);
+  map_bonds_to_pairs(set, pairs);
+}
+
+// The pairs and histories made whole: the lists in rank order (one process's: sorted by first
+// grain), each block's store from the rank that owns the block.
+template <class CL>
+void gather_contacts(ContactSet<CL>& c, const std::vector<IndexRange>& ranges,
+                     std::size_t particles) {
+  PairList whole;
+  whole.first = concatenated(c.pairs.first);
+  whole.second = concatenated(c.pairs.second);
+  c.history = concatenated(c.history);
+  c.kept_force = concatenated(c.kept_force);
+  const std::size_t blocks = (particles + kParticleBlock - 1) / kParticleBlock;
+  const IndexRange mine =
+      owned_blocks(ranges[static_cast<std::size_t>(ranks::rank())], kParticleBlock);
+  std::string out;
+  for (std::size_t b = mine.begin; b < mine.end; ++b) {
+    bytes::put(out, static_cast<std::uint64_t>(c.stores[b].size()));
+    bytes::put_range(out, c.stores[b].data(), c.stores[b].size());
+    bytes::put(out, c.packed[b]);
+  }
+  c.stores.resize(blocks);
+  c.packed.resize(blocks);
+  const std::vector<std::string> all = ranks::all_gather(out);
+  for (std::size_t r = 0; r < all.size(); ++r) {
+    std::size_t at = 0;
+    const IndexRange theirs = owned_blocks(ranges[r], kParticleBlock);
+    for (std::size_t b = theirs.begin; b < theirs.end; ++b) {
+      c.stores[b].resize(bytes::take<std::uint64_t>(all[r], at));
+      bytes::take_range(all[r], at, c.stores[b].data(), c.stores[b].size());
+      c.packed[b] = bytes::take<std::uint32_t>(all[r], at);
+    }
+  }
+  whole.build_offsets(particles);
+  whole.build_cross_index(particles);
+  c.pairs = std::move(whole);
+}
+
+// A wall's contacts made whole: each rank's are its grains', ascending.
+template <class CL>
+void gather_wall_contacts(WallContacts<CL>& wc) {
+  wc.particle = concatenated(wc.particle);
+  wc.state = concatenated(wc.state);
+  wc.force = concatenated(wc.force);
+  wc.torque = concatenated(wc.torque);
+  wc.normal_force = concatenated(wc.normal_force);
+  wc.stiffness = concatenated(wc.stiffness);
+}
+
 }  // namespace
 
 // The split keeps the lists of the last rebuild, each rank its own part of them, so that the
@@ -336,6 +421,120 @@ void Simulation::gather_particles() {
   complete_particle_values(p_.orientation, ranges);
   complete_particle_values(p_.angle, ranges);
   complete_particle_values(p_.displacement, ranges);
+}
+
+void Simulation::unsplit() {
+  if (!split_) return;
+  const std::vector<IndexRange> ranges = split_->ranges;
+  gather_particles();
+  complete_particle_values(x_at_build_, ranges);
+  if (!drive_force_prev_.empty()) {
+    // Two entries a grain.
+    std::vector<IndexRange> twice(ranges.size());
+    for (std::size_t r = 0; r < ranges.size(); ++r)
+      twice[r] = {2 * ranges[r].begin, 2 * ranges[r].end};
+    complete_particle_values(drive_force_prev_, twice);
+  }
+  std::visit(
+      [&]<class CL>(ContactSet<CL>& c) {
+        gather_contacts(c, ranges, p_.size());
+        std::apply([&](auto&... set) { (gather_elements(set, c.pairs), ...); }, bonds_);
+        std::apply([&](auto&... set) { (gather_elements(set, c.pairs), ...); }, joints_);
+        for (auto& wc : std::get<std::vector<WallContacts<CL>>>(wall_contacts_))
+          gather_wall_contacts(wc);
+      },
+      contact_);
+  split_.reset();
+  cross_slots_.clear();
+}
+
+void Simulation::pair_loads_around(const std::vector<std::uint32_t>& grains,
+                                   std::vector<std::uint32_t>& offsets,
+                                   std::vector<PairLoad>& loads) const {
+  // This rank's part: per grain, the pairs where it is first, and those where it is second.
+  std::vector<std::vector<PairLoad>> rows(grains.size()), in(grains.size());
+  std::visit(
+      [&](const auto& c) {
+        const PairList& l = c.pairs;
+        if (l.offsets.empty()) return;
+        for (std::size_t a = 0; a < grains.size(); ++a)
+          for (std::uint32_t k = l.offsets[grains[a]]; k < l.offsets[grains[a] + 1]; ++k)
+            rows[a].push_back({l.second[k], pair_force(c, k)});
+        for (std::size_t k = 0; k < l.size(); ++k) {
+          const auto at = std::lower_bound(grains.begin(), grains.end(), l.second[k]);
+          if (at != grains.end() && *at == l.second[k])
+            in[static_cast<std::size_t>(at - grains.begin())].push_back(
+                {l.first[k], -pair_force(c, k)});
+        }
+      },
+      contact_);
+  offsets.assign(1, 0);
+  loads.clear();
+  if (!split_) {
+    for (std::size_t a = 0; a < grains.size(); ++a) {
+      loads.insert(loads.end(), rows[a].begin(), rows[a].end());
+      loads.insert(loads.end(), in[a].begin(), in[a].end());
+      offsets.push_back(static_cast<std::uint32_t>(loads.size()));
+    }
+    return;
+  }
+  // Every rank's parts: a grain's first-grain pairs come from its owner alone; its second-grain
+  // pairs from the ranks in rank order, which is slot order.
+  std::string mine;
+  for (std::size_t a = 0; a < grains.size(); ++a) {
+    put(mine, static_cast<std::uint64_t>(rows[a].size()));
+    put_range(mine, rows[a].data(), rows[a].size());
+    put(mine, static_cast<std::uint64_t>(in[a].size()));
+    put_range(mine, in[a].data(), in[a].size());
+  }
+  const std::vector<std::string> all = ranks::all_gather(mine);
+  std::vector<std::size_t> at(all.size(), 0);
+  std::vector<PairLoad> second;
+  for (std::size_t a = 0; a < grains.size(); ++a) {
+    second.clear();
+    for (std::size_t r = 0; r < all.size(); ++r) {
+      const auto n_rows = take<std::uint64_t>(all[r], at[r]);
+      const std::size_t begin = loads.size();
+      loads.resize(begin + n_rows);
+      take_range(all[r], at[r], loads.data() + begin, n_rows);
+      const auto n_in = take<std::uint64_t>(all[r], at[r]);
+      const std::size_t in_begin = second.size();
+      second.resize(in_begin + n_in);
+      take_range(all[r], at[r], second.data() + in_begin, n_in);
+    }
+    loads.insert(loads.end(), second.begin(), second.end());
+    offsets.push_back(static_cast<std::uint32_t>(loads.size()));
+  }
+}
+
+BondSets Simulation::whole_bonds() const {
+  BondSets out = bonds_;
+  const auto whole = [&](auto& set) {
+    set.bond_of_pair.clear();
+    if (split_) concatenate_elements(set);
+  };
+  std::apply([&](auto&... set) { (whole(set), ...); }, out);
+  return out;
+}
+
+Simulation::SampleCounts Simulation::sample_counts() const {
+  SampleCounts c{intact_bonds(), active_contacts()};
+  if (!split_) return c;
+  std::string mine;
+  put(mine, c);
+  c = {};
+  for (const std::string& from :
+       ranks::all_gather(mine, std::vector<std::size_t>(split_->ranges.size(), mine.size()))) {
+    std::size_t at = 0;
+    const auto theirs = take<SampleCounts>(from, at);
+    c.intact_bonds += theirs.intact_bonds;
+    c.active_contacts += theirs.active_contacts;
+  }
+  return c;
+}
+
+bool Simulation::lead_rank() const noexcept {
+  return !split_ || ranks::root();
 }
 
 }  // namespace breccia

@@ -295,6 +295,11 @@ void Simulation::for_each_intact_bond(
     for (std::size_t k = 0; k < b.size(); ++k)
       if (b.intact[k]) f(b.pairs.first[k], b.pairs.second[k]);
   };
+  if (split()) {
+    const BondSets whole = whole_bonds();
+    std::apply([&](const auto&... set) { (one(set), ...); }, whole);
+    return;
+  }
   std::apply([&](const auto&... set) { (one(set), ...); }, bonds_);
 }
 

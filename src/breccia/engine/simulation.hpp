@@ -269,9 +269,29 @@ class Simulation {
   IndexRange owned_particles() const noexcept {
     return split_ ? split_->own : IndexRange{0, p_.size()};
   }
+  // Every rank's particles, in rank order (empty when the sample is not split).
+  const std::vector<IndexRange>& rank_ranges() const noexcept;
   // Makes every rank's particle store whole and current (collective): positions, velocities,
   // orientations, displacements and the last step's loads.
   void gather_particles();
+  // Gathers a split sample back whole on every rank (collective): the particles, the lists, the
+  // contact histories, the bonds and joints and the wall contacts, each in the order one process
+  // holds them, so that the state is that one process would hold at this step to the bit (its
+  // checkpoint is that process's). Afterwards every rank steps the whole sample; split_over_ranks
+  // splits it again. Nothing when not split.
+  void unsplit();
+
+  // The bonds of the whole sample, in one process's order (collective on a split sample; a copy
+  // of the sets, without their pair index, otherwise).
+  BondSets whole_bonds() const;
+  // The whole sample's intact bonds and contacts in touch (collective on a split sample).
+  struct SampleCounts {
+    std::size_t intact_bonds = 0, active_contacts = 0;
+  };
+  SampleCounts sample_counts() const;
+  // Whether this process writes what a run records: every process of an unsplit sample (a
+  // sweep's runs under mpirun write their own folders), only root of a split one.
+  bool lead_rank() const noexcept;
 
   // --- views ---
   const ParticleStore& particles() const noexcept { return p_; }
@@ -313,6 +333,7 @@ class Simulation {
   }
   // Calls f(first, second) with the particle indexes of each intact bond of every law, in law
   // and bond order (fragments, wear).
+  // Collective on a split sample, which visits the whole sample's bonds.
   void for_each_intact_bond(const std::function<void(std::uint32_t, std::uint32_t)>& f) const;
   // The moduli of the bond law called `law` with this simulation's parameters (crack records
   // name their law); zero for a name that is not a bond law.
@@ -338,6 +359,17 @@ class Simulation {
   }
   // Whether the pair pass keeps the array of pair forces (above).
   bool keeps_pair_forces() const noexcept { return keep_pair_forces_; }
+  // The loads of the neighbour pairs of each grain of `grains` (ascending), as one process lists
+  // them: for grain p, (q, the force p exerts on q) for the pairs where p is first in list order,
+  // then for those where it is second in ascending slot order. Grain a's loads are
+  // loads[offsets[a], offsets[a + 1]). A scan of the list; collective on a split sample, where
+  // every rank gets the whole answer.
+  struct PairLoad {
+    std::uint32_t other = 0;
+    Vec3 force;
+  };
+  void pair_loads_around(const std::vector<std::uint32_t>& grains,
+                         std::vector<std::uint32_t>& offsets, std::vector<PairLoad>& loads) const;
   // Pair forces of the last step as a stress sum and contact counts (docs/physics.md §6.5, §7.2).
   PairStress pair_stress() const;
   // Per-particle stress of the last step's forces (docs/physics.md §6.5), compression-positive,
@@ -409,8 +441,6 @@ class Simulation {
   bool bonds_here() const noexcept;
   bool bonds_anywhere() const noexcept;
   void note_bonds_anywhere();
-  // Every rank's ranges (empty when the sample is not split): the block sums' owners.
-  const std::vector<IndexRange>& rank_ranges() const noexcept;
   void compute_pairs();
   void compute_walls();
   void integrate(bool sample);

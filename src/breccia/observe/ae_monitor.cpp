@@ -248,7 +248,43 @@ void AeMonitor::forget_incoming(std::size_t particles) {
 // The grains of the new cracks (from seen_ on) and the sources of the open events: those the
 // step reads the pairs of. Their pairs as second particle are found by one scan of the list;
 // a neighbour rebuild makes a new list, whose slots are read afresh.
+template <class F>
+void AeMonitor::for_pairs_of(const Simulation& sim, std::uint32_t p, F&& f) const {
+  if (!sim.split()) {
+    for_pairs(sim, incoming(p), p, f);
+    return;
+  }
+  const GatheredLoads& g = gathered_;
+  const auto at = std::lower_bound(g.grains.begin(), g.grains.end(), p);
+  if (at == g.grains.end() || *at != p)
+    throw InternalError("AeMonitor: the pairs of particle " + std::to_string(p) + " were not read");
+  const auto a = static_cast<std::size_t>(at - g.grains.begin());
+  for (std::uint32_t k = g.offsets[a]; k < g.offsets[a + 1]; ++k)
+    f(g.loads[k].other, g.loads[k].force);
+}
+
+void AeMonitor::gather_loads(const Simulation& sim, CrackCatalogue::Reader& cracks) {
+  const ParticleStore& ps = sim.particles();
+  std::vector<std::uint32_t>& grains = gathered_.grains;
+  grains.clear();
+  // Every rank decides alike (the settings and the cracks are the same on all): no pair is read
+  // without moment tensors or grain linkage.
+  if (!s_.moment_tensors && s_.linkage != analysis::Linkage::Grain) return;
+  for (std::size_t k = seen_; k < cracks.size(); ++k) {
+    grains.push_back(static_cast<std::uint32_t>(ps.index_of(cracks[k].id1)));
+    grains.push_back(static_cast<std::uint32_t>(ps.index_of(cracks[k].id2)));
+  }
+  for (const auto& [root, o] : open_) grains.insert(grains.end(), o.source.begin(), o.source.end());
+  std::sort(grains.begin(), grains.end());
+  grains.erase(std::unique(grains.begin(), grains.end()), grains.end());
+  sim.pair_loads_around(grains, gathered_.offsets, gathered_.loads);
+}
+
 void AeMonitor::find_incoming(const Simulation& sim, CrackCatalogue::Reader& cracks) {
+  if (sim.split()) {
+    gather_loads(sim, cracks);
+    return;
+  }
   const ParticleStore& ps = sim.particles();
   if (incoming_.rebuilds != sim.neighbour_rebuilds() || incoming_.read.size() != ps.size()) {
     forget_incoming(ps.size());
@@ -293,7 +329,7 @@ void AeMonitor::add_source(const Simulation& sim, Open& o, std::uint32_t p) {
   if (!s_.moment_tensors) return;
   // Reference forces of p on its outside neighbours, as they are now (before the crack acts).
   const ParticleStore& ps = sim.particles();
-  for_pairs(sim, incoming(p), p, [&](std::uint32_t q, const Vec3& f) {
+  for_pairs_of(sim, p, [&](std::uint32_t q, const Vec3& f) {
     if (is_zero(f) || contains(o.source, q)) return;
     const std::uint64_t key = ref_key(p, q);
     const auto at = std::lower_bound(o.refs.begin(), o.refs.end(), key,
@@ -319,7 +355,7 @@ void AeMonitor::evaluate(const Simulation& sim, Open& o, double strain) {
       for (int j = 0; j < 3; ++j) m[static_cast<std::size_t>(3 * i + j)] += df[i] * r[j];
   };
   for (std::uint32_t p : o.source)
-    for_pairs(sim, incoming(p), p, [&](std::uint32_t q, const Vec3& f) {
+    for_pairs_of(sim, p, [&](std::uint32_t q, const Vec3& f) {
       if (contains(o.source, q)) return;  // internal to the source
       const std::uint64_t key = ref_key(p, q);
       const auto at = std::lower_bound(o.refs.begin(), o.refs.end(), key,
@@ -447,7 +483,7 @@ void AeMonitor::after_step(const Simulation& sim, double strain, double deviator
         // The crack's grains and those in contact with them; window 2 D_c / v_S.
         std::vector<std::uint32_t> touched{i1, i2};
         for (std::uint32_t p : {i1, i2})
-          for_pairs(sim, incoming(p), p, [&](std::uint32_t q, const Vec3& f) {
+          for_pairs_of(sim, p, [&](std::uint32_t q, const Vec3& f) {
             if (!is_zero(f)) touched.push_back(q);
           });
         const double tc = 2.0 * (2.0 * std::max(c.R1, c.R2)) / s_.shear_wave_speed;

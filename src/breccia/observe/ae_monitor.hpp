@@ -185,6 +185,17 @@ class AeMonitor : public Recorder {
   using IncomingSlots = std::pair<const std::uint64_t*, const std::uint64_t*>;
   IncomingSlots incoming(std::uint32_t p) const;
   void forget_incoming(std::size_t particles);
+  // On a sample split over ranks the pairs live with their first grains' owners: the loads of
+  // every grain the step reads (the new cracks' and the open events' sources) are gathered
+  // whole each step instead (Simulation::pair_loads_around). Scratch, not saved.
+  struct GatheredLoads {
+    std::vector<std::uint32_t> grains, offsets;
+    std::vector<Simulation::PairLoad> loads;
+  } gathered_;
+  void gather_loads(const Simulation& sim, CrackCatalogue::Reader& cracks);
+  // Calls f(q, force exerted by p on q) for every neighbour pair of p, in the list's order.
+  template <class F>
+  void for_pairs_of(const Simulation& sim, std::uint32_t p, F&& f) const;
 };
 
 // The fracture-energy estimate of docs/analysis.md §2.3 for a bond crack: sigma^2 V / (2 E_b) in

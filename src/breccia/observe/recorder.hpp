@@ -30,6 +30,9 @@ struct RecorderSetup {
   const ExperimentSpec& spec;
   const Simulation& sim;
   const Protocol& test;
+  // Whether this process writes the run's files: not a split sample's other ranks, whose
+  // recorders run beside root's, alike, for what they share (a scratch folder takes the rest).
+  bool writes_files = true;
 };
 
 // One history row as the run measured it: the test's axial state and its own columns.
@@ -46,6 +49,9 @@ class Recorder {
   virtual void after_step(const Simulation&, const Protocol&) {}
   // At every history row; what is written here is flushed, so an interrupted run keeps it.
   virtual void at_row(const Simulation&, const Protocol&, const RecordedRow&) {}
+  // Whether at_row will read the whole sample's pairs and bonds at this row (a snapshot's
+  // particle stresses): a sample split over ranks is then gathered whole around the row.
+  virtual bool reads_whole_sample(const RecordedRow&) const { return false; }
   // When the loading ends, whether complete or interrupted: the last records, flushed.
   virtual void finish(const Simulation&) {}
   // Everything needed to continue exactly after a restore (file lengths, counters, state).

@@ -129,6 +129,7 @@ void HistoryRecorder::record(const Simulation& sim, const AxialState& a,
     tensile_ += cracks[cracks_seen_].mode == CrackMode::Tensile ? 1 : 0;
   const std::size_t tensile = tensile_;
   const EnergyLedger& L = sim.ledger();
+  const Simulation::SampleCounts counts = sim.sample_counts();
   std::string line = fmt::format(
       "{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
       "{},{},{},{},{},"
@@ -137,7 +138,7 @@ void HistoryRecorder::record(const Simulation& sim, const AxialState& a,
       sim.step_count(), sim.time(), a.strain, a.stress, a.stress_nominal, a.deviatoric,
       a.confining_stress, a.lateral_strain, a.volumetric_strain, a.gauge_strain,
       a.gauge_lateral_strain, a.force_bottom, a.force_top, sim.cracks().size(), tensile,
-      sim.cracks().size() - tensile, sim.intact_bonds(), sim.active_contacts(), L.kinetic(),
+      sim.cracks().size() - tensile, counts.intact_bonds, counts.active_contacts, L.kinetic(),
       L.bond.tension, L.bond.compression, L.bond.shear, L.bond.bending, L.bond.twisting, L.contact,
       L.boundary_work, L.friction, L.local_damping, L.viscous_damping, L.deleted,
       L.released.total(), L.residual, L.residual_relative);

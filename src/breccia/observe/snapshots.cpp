@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iterator>
+#include <optional>
 #include <tuple>
 #include <utility>
 
@@ -104,13 +105,16 @@ void vector(std::ostream& s, const char* name, std::size_t n, F&& f) {
 std::unique_ptr<Recorder> SnapshotWriter::create(const RecorderSetup& setup) {
   auto w = std::make_unique<SnapshotWriter>((setup.folder / "snapshots").string(),
                                             setup.spec.snapshot_strain_interval);
+  w->writes_files_ = setup.writes_files;
   w->write(setup.sim);  // the sample as loading begins
   return w;
 }
 
 std::unique_ptr<Recorder> SnapshotWriter::restore(const RecorderSetup& setup, ArchiveReader& a) {
-  return std::make_unique<SnapshotWriter>((setup.folder / "snapshots").string(),
-                                          setup.spec.snapshot_strain_interval, a, setup.sim);
+  auto w = std::make_unique<SnapshotWriter>((setup.folder / "snapshots").string(),
+                                            setup.spec.snapshot_strain_interval, a, setup.sim);
+  w->writes_files_ = setup.writes_files;
+  return w;
 }
 
 SnapshotWriter::SnapshotWriter(std::string folder, double interval)
@@ -156,9 +160,13 @@ void SnapshotWriter::save_state(ArchiveWriter& a) const {
   a.value(static_cast<std::uint64_t>(cracks_seen_));
 }
 
+bool SnapshotWriter::reads_whole_sample(const RecordedRow& row) const {
+  return interval_ > 0.0 && row.axial.strain >= next_strain_;
+}
+
 void SnapshotWriter::at_row(const Simulation& sim, const Protocol&, const RecordedRow& row) {
   const double strain = row.axial.strain;
-  if (interval_ <= 0.0 || strain < next_strain_) return;
+  if (!reads_whole_sample(row)) return;
   write(sim);
   // The next multiple of the interval above this strain (one snapshot per row at most).
   next_strain_ = interval_ * (std::floor(strain / interval_) + 1.0);
@@ -167,11 +175,12 @@ void SnapshotWriter::at_row(const Simulation& sim, const Protocol&, const Record
 void SnapshotWriter::write(const Simulation& sim) {
   count_broken(sim, sim.cracks().size());
   const std::string name = fmt::format("{:05d}", times_.size());
-  write_particles(sim, fs::path(folder_) / ("particles_" + name + ".vtu"));
-  write_bonds(sim, fs::path(folder_) / ("bonds_" + name + ".vtu"));
-  write_cracks(sim, fs::path(folder_) / ("cracks_" + name + ".vtu"));
   times_.push_back(sim.time());
   names_.push_back(name);
+  if (!writes_files_) return;
+  write_particles(sim, fs::path(folder_) / ("particles_" + name + ".vtu"));
+  write_bonds(sim, sim.bonds(), fs::path(folder_) / ("bonds_" + name + ".vtu"));
+  write_cracks(sim, fs::path(folder_) / ("cracks_" + name + ".vtu"));
   write_collections();
 }
 
@@ -181,7 +190,7 @@ namespace {
 // f(law index, bond set, bond index) for the next one.
 class IntactBonds {
  public:
-  explicit IntactBonds(const Simulation& sim) : sim_(sim) {}
+  explicit IntactBonds(const BondSets& sets) : sets_(sets) {}
   template <class F>
   void next(F&& f) {
     bool found = false;
@@ -200,7 +209,7 @@ class IntactBonds {
                 }(),
                 ...);
           },
-          sim_.bonds());
+          sets_);
       if (!found) {
         ++law_;
         bond_ = 0;
@@ -209,7 +218,7 @@ class IntactBonds {
   }
 
  private:
-  const Simulation& sim_;
+  const BondSets& sets_;
   std::uint32_t law_ = 0;
   std::size_t bond_ = 0;
 };
@@ -245,7 +254,8 @@ void SnapshotWriter::write_particles(const Simulation& sim, const fs::path& path
 
 // Intact bonds as lines between the grain centres, each with its loads and how close they are
 // to its strength as its law judges them (the law's assess(): docs/physics.md §4.5).
-void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) const {
+void SnapshotWriter::write_bonds(const Simulation& sim, const BondSets& sets,
+                                 const fs::path& path) const {
   const ParticleStore& p = sim.particles();
   std::size_t m = 0;
   std::apply(
@@ -254,14 +264,14 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) co
               std::count_if(set.intact.begin(), set.intact.end(), [](auto v) { return v != 0; }))),
          ...);
       },
-      sim.bonds());
+      sets);
   AtomicFileWriter file(path);
   std::ostream& s = file.stream();
   s << header(2 * m, m);
   // Each block walks the intact bonds afresh with its own cursor (assess() is cheap next to
   // formatting) instead of holding a list of every bond.
   {
-    IntactBonds c(sim);
+    IntactBonds c(sets);
     Vec3 second;
     points_block(s, 2 * m, [&](std::size_t e) {
       if (e % 2 == 1) return second;
@@ -276,7 +286,7 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) co
   cells_block(s, m, 2);
   s << "<CellData Scalars=\"breakage_index\">\n";
   {
-    IntactBonds c(sim);
+    IntactBonds c(sets);
     scalar(s, "law", "Int32", m, [&](std::size_t) {
       std::uint32_t law = 0;
       c.next([&](std::uint32_t l, const auto&, std::uint32_t) { law = l; });
@@ -284,7 +294,7 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) co
     });
   }
   auto column = [&](const char* name, double BondFailure::*value) {
-    IntactBonds c(sim);
+    IntactBonds c(sets);
     scalar(s, name, "Float64", m, [&](std::size_t) {
       BondFailure loads;
       c.next([&]<class Law>(std::uint32_t, const BondSet<Law>& set, std::uint32_t k) {

@@ -33,6 +33,7 @@ class SnapshotWriter : public Recorder {
 
   std::string_view name() const noexcept override { return kind; }
   void at_row(const Simulation& sim, const Protocol&, const RecordedRow& row) override;
+  bool reads_whole_sample(const RecordedRow& row) const override;
   void finish(const Simulation& sim) override { write(sim); }
   void save_state(ArchiveWriter& a) const override;
   std::vector<std::string> files() const override {
@@ -42,9 +43,11 @@ class SnapshotWriter : public Recorder {
  private:
   void write_collections() const;
   void write_particles(const Simulation& sim, const std::filesystem::path& path) const;
-  void write_bonds(const Simulation& sim, const std::filesystem::path& path) const;
+  void write_bonds(const Simulation& sim, const BondSets& sets,
+                   const std::filesystem::path& path) const;
   void write_cracks(const Simulation& sim, const std::filesystem::path& path) const;
   std::string folder_;
+  bool writes_files_ = true;  // RecorderSetup::writes_files
   double interval_ = 0.0;     // axial strain between snapshots
   double next_strain_ = 0.0;  // the next snapshot is due when the strain reaches it
   std::vector<double> times_;

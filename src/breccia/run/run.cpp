@@ -2,7 +2,9 @@
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
+#include <thread>
 
 #include "breccia/analysis/compression.hpp"
 #include "breccia/analysis/crack_pattern.hpp"
@@ -183,11 +186,19 @@ struct LoopEnd {
 // One history row: the recorders (tables flushed, so an interrupted run keeps them; a snapshot
 // when its strain is due), the analysed series and the quality monitors (docs/physics.md §6.1).
 void record_row(Session& ss, const AxialState& a) {
-  const Simulation& sim = ss.sim;
+  Simulation& sim = ss.sim;
   LoopState& L = ss.loop;
   std::vector<double> extra;
   ss.test->history_values(sim, extra);
-  for (const auto& r : ss.recorders) r->at_row(sim, *ss.test, {a, extra});
+  const RecordedRow row{a, extra};
+  // A recorder that reads every pair (a snapshot) sees a split sample gathered whole, which then
+  // splits again and goes on to the bit as before.
+  const bool whole =
+      sim.split() && std::any_of(ss.recorders.begin(), ss.recorders.end(),
+                                 [&](const auto& r) { return r->reads_whole_sample(row); });
+  if (whole) sim.unsplit();
+  for (const auto& r : ss.recorders) r->at_row(sim, *ss.test, row);
+  if (whole) sim.split_over_ranks();
   analysis::CompressionSeries& series = L.series;
   series.axial_strain.push_back(a.strain);
   series.deviatoric.push_back(a.deviatoric);
@@ -250,7 +261,10 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
   };
   for (;;) {
     const bool stop_step = opt.stop_at_step > 0 && sim.step_count() >= opt.stop_at_step;
-    if ((opt.interrupt && opt.interrupt->load()) || stop_step) {
+    bool interrupted = opt.interrupt && opt.interrupt->load();
+    // The ranks of a split sample stop at one step: when a signal has reached any of them.
+    if (sim.split()) interrupted = ranks::any_flags(interrupted ? 1 : 0) != 0;
+    if (interrupted || stop_step) {
       LoopEnd e =
           ended("interrupted",
                 stop_step ? fmt::format("stopped at step {} (--stop-at-step)", sim.step_count())
@@ -264,6 +278,8 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
     if (sim.step_count() % interval == 0) sim.request_energy_sample();
     test.control(sim);
     sim.step();
+    // The test and the recorders read every grain: a split sample's ranks share their own.
+    if (sim.split()) sim.gather_particles();
     for (const auto& r : ss.recorders) r->after_step(sim, test);
     if ((sim.step_count() - 1) % interval != 0) continue;
     const AxialState a = test.measure(sim);
@@ -274,8 +290,12 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
       return ended("complete", test.stop_reason());
     }
     const auto now = std::chrono::steady_clock::now();
-    if (spec.checkpoint_interval > 0.0 &&
-        std::chrono::duration<double>(now - last_checkpoint).count() >= spec.checkpoint_interval) {
+    bool checkpoint_due =
+        spec.checkpoint_interval > 0.0 &&
+        std::chrono::duration<double>(now - last_checkpoint).count() >= spec.checkpoint_interval;
+    // Root's clock decides for every rank of a split sample.
+    if (sim.split()) checkpoint_due = ranks::broadcast(checkpoint_due ? "1" : "0") == "1";
+    if (checkpoint_due) {
       checkpoint();
       last_checkpoint = std::chrono::steady_clock::now();
       checkpoint_seconds += std::chrono::duration<double>(last_checkpoint - now).count();
@@ -535,9 +555,14 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
                        Session& ss, const LoopEnd& end, const std::function<double()>& wall,
                        const std::function<void(const std::string&)>& log) {
   Simulation& sim = ss.sim;
+  // The last records and the analysis read the whole sample: a split one is gathered; its
+  // lead rank alone goes on to the analysis, and the others' part of the run ends there.
+  const bool lead = sim.lead_rank();
+  sim.unsplit();
   for (const auto& r : ss.recorders) r->finish(sim);
   const analysis::CompressionResult an = analysis::analyse_compression(ss.loop.series);
   RunResult result = run_result(folder, ss, end, an, wall());
+  if (!lead) return result;
   const QualityVerdict q = judge_quality(ss.loop, an);
   std::vector<std::string> warnings = ss.loop.warnings;  // those of the set-up, logged already
   for (const std::string& w : quality_warnings(q, *ss.test)) {
@@ -643,6 +668,43 @@ void add_launch(json& j) {
         {"ranks", ranks::size()}, {"rank", ranks::rank()}, {"sample_split_over_ranks", false}};
 }
 
+// One sample split over the ranks: each rank's particles (an index range of the store).
+json decomposition(const Simulation& sim) {
+  json first = json::array(), count = json::array();
+  for (const IndexRange& r : sim.rank_ranges()) {
+    first.push_back(r.begin);
+    count.push_back(r.size());
+  }
+  return {{"ranks", ranks::size()},
+          {"sample_split_over_ranks", true},
+          {"first_particle", first},
+          {"particles", count}};
+}
+
+// A folder of this rank's own under the system's temporary folder, removed with its contents
+// when the run ends: where a split sample's other ranks write what root writes in the run folder.
+class ScratchFolder {
+ public:
+  ScratchFolder() = default;
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  ~ScratchFolder() {
+    std::error_code ec;
+    if (!path_.empty()) fs::remove_all(path_, ec);
+  }
+  const fs::path& make() {
+    path_ = fs::temp_directory_path() /
+            fmt::format("breccia-rank{}-{}", ranks::rank(), static_cast<long>(::getpid()));
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+    fs::create_directories(path_);
+    return path_;
+  }
+
+ private:
+  fs::path path_;
+};
+
 // manifest.json as a run starts: what made it, on what, from which experiment, "running".
 json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptions& opt) {
   json m = {{"program", "breccia"},
@@ -666,17 +728,37 @@ json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptio
   return m;
 }
 
+// The experiment's threads, or with engine.threads = 0 the machine's cores, shared among the
+// ranks a launch started on it.
+void use_threads(const ExperimentSpec& spec) {
+  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  if (spec.threads > 0)
+    set_threads(static_cast<int>(spec.threads));
+  else if (ranks::local_size() > 1)
+    set_threads(std::max(1, cores / ranks::local_size()));
+}
+
+// A split sample's root makes the run folder (its failure is every rank's); the other ranks
+// write into scratch folders.
+fs::path run_folder_of_rank(const ExperimentSpec& spec, const RunOptions& opt,
+                            ScratchFolder& scratch) {
+  if (!opt.split_over_ranks) return make_folder(spec);
+  const std::string made = ranks::on_root([&] { return make_folder(spec).string(); });
+  return ranks::root() ? fs::path(made) : scratch.make();
+}
+
 }  // namespace
 
 RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   auto log = [&](const std::string& m) {
     if (opt.log) opt.log(m);
   };
-  if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
+  use_threads(spec);
   const auto t_start = std::chrono::steady_clock::now();
   // Build first: a bad sample (geometry file, bond list) fails before any file is written.
   Built b = build(spec, log);
-  const fs::path folder = make_folder(spec);
+  ScratchFolder scratch;
+  const fs::path folder = run_folder_of_rank(spec, opt, scratch);
   json manifest = initial_manifest(spec, b, opt);
   write_file_atomically(folder / "experiment.toml", to_toml(spec));
   write_json(folder / "manifest.json", manifest);
@@ -725,7 +807,13 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     loop.wave_speed_method = "given in the experiment file (ae.shear_wave_speed)";
   std::unique_ptr<Session> ss;
   try {
-    RecorderList recorders = make_recorders({folder, spec, sim, test});
+    RecorderList recorders =
+        make_recorders({folder, spec, sim, test, !opt.split_over_ranks || ranks::root()});
+    if (opt.split_over_ranks) {
+      sim.split_over_ranks();
+      manifest["mpi"] = decomposition(sim);
+      write_json(folder / "manifest.json", manifest);
+    }
     ss.reset(new Session{std::move(b.sim), std::move(b.protocol), std::move(loop),
                          std::move(recorders)});
   } catch (const std::exception& e) {
@@ -737,11 +825,28 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   return execute(spec, folder, manifest, *ss, opt, t_start);
 }
 
+namespace {
+
+// A split sample's other ranks resume in scratch folders holding copies of the run folder's
+// tables and logs (what the recorders cut back and continue), not of its checkpoint or
+// snapshots, which they read in place or never.
+fs::path resume_folder_of_rank(const fs::path& folder, ScratchFolder& scratch) {
+  const fs::path& mine = scratch.make();
+  for (const auto& e : fs::directory_iterator(folder))
+    if (e.is_regular_file() && e.path().filename() != kCheckpointFile)
+      fs::copy_file(e.path(), mine / e.path().filename());
+  return mine;
+}
+
+}  // namespace
+
 RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
                      const RunOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
-  const fs::path folder(folder_name);
-  const fs::path mpath = folder / "manifest.json", cpath = folder / kCheckpointFile;
+  const fs::path source(folder_name);
+  ScratchFolder scratch;
+  const bool other_rank = opt.split_over_ranks && !ranks::root();
+  const fs::path mpath = source / "manifest.json", cpath = source / kCheckpointFile;
   if (!fs::exists(mpath))
     throw InputError(folder_name, "manifest.json", "(missing)",
                      "a run folder (with manifest.json) or a sweep folder (with sweep-plan.json)");
@@ -756,6 +861,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
                          "(see output.checkpoint_interval_s)");
   std::ifstream in = open_checkpoint(cpath);
   ArchiveReader a(in, cpath.string());
+  const fs::path folder = other_rank ? resume_folder_of_rank(source, scratch) : source;
   a.string();  // magic, format and version: checked with the hash
   a.get<std::uint32_t>();
   a.string();
@@ -764,7 +870,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   std::vector<std::string> overrides;
   if (ro.threads >= 0) overrides.push_back("engine.threads=" + std::to_string(ro.threads));
   const ExperimentSpec spec = parse_experiment(a.string(), cpath.string(), overrides);
-  if (spec.threads > 0) set_threads(static_cast<int>(spec.threads));
+  use_threads(spec);
 
   LoopState loop;
   loop.load(a);
@@ -773,7 +879,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   std::unique_ptr<Protocol> test;
   visit_lab_test(spec.test, [&]<class T>(const typename T::Params&) { test = T::restore(a); });
   test->check_restored(sim, cpath.string());
-  RecorderList recorders = restore_recorders({folder, spec, sim, *test}, a);
+  RecorderList recorders = restore_recorders({folder, spec, sim, *test, !other_rank}, a);
   a.label("end of checkpoint");
   if (loop.imbalance.size() != loop.series.axial_strain.size())
     throw InputError(cpath.string(), "loop", "", "inconsistent series: the checkpoint is corrupt");
@@ -789,12 +895,17 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
              {"command", opt.command_line},
              {"threads", max_threads()},
              {"machine", machine_description()}};
-  add_launch(entry);
+  if (opt.split_over_ranks) {
+    sim.split_over_ranks();
+    entry["mpi"] = decomposition(sim);
+  } else {
+    add_launch(entry);
+  }
   if (!manifest.contains("resumed")) manifest["resumed"] = json::array();
   manifest["resumed"].push_back(entry);
   manifest["status"] = "running";
   manifest.erase("stop_reason");
-  write_json(mpath, manifest);
+  write_json(folder / "manifest.json", manifest);
   Session ss{std::move(sim), std::move(test), std::move(loop), std::move(recorders)};
   return execute(spec, folder, manifest, ss, opt, t_start);
 }

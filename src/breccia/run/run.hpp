@@ -42,6 +42,10 @@ struct RunOptions {
   // process). Without an executable a sweep runs in this process.
   int jobs = 0;
   std::string executable;
+  // Under mpirun: one sample split over the ranks of the launch (`breccia run`), with the results
+  // of one process to the bit. Root writes the run folder; each other rank runs the same loop
+  // beside it, writing what it records into a scratch folder of its own that it removes.
+  bool split_over_ranks = false;
 };
 
 struct ResumeOptions {

@@ -8,6 +8,7 @@
 
 #include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/core/text_file.hpp"
 #include "breccia/version.hpp"
 
@@ -36,7 +37,9 @@ constexpr std::uint32_t kCheckpointFormat = 23;
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
 // it is trusted.
-void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Session& s) {
+namespace {
+
+void write_whole_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Session& s) {
   // Streamed to a temporary renamed over the last complete checkpoint once whole.
   AtomicFileWriter file(folder / kCheckpointFile);
   {
@@ -55,6 +58,23 @@ void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Sessio
   const std::uint64_t hash = file.hash();
   file.stream().write(reinterpret_cast<const char*>(&hash), sizeof hash);
   file.commit();
+}
+
+}  // namespace
+
+void write_checkpoint(const fs::path& folder, const ExperimentSpec& spec, Session& s) {
+  if (!s.sim.split()) {
+    write_whole_checkpoint(folder, spec, s);
+    return;
+  }
+  // A split sample is saved as one process holds it: gathered whole, written by root (whose
+  // failure every rank shares), and split again, which continues as before to the bit.
+  s.sim.unsplit();
+  ranks::on_root([&] {
+    write_whole_checkpoint(folder, spec, s);
+    return std::string();
+  });
+  s.sim.split_over_ranks();
 }
 
 std::ifstream open_checkpoint(const fs::path& cpath) {

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Every example experiment run in one process and under `mpirun -np RANKS --oversubscribe` (the
+# sample split over the ranks), its run folders compared file by file, byte for byte. Only what
+# depends on the clock and the launch is left out: manifest.json, summary.json's timings, and
+# the plot and report made from the tables (`output.plot=false` in both runs).
+#
+#   validation/mpi-identity/run.sh [RANKS] [EXAMPLE.toml ...]    (default: 4, every example run)
+#
+# Calibrations (examples/calibrate-*.toml) spread their trials over ranks instead: each trial is a
+# whole run on one rank (tests/test_mpi.cpp compares such a calibration with one process).
+# Environment: BRECCIA (default build/breccia), OUT (default runs/mpi-identity), THREADS (per rank
+# and for the one process, default 1). Prints a table; exits 1 if any file differs.
+set -uo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+ranks="${1:-4}"
+shift || true
+breccia="${BRECCIA:-$root/build/breccia}"
+out="${OUT:-$root/runs/mpi-identity}"
+threads="${THREADS:-1}"
+examples=("$@")
+if [ ${#examples[@]} -eq 0 ]; then
+  for f in "$root"/examples/*.toml; do
+    case "$(basename "$f")" in calibrate-*) ;; *) examples+=("$f") ;; esac
+  done
+fi
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+export OMPI_MCA_btl="${OMPI_MCA_btl:-self,vader}"
+export OMPI_MCA_btl_vader_single_copy_mechanism="${OMPI_MCA_btl_vader_single_copy_mechanism:-none}"
+export OMP_NUM_THREADS="$threads"
+compare="$root/validation/mpi-identity/compare.py"
+status=0
+echo "| example | one process | $ranks ranks | files compared | differing |"
+echo "|---|---|---|---|---|"
+for ex in "${examples[@]}"; do
+  name="$(basename "$ex" .toml)"
+  rm -rf "$out/$name"
+  mkdir -p "$out/$name/one" "$out/$name/ranks"
+  common=(run "$ex" --quiet --threads "$threads" --set output.plot=false)
+  t0=$(date +%s)
+  a=$("$breccia" "${common[@]}" --output "$out/$name/one" 2>"$out/$name/one.log" | tail -1)
+  t1=$(date +%s)
+  b=$(mpirun --oversubscribe --bind-to none -np "$ranks" "$breccia" "${common[@]}" \
+        --output "$out/$name/ranks" 2>"$out/$name/ranks.log" | tail -1)
+  t2=$(date +%s)
+  if [ -z "$a" ] || [ -z "$b" ] || [ ! -d "$a" ] || [ ! -d "$b" ]; then
+    echo "| $name | $((t1 - t0)) s | $((t2 - t1)) s | - | run failed (see $out/$name/*.log) |"
+    status=1
+    continue
+  fi
+  result=$(/usr/bin/python3 "$compare" "$a" "$b") || status=1
+  echo "| $name | $((t1 - t0)) s | $((t2 - t1)) s | $result |"
+done
+exit $status
