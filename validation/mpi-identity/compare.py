@@ -1,19 +1,29 @@
 #!/usr/bin/env python3
 """Compares two run folders file by file: prints "<files compared> | <differing files>" and exits
 1 when a file differs or is missing. manifest.json (the launch, the clock) is left out, and so are
-summary.json's timings and the experiment's output folder."""
+summary.json's timings, the sample cache's path and the output folder in the resolved
+experiment."""
 import json
 import sys
 from pathlib import Path
 
-TIMINGS = ("wall_seconds", "loading_loop", "particle_steps_per_second", "resumed")
+# What depends on the clock, the machine or the output folder, at any depth of summary.json.
+MACHINE_KEYS = {"wall_seconds", "loading_loop", "particle_steps_per_second", "resumed",
+                "packing_seconds", "seconds", "cached_file"}
+
+
+def without_machine(v):
+    if isinstance(v, dict):
+        return {k: without_machine(x) for k, x in v.items() if k not in MACHINE_KEYS}
+    if isinstance(v, list):
+        return [without_machine(x) for x in v]
+    if isinstance(v, str) and "\ndirectory = " in v:
+        return "\n".join(l for l in v.split("\n") if not l.startswith("directory = "))
+    return v
 
 
 def summary(path):
-    j = json.loads(path.read_text())
-    for key in TIMINGS:
-        j.pop(key, None)
-    return j
+    return without_machine(json.loads(path.read_text()))
 
 
 def experiment(path):

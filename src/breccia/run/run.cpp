@@ -13,6 +13,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -738,6 +739,21 @@ void use_threads(const ExperimentSpec& spec) {
     set_threads(std::max(1, cores / ranks::local_size()));
 }
 
+// The sample and the test, built whole by every process. A split sample's root builds first (its
+// failure is every rank's), so that a generated sample is packed and cached once and the other
+// ranks read it from the cache.
+Built build_on_every_rank(const ExperimentSpec& spec, const RunOptions& opt,
+                          const std::function<void(const std::string&)>& log) {
+  if (!opt.split_over_ranks) return build(spec, log);
+  std::optional<Built> b;
+  ranks::on_root([&] {
+    b.emplace(build(spec, log));
+    return std::string();
+  });
+  if (!b) b.emplace(build(spec, log));
+  return std::move(*b);
+}
+
 // A split sample's root makes the run folder (its failure is every rank's); the other ranks
 // write into scratch folders.
 fs::path run_folder_of_rank(const ExperimentSpec& spec, const RunOptions& opt,
@@ -756,7 +772,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   use_threads(spec);
   const auto t_start = std::chrono::steady_clock::now();
   // Build first: a bad sample (geometry file, bond list) fails before any file is written.
-  Built b = build(spec, log);
+  Built b = build_on_every_rank(spec, opt, log);
   ScratchFolder scratch;
   const fs::path folder = run_folder_of_rank(spec, opt, scratch);
   json manifest = initial_manifest(spec, b, opt);
