@@ -410,17 +410,42 @@ void Simulation::exchange_step_loads(const PairList& pairs) {
   arrange_shares(s.own, shares, s.incoming);
 }
 
+// One collective for every field (a run gathers after each step: its latency counts).
 void Simulation::gather_particles() {
   if (!split_) return;
   const std::vector<IndexRange>& ranges = split_->ranges;
-  complete_particle_values(p_.pos_rad, ranges);
-  complete_particle_values(p_.vel, ranges);
-  complete_particle_values(p_.angvel, ranges);
-  complete_particle_values(p_.force, ranges);
-  complete_particle_values(p_.torque, ranges);
-  complete_particle_values(p_.orientation, ranges);
-  complete_particle_values(p_.angle, ranges);
-  complete_particle_values(p_.displacement, ranges);
+  const auto each_field = [&](auto&& f) {
+    f(p_.pos_rad);
+    f(p_.vel);
+    f(p_.angvel);
+    f(p_.force);
+    f(p_.torque);
+    f(p_.orientation);
+    f(p_.angle);
+    f(p_.displacement);
+  };
+  // Every field's bytes of a range of grains (empty fields, such as the 3D angles, have none).
+  const auto bytes_of = [&](IndexRange r) {
+    std::size_t n = 0;
+    each_field([&](const auto& v) { n += v.empty() ? 0 : r.size() * sizeof(v[0]); });
+    return n;
+  };
+  const IndexRange own = split_->own;
+  std::string mine;
+  mine.reserve(bytes_of(own));
+  each_field([&](const auto& v) {
+    if (!v.empty()) put_range(mine, v.data() + own.begin, own.size());
+  });
+  std::vector<std::size_t> sizes(ranges.size());
+  for (std::size_t r = 0; r < ranges.size(); ++r) sizes[r] = bytes_of(ranges[r]);
+  const std::vector<std::string> all = ranks::all_gather(mine, sizes);
+  for (std::size_t r = 0; r < all.size(); ++r) {
+    if (r == static_cast<std::size_t>(ranks::rank())) continue;
+    std::size_t at = 0;
+    each_field([&](auto& v) {
+      if (!v.empty()) take_range(all[r], at, v.data() + ranges[r].begin, ranges[r].size());
+    });
+  }
 }
 
 void Simulation::unsplit() {
