@@ -160,18 +160,19 @@ TEST(Ranks, LaunchReadFromTheLaunchersEnvironment) {
 // MPI, and a refusal says why and what to do.
 TEST(Ranks, SeveralProcessesRunOnlyWhatSpreadsOverRanks) {
   using breccia::ranks::launch_refusal;
-  const std::vector<std::string> spread{"sweep", "resume", "calibrate"};
+  const std::vector<std::string> spread{"run", "sweep", "resume", "calibrate"};
   breccia::ranks::Launch one{true, 1, 0, 1}, two{true, 2, 1, 2};
-  EXPECT_FALSE(launch_refusal(one, false, "run", spread));
-  EXPECT_FALSE(launch_refusal(two, true, "sweep", spread));
-  const auto no_mpi = launch_refusal(two, false, "sweep", spread);
+  EXPECT_FALSE(launch_refusal(one, false, "generate", spread));
+  EXPECT_FALSE(launch_refusal(two, true, "run", spread));
+  const auto no_mpi = launch_refusal(two, false, "run", spread);
   ASSERT_TRUE(no_mpi);
   EXPECT_NE(no_mpi->find("built without MPI"), std::string::npos) << *no_mpi;
   EXPECT_NE(no_mpi->find("-DBRECCIA_MPI=ON"), std::string::npos) << *no_mpi;
-  const auto run = launch_refusal(two, true, "run", spread);
-  ASSERT_TRUE(run);
-  EXPECT_NE(run->find("`breccia run` runs in one process"), std::string::npos) << *run;
-  EXPECT_NE(run->find("sweep, resume, calibrate"), std::string::npos) << *run;
+  const auto generate = launch_refusal(two, true, "generate", spread);
+  ASSERT_TRUE(generate);
+  EXPECT_NE(generate->find("`breccia generate` runs in one process"), std::string::npos)
+      << *generate;
+  EXPECT_NE(generate->find("run, sweep, resume, calibrate"), std::string::npos) << *generate;
 }
 
 // Without a launcher a command is rank 0 of 1, and the collective calls are those of one process.

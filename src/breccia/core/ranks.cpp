@@ -106,7 +106,7 @@ std::optional<std::string> launch_refusal(const Launch& launch, bool with_mpi,
   std::string names;
   for (const std::string& s : spread) names += (names.empty() ? "" : ", ") + s;
   return fmt::format(
-      "`breccia {}` runs in one process (its threads: --threads); on {} ranks it would run {} "
+      "`breccia {}` runs in one process; on {} ranks it would run {} "
       "times over. Commands that spread over ranks: {}",
       command, launch.size, launch.size, names);
 }
