@@ -333,7 +333,8 @@ std::string first_difference(const std::string& a, const std::string& b) {
 
 // A split sample gathered whole again is one process's to the bit: its checkpoint is that
 // process's, byte for byte, after breaks, a rebuild and new joints; split again, it goes on as
-// one process, and gathers again to the same bytes.
+// one process, and gathers again to the same bytes. Before that, the pair loads around grains
+// (what the AE monitor reads) are those one process lists.
 TEST(MpiDomain, AGatheredSplitIsOneProcessToTheBit) {
   set_threads(1);
   Simulation reference = test::compressed_block(5, 5, 20, 8.0, 3e6, 0.7, with_inclined_joint);
@@ -342,6 +343,24 @@ TEST(MpiDomain, AGatheredSplitIsOneProcessToTheBit) {
   step_both(reference, split, 1100);
   ASSERT_GT(reference.neighbour_rebuilds(), 1u);
   ASSERT_GT(reference.cracks().size(), 100u);
+  // The pair loads around grains of every rank's range, as one process lists them.
+  const std::size_t n = reference.particles().size();
+  const std::vector<std::uint32_t> grains = {0, 7, static_cast<std::uint32_t>(n / 2),
+                                             static_cast<std::uint32_t>(n - 1)};
+  std::vector<std::uint32_t> offsets_split, offsets_one;
+  std::vector<Simulation::PairLoad> loads_split, loads_one;
+  split.pair_loads_around(grains, offsets_split, loads_split);
+  reference.pair_loads_around(grains, offsets_one, loads_one);
+  EXPECT_EQ(offsets_split, offsets_one) << "rank " << ranks::rank();
+  EXPECT_GT(loads_one.size(), 20u);
+  ASSERT_EQ(loads_split.size(), loads_one.size());
+  std::size_t differ = 0;
+  for (std::size_t k = 0; k < loads_one.size(); ++k)
+    differ +=
+        loads_split[k].other != loads_one[k].other || !(loads_split[k].force == loads_one[k].force)
+            ? 1
+            : 0;
+  EXPECT_EQ(differ, 0u) << "rank " << ranks::rank();
   split.unsplit();
   EXPECT_FALSE(split.split());
   EXPECT_EQ(first_difference(checkpoint_of(split), checkpoint_of(reference)), "")

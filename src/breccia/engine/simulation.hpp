@@ -332,8 +332,7 @@ class Simulation {
     return {p_.pos_rad[i].r, p_.pos_rad[j].r};
   }
   // Calls f(first, second) with the particle indexes of each intact bond of every law, in law
-  // and bond order (fragments, wear).
-  // Collective on a split sample, which visits the whole sample's bonds.
+  // and bond order (fragments, wear); collective on a split sample, whose whole bonds it visits.
   void for_each_intact_bond(const std::function<void(std::uint32_t, std::uint32_t)>& f) const;
   // The moduli of the bond law called `law` with this simulation's parameters (crack records
   // name their law); zero for a name that is not a bond law.
