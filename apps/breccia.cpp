@@ -118,8 +118,10 @@ breccia::ExperimentSpec load_spec(const std::string& file,
                       : breccia::load_experiment(file, overrides);
 }
 
-// Prints the outcome of a run that wrote a run folder; the exit status of the command.
+// Prints the outcome of a run that wrote a run folder (root speaks for a split run's ranks); the
+// exit status of the command.
 int finish_run(const breccia::RunResult& r, bool quiet) {
+  if (!breccia::ranks::root()) return r.status == "complete" ? 0 : 130;
   if (!quiet) {
     std::cerr << "status: " << r.status << " (" << r.stop_reason << ")\n";
     std::cerr << breccia::summarise_folder(r.folder);
@@ -164,9 +166,7 @@ Command add_run(CLI::App& app, const std::string& command_line) {
             opt.show_progress = speaks && !o->quiet && spec.progress && isatty(fileno(stderr));
             if (speaks && !o->quiet) opt.log = log_to_stderr;
             opt.stop_at_step = static_cast<std::uint64_t>(o->stop_at_step);
-            const breccia::RunResult result = breccia::run_experiment(spec, opt);
-            if (!speaks) return result.status == "complete" ? 0 : 130;
-            return finish_run(result, o->quiet);
+            return finish_run(breccia::run_experiment(spec, opt), o->quiet);
           }};
 }
 
@@ -238,15 +238,12 @@ Command add_resume(CLI::App& app, const std::string& command_line) {
             }
             // A run resumes split over the ranks, whatever split (or none) it stopped in.
             opt.split_over_ranks = breccia::ranks::size() > 1;
-            const bool speaks = breccia::ranks::root();
-            if (!speaks) {
+            if (!breccia::ranks::root()) {
               opt.log = nullptr;
               opt.show_progress = false;
             }
-            const breccia::RunResult result =
-                breccia::resume_run(o->folder, breccia::ResumeOptions{o->threads}, opt);
-            if (!speaks) return result.status == "complete" ? 0 : 130;
-            return finish_run(result, o->quiet);
+            return finish_run(
+                breccia::resume_run(o->folder, breccia::ResumeOptions{o->threads}, opt), o->quiet);
           }};
 }
 

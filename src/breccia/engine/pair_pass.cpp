@@ -501,8 +501,8 @@ void Simulation::record_crack(const BondSet<Law>& set, std::uint32_t bond,
   r.ratio_s = info.ratio_s;
   r.energy = info.energy;
   if (split_) {
-    split_->cracks.push_back(
-        r);  // shared in pair order with the other ranks' (exchange_step_loads)
+    // Shared in pair order with the other ranks' (exchange_step_loads).
+    split_->cracks.push_back(r);
     return;
   }
   released_ += info.energy;

@@ -134,9 +134,8 @@ std::vector<T> concatenated(const std::vector<T>& mine) {
   return all;
 }
 
-// A bond-layout set made whole: every rank's elements in rank order are one process's order (a
-// set is sorted by pair, and the ranks own ascending grain ranges). The pair index is made anew
-// from the whole list, as one process made it.
+// A bond-layout set made whole, without its pair index: every rank's elements in rank order are
+// one process's order (a set is sorted by pair, and the ranks own ascending grain ranges).
 template <class Law>
 void concatenate_elements(BondSet<Law>& set) {
   std::size_t broken = 0;
@@ -151,6 +150,7 @@ void concatenate_elements(BondSet<Law>& set) {
   set.bond_of_pair.clear();
 }
 
+// The same with its pair index made anew from the whole list, as one process made it.
 template <class Law>
 void gather_elements(BondSet<Law>& set, const PairList& pairs) {
   concatenate_elements(set);

@@ -245,9 +245,8 @@ void AeMonitor::forget_incoming(std::size_t particles) {
   incoming_.grains = 0;
 }
 
-// The grains of the new cracks (from seen_ on) and the sources of the open events: those the
-// step reads the pairs of. Their pairs as second particle are found by one scan of the list;
-// a neighbour rebuild makes a new list, whose slots are read afresh.
+// Of a split sample: the loads of the pairs of the grains this step reads, gathered by
+// gather_loads; of one process: read in the list through `incoming`.
 template <class F>
 void AeMonitor::for_pairs_of(const Simulation& sim, std::uint32_t p, F&& f) const {
   if (!sim.split()) {
@@ -280,6 +279,9 @@ void AeMonitor::gather_loads(const Simulation& sim, CrackCatalogue::Reader& crac
   sim.pair_loads_around(grains, gathered_.offsets, gathered_.loads);
 }
 
+// The grains of the new cracks (from seen_ on) and the sources of the open events: those the
+// step reads the pairs of. Their pairs as second particle are found by one scan of the list;
+// a neighbour rebuild makes a new list, whose slots are read afresh.
 void AeMonitor::find_incoming(const Simulation& sim, CrackCatalogue::Reader& cracks) {
   if (sim.split()) {
     gather_loads(sim, cracks);

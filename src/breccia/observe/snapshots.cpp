@@ -7,7 +7,6 @@
 #include <cmath>
 #include <filesystem>
 #include <iterator>
-#include <optional>
 #include <tuple>
 #include <utility>
 
@@ -179,7 +178,7 @@ void SnapshotWriter::write(const Simulation& sim) {
   names_.push_back(name);
   if (!writes_files_) return;
   write_particles(sim, fs::path(folder_) / ("particles_" + name + ".vtu"));
-  write_bonds(sim, sim.bonds(), fs::path(folder_) / ("bonds_" + name + ".vtu"));
+  write_bonds(sim, fs::path(folder_) / ("bonds_" + name + ".vtu"));
   write_cracks(sim, fs::path(folder_) / ("cracks_" + name + ".vtu"));
   write_collections();
 }
@@ -190,7 +189,7 @@ namespace {
 // f(law index, bond set, bond index) for the next one.
 class IntactBonds {
  public:
-  explicit IntactBonds(const BondSets& sets) : sets_(sets) {}
+  explicit IntactBonds(const Simulation& sim) : sim_(sim) {}
   template <class F>
   void next(F&& f) {
     bool found = false;
@@ -209,7 +208,7 @@ class IntactBonds {
                 }(),
                 ...);
           },
-          sets_);
+          sim_.bonds());
       if (!found) {
         ++law_;
         bond_ = 0;
@@ -218,7 +217,7 @@ class IntactBonds {
   }
 
  private:
-  const BondSets& sets_;
+  const Simulation& sim_;
   std::uint32_t law_ = 0;
   std::size_t bond_ = 0;
 };
@@ -254,8 +253,7 @@ void SnapshotWriter::write_particles(const Simulation& sim, const fs::path& path
 
 // Intact bonds as lines between the grain centres, each with its loads and how close they are
 // to its strength as its law judges them (the law's assess(): docs/physics.md §4.5).
-void SnapshotWriter::write_bonds(const Simulation& sim, const BondSets& sets,
-                                 const fs::path& path) const {
+void SnapshotWriter::write_bonds(const Simulation& sim, const fs::path& path) const {
   const ParticleStore& p = sim.particles();
   std::size_t m = 0;
   std::apply(
@@ -264,14 +262,14 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const BondSets& sets,
               std::count_if(set.intact.begin(), set.intact.end(), [](auto v) { return v != 0; }))),
          ...);
       },
-      sets);
+      sim.bonds());
   AtomicFileWriter file(path);
   std::ostream& s = file.stream();
   s << header(2 * m, m);
   // Each block walks the intact bonds afresh with its own cursor (assess() is cheap next to
   // formatting) instead of holding a list of every bond.
   {
-    IntactBonds c(sets);
+    IntactBonds c(sim);
     Vec3 second;
     points_block(s, 2 * m, [&](std::size_t e) {
       if (e % 2 == 1) return second;
@@ -286,7 +284,7 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const BondSets& sets,
   cells_block(s, m, 2);
   s << "<CellData Scalars=\"breakage_index\">\n";
   {
-    IntactBonds c(sets);
+    IntactBonds c(sim);
     scalar(s, "law", "Int32", m, [&](std::size_t) {
       std::uint32_t law = 0;
       c.next([&](std::uint32_t l, const auto&, std::uint32_t) { law = l; });
@@ -294,7 +292,7 @@ void SnapshotWriter::write_bonds(const Simulation& sim, const BondSets& sets,
     });
   }
   auto column = [&](const char* name, double BondFailure::*value) {
-    IntactBonds c(sets);
+    IntactBonds c(sim);
     scalar(s, name, "Float64", m, [&](std::size_t) {
       BondFailure loads;
       c.next([&]<class Law>(std::uint32_t, const BondSet<Law>& set, std::uint32_t k) {

@@ -43,8 +43,7 @@ class SnapshotWriter : public Recorder {
  private:
   void write_collections() const;
   void write_particles(const Simulation& sim, const std::filesystem::path& path) const;
-  void write_bonds(const Simulation& sim, const BondSets& sets,
-                   const std::filesystem::path& path) const;
+  void write_bonds(const Simulation& sim, const std::filesystem::path& path) const;
   void write_cracks(const Simulation& sim, const std::filesystem::path& path) const;
   std::string folder_;
   bool writes_files_ = true;  // RecorderSetup::writes_files
