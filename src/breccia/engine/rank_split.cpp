@@ -410,41 +410,94 @@ void Simulation::exchange_step_loads(const PairList& pairs) {
   arrange_shares(s.own, shares, s.incoming);
 }
 
-// One collective for every field (a run gathers after each step: its latency counts).
+namespace {
+
+// The fields a gather brings, in their order (empty fields, such as the 3D angles, carry none).
+template <class Store, class F>
+void for_each_gathered_field(Store& p, F&& f) {
+  f(p.pos_rad);
+  f(p.vel);
+  f(p.angvel);
+  f(p.force);
+  f(p.torque);
+  f(p.orientation);
+  f(p.angle);
+  f(p.displacement);
+}
+
+std::size_t gathered_bytes_per_grain(const ParticleStore& p) {
+  std::size_t n = 0;
+  for_each_gathered_field(p, [&](const auto& v) { n += v.empty() ? 0 : sizeof(v[0]); });
+  return n;
+}
+
+}  // namespace
+
+// One collective for every field (it may come after each step: its latency counts).
 void Simulation::gather_particles() {
-  if (!split_) return;
+  if (!split_ || split_->particles_whole) return;
   const std::vector<IndexRange>& ranges = split_->ranges;
-  const auto each_field = [&](auto&& f) {
-    f(p_.pos_rad);
-    f(p_.vel);
-    f(p_.angvel);
-    f(p_.force);
-    f(p_.torque);
-    f(p_.orientation);
-    f(p_.angle);
-    f(p_.displacement);
-  };
-  // Every field's bytes of a range of grains (empty fields, such as the 3D angles, have none).
-  const auto bytes_of = [&](IndexRange r) {
-    std::size_t n = 0;
-    each_field([&](const auto& v) { n += v.empty() ? 0 : r.size() * sizeof(v[0]); });
-    return n;
-  };
+  const std::size_t grain_bytes = gathered_bytes_per_grain(p_);
   const IndexRange own = split_->own;
   std::string mine;
-  mine.reserve(bytes_of(own));
-  each_field([&](const auto& v) {
+  mine.reserve(own.size() * grain_bytes);
+  for_each_gathered_field(p_, [&](const auto& v) {
     if (!v.empty()) put_range(mine, v.data() + own.begin, own.size());
   });
   std::vector<std::size_t> sizes(ranges.size());
-  for (std::size_t r = 0; r < ranges.size(); ++r) sizes[r] = bytes_of(ranges[r]);
+  for (std::size_t r = 0; r < ranges.size(); ++r) sizes[r] = ranges[r].size() * grain_bytes;
   const std::vector<std::string> all = ranks::all_gather(mine, sizes);
   for (std::size_t r = 0; r < all.size(); ++r) {
     if (r == static_cast<std::size_t>(ranks::rank())) continue;
     std::size_t at = 0;
-    each_field([&](auto& v) {
+    for_each_gathered_field(p_, [&](auto& v) {
       if (!v.empty()) take_range(all[r], at, v.data() + ranges[r].begin, ranges[r].size());
     });
+  }
+  split_->particles_whole = true;
+}
+
+// The listed grains' fields, grain by grain, from their owners in rank order.
+void Simulation::gather_grains(const GrainReads& reads) {
+  const std::span<const std::uint32_t> grains = reads.some;
+  // Checked in one process too, where a reader's list is tested most.
+  if (!std::is_sorted(grains.begin(), grains.end()) ||
+      (!grains.empty() && grains.back() >= p_.size()))
+    throw std::logic_error("Simulation::gather_grains: the grains are not ascending indexes");
+  if (!split_ || split_->particles_whole) return;
+  if (reads.all) {
+    gather_particles();
+    return;
+  }
+  if (grains.empty()) return;
+  const std::vector<IndexRange>& ranges = split_->ranges;
+  const std::size_t grain_bytes = gathered_bytes_per_grain(p_);
+  // Each rank's part of the list: a run of it, as the list is ascending.
+  std::vector<std::span<const std::uint32_t>> parts(ranges.size());
+  std::size_t from = 0;
+  for (std::size_t r = 0; r < ranges.size(); ++r) {
+    std::size_t to = from;
+    while (to < grains.size() && grains[to] < ranges[r].end) ++to;
+    parts[r] = grains.subspan(from, to - from);
+    from = to;
+  }
+  const auto me = static_cast<std::size_t>(ranks::rank());
+  std::string mine;
+  mine.reserve(parts[me].size() * grain_bytes);
+  for (const std::uint32_t i : parts[me])
+    for_each_gathered_field(p_, [&](const auto& v) {
+      if (!v.empty()) put_range(mine, v.data() + i, 1);
+    });
+  std::vector<std::size_t> sizes(ranges.size());
+  for (std::size_t r = 0; r < ranges.size(); ++r) sizes[r] = parts[r].size() * grain_bytes;
+  const std::vector<std::string> all = ranks::all_gather(mine, sizes);
+  for (std::size_t r = 0; r < all.size(); ++r) {
+    if (r == me) continue;
+    std::size_t at = 0;
+    for (const std::uint32_t i : parts[r])
+      for_each_gathered_field(p_, [&](auto& v) {
+        if (!v.empty()) take_range(all[r], at, v.data() + i, 1);
+      });
   }
 }
 

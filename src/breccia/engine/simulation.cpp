@@ -211,6 +211,7 @@ void Simulation::step() {
   advance_walls();
   time_ += dt_;
   ++step_;
+  if (split_) split_->particles_whole = false;  // the other ranks' grains moved
 }
 
 void Simulation::retire_interactions() {

@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <tuple>
 #include <variant>
@@ -158,6 +159,16 @@ struct RankSplit {
   IncomingShares<CrossSlot> incoming;
   std::vector<CrackRecord> cracks;  // this rank's cracks of the step, in pair order
   bool bonds_anywhere = false;      // a bond or joint on some rank (central_forces_only)
+  bool particles_whole = true;      // every grain's entries current (gathered since the step)
+};
+
+// The grains a reader of a split sample needs current besides its own and the walls: none, a
+// few (ascending indexes), or all of them. Readers declare them so that a run brings only those
+// from their owners (Simulation::gather_grains) instead of every grain after every step.
+struct GrainReads {
+  bool all = false;
+  std::span<const std::uint32_t> some;  // when not all
+  static GrainReads every() { return {.all = true, .some = {}}; }
 };
 
 // Stress carried by the pair forces (docs/physics.md §6.5): the sum over interacting pairs of l (x)
@@ -272,8 +283,12 @@ class Simulation {
   // Every rank's particles, in rank order (empty when the sample is not split).
   const std::vector<IndexRange>& rank_ranges() const noexcept;
   // Makes every rank's particle store whole and current (collective): positions, velocities,
-  // orientations, displacements and the last step's loads.
+  // orientations, displacements and the last step's loads. Nothing when it is current already
+  // (no step since the last gather).
   void gather_particles();
+  // Makes the grains a reader declares current on every rank (collective: every rank passes the
+  // same): all of them through gather_particles, or the listed ones from their owners.
+  void gather_grains(const GrainReads& reads);
   // Gathers a split sample back whole on every rank (collective): the particles, the lists, the
   // contact histories, the bonds and joints and the wall contacts, each in the order one process
   // holds them, so that the state is that one process would hold at this step to the bit (its

@@ -117,6 +117,11 @@ class AeMonitor : public Recorder {
   std::string_view name() const noexcept override { return kind; }
   // Cheap unless bonds broke in the step or an event is open.
   void after_step(const Simulation& sim, const Protocol& test) override;
+  // The test's measure, the grains around the sources and their kinetic energies.
+  GrainReads grains_read_after_step(const Simulation& sim) const override {
+    return sim.cracks().size() > cracks_seen() || has_open_events() ? GrainReads::every()
+                                                                    : GrainReads{};
+  }
   void finish(const Simulation&) override { finish(); }
   void save_state(ArchiveWriter& a) const override { save(a); }
   std::vector<std::string> files() const override { return {}; }  // events.csv: the analysis

@@ -47,6 +47,9 @@ class Recorder {
   virtual std::string_view name() const noexcept = 0;  // the registry's `kind`
   // After every step of the loading. Called often: return at once when there is nothing to do.
   virtual void after_step(const Simulation&, const Protocol&) {}
+  // The grains after_step will read in this step, besides the walls: on a sample split over
+  // ranks the run brings them current first (at_row and finish see the whole sample).
+  virtual GrainReads grains_read_after_step(const Simulation&) const { return {}; }
   // At every history row; what is written here is flushed, so an interrupted run keeps it.
   virtual void at_row(const Simulation&, const Protocol&, const RecordedRow&) {}
   // Whether at_row will read the whole sample's pairs and bonds at this row (a snapshot's

@@ -84,6 +84,8 @@ class AbrasionTest final : public Protocol {
   }
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   void control(Simulation& sim) override;
+  // The grit layer's servo reads the grit's forces (its grains come last: ascending).
+  GrainReads grains_read_by_control() const override { return {.all = false, .some = grit_}; }
   AxialState measure(const Simulation& sim) const override;
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }

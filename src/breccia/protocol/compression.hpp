@@ -55,6 +55,10 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   // Servo update of the lateral walls; call before every step during loading.
   void control(Simulation& sim) override;
+  // A membrane finds its chains among every grain before each step.
+  GrainReads grains_read_by_control() const override {
+    return confined() && lateral_ == LateralBoundary::Membrane ? GrainReads::every() : GrainReads{};
+  }
 
   AxialState measure(const Simulation& sim) const override;
   // Updates the peak tracking; true when the test should stop. The post-peak rule applies only

@@ -159,6 +159,10 @@ class Protocol {
   virtual std::uint64_t start(Simulation& sim, double bar_wave_speed) = 0;
   // Before every loading step (servo walls, driven grips).
   virtual void control(Simulation& sim) = 0;
+  // The grains control() reads besides the walls (a membrane's, a grit layer's): on a sample
+  // split over ranks the run brings them current first. measure() and the rest read the whole
+  // sample, which the run gathers at each row.
+  virtual GrainReads grains_read_by_control() const { return {}; }
   virtual AxialState measure(const Simulation& sim) const = 0;
   // Updates the peak tracking; true when the test should stop.
   virtual bool finished(const AxialState& s, std::size_t broken_bonds) = 0;

@@ -277,12 +277,17 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
       return e;
     }
     if (sim.step_count() % interval == 0) sim.request_energy_sample();
+    // A split sample's ranks share the grains each reader declares (gather_grains is nothing
+    // otherwise), and every grain at a row.
+    sim.gather_grains(test.grains_read_by_control());
     test.control(sim);
     sim.step();
-    // The test and the recorders read every grain: a split sample's ranks share their own.
-    if (sim.split()) sim.gather_particles();
-    for (const auto& r : ss.recorders) r->after_step(sim, test);
+    for (const auto& r : ss.recorders) {
+      sim.gather_grains(r->grains_read_after_step(sim));
+      r->after_step(sim, test);
+    }
     if ((sim.step_count() - 1) % interval != 0) continue;
+    sim.gather_particles();
     const AxialState a = test.measure(sim);
     check_finite_state(sim, a);
     record_row(ss, a);
