@@ -7,7 +7,9 @@
 
 #include "breccia/core/archive.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/core/byte_text.hpp"
 #include "breccia/core/format.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/spec/experiment.hpp"
 
 namespace breccia {
@@ -156,6 +158,10 @@ AeMonitor& AeMonitor::operator=(AeMonitor&& o) noexcept {
   steps_ = o.steps_;
   grid_ = std::move(o.grid_);
   incoming_ = std::move(o.incoming_);
+  gathered_ = std::move(o.gathered_);
+  near_ = std::move(o.near_);
+  reads_ = std::move(o.reads_);
+  prepared_step_ = o.prepared_step_;
   wave_speed_source_ = std::move(o.wave_speed_source_);
   bind_clusterer();  // the moved callbacks still point at `o`
   return *this;
@@ -171,17 +177,17 @@ std::pair<const std::uint32_t*, const std::uint32_t*> AeMonitor::Grid::at(
   return {items.data() + start[k], items.data() + start[k + 1]};
 }
 
-void AeMonitor::build_grid(const Simulation& sim) {
+template <class IndexAt>
+void AeMonitor::fill_grid(const ParticleStore& p, std::size_t n, IndexAt at) {
   const double h = s_.source_radius;
-  const auto& pr = sim.particles().pos_rad;
-  const std::size_t n = pr.size();
+  const auto& pr = p.pos_rad;
   auto key = [h](const Vec3& x, int k) { return static_cast<long long>(std::floor(x[k] / h)); };
   std::array<long long, 3> lo{}, hi{};
   if (n > 0)
-    for (int k = 0; k < 3; ++k) lo[k] = hi[k] = key(pr[0].x, k);
-  for (const PosRad& q : pr)
+    for (int k = 0; k < 3; ++k) lo[k] = hi[k] = key(pr[at(0)].x, k);
+  for (std::size_t m = 0; m < n; ++m)
     for (std::size_t k = 0; k < 3; ++k) {
-      const long long c = key(q.x, static_cast<int>(k));
+      const long long c = key(pr[at(m)].x, static_cast<int>(k));
       lo[k] = std::min(lo[k], c);
       hi[k] = std::max(hi[k], c);
     }
@@ -194,28 +200,49 @@ void AeMonitor::build_grid(const Simulation& sim) {
     const long long a = key(x, 0) - lo[0], b = key(x, 1) - lo[1], c = key(x, 2) - lo[2];
     return static_cast<std::size_t>((a * g.size[1] + b) * g.size[2] + c);
   };
-  for (const PosRad& q : pr) ++g.start[cell_of(q.x) + 1];
+  for (std::size_t m = 0; m < n; ++m) ++g.start[cell_of(pr[at(m)].x) + 1];
   for (std::size_t k = 1; k < g.start.size(); ++k) g.start[k] += g.start[k - 1];
   g.items.resize(n);
   // A stable fill: each cell lists its particles in index order.
   std::vector<std::uint32_t> fill(g.start.begin(), g.start.end() - 1);
-  for (std::uint32_t i = 0; i < n; ++i) g.items[fill[cell_of(pr[i].x)]++] = i;
+  for (std::size_t m = 0; m < n; ++m) {
+    const std::uint32_t i = at(m);
+    g.items[fill[cell_of(pr[i].x)]++] = i;
+  }
 }
 
-void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
+// Of a split sample, the grid holds the grains near the step's new cracks alone (found by their
+// owners, whose positions are current): what a query near a new crack meets in it is what it
+// meets in the whole sample's grid, in the same order.
+void AeMonitor::build_grid(const Simulation& sim) {
+  const ParticleStore& p = sim.particles();
+  if (sim.split()) {
+    expect_prepared(sim);
+    fill_grid(p, near_.size(), [&](std::size_t k) { return near_[k]; });
+    return;
+  }
+  fill_grid(p, p.size(), [](std::size_t k) { return static_cast<std::uint32_t>(k); });
+}
+
+template <class F>
+void AeMonitor::for_grains_near(const ParticleStore& p, const Vec3& x, F&& f) const {
   const double h = s_.source_radius;
-  const auto& p = sim.particles();
   const long long a = static_cast<long long>(std::floor(x.x / h));
   const long long b = static_cast<long long>(std::floor(x.y / h));
   const long long c = static_cast<long long>(std::floor(x.z / h));
-  std::vector<Watched> add;
   for (long long da = -1; da <= 1; ++da)
     for (long long db = -1; db <= 1; ++db)
       for (long long dc = -1; dc <= 1; ++dc) {
         const auto [first, last] = grid_.at(a + da, b + db, c + dc);
         for (const std::uint32_t* it = first; it != last; ++it)
-          if (norm2(p.pos_rad[*it].x - x) <= h * h) add.push_back({*it, kinetic(p, *it)});
+          if (norm2(p.pos_rad[*it].x - x) <= h * h) f(*it);
       }
+}
+
+void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
+  const ParticleStore& p = sim.particles();
+  std::vector<Watched> add;
+  for_grains_near(p, x, [&](std::uint32_t i) { add.push_back({i, kinetic(p, i)}); });
   for (const Watched& w : add) {
     const auto pos =
         std::lower_bound(o.watched.begin(), o.watched.end(), w.particle,
@@ -224,6 +251,61 @@ void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
     o.watched.insert(pos, w);
     o.ke_baseline += w.ke0;
   }
+}
+
+void AeMonitor::find_near_new_cracks(const Simulation& sim, CrackCatalogue::Reader& cracks) {
+  near_.clear();
+  if (cracks.size() <= seen_) return;  // alike on every rank: no exchange
+  const ParticleStore& p = sim.particles();
+  const IndexRange own = sim.owned_particles();
+  fill_grid(p, own.size(), [&](std::size_t k) { return static_cast<std::uint32_t>(own.begin + k); });
+  std::vector<std::uint32_t> mine;
+  for (std::size_t k = seen_; k < cracks.size(); ++k)
+    for_grains_near(p, cracks[k].position, [&](std::uint32_t i) { mine.push_back(i); });
+  std::sort(mine.begin(), mine.end());
+  mine.erase(std::unique(mine.begin(), mine.end()), mine.end());
+  std::string bytes;
+  bytes::put_range(bytes, mine.data(), mine.size());
+  // The ranks' parts in rank order: ascending.
+  for (const std::string& part : ranks::all_gather(bytes)) {
+    const std::size_t count = part.size() / sizeof(std::uint32_t), at = near_.size();
+    near_.resize(at + count);
+    std::size_t from = 0;
+    bytes::take_range(part, from, near_.data() + at, count);
+  }
+}
+
+GrainReads AeMonitor::grains_read_after_step(const Simulation& sim, const Protocol& test) {
+  if (sim.cracks().size() <= cracks_seen() && !has_open_events()) return {};
+  if (!sim.split()) return GrainReads::every();
+  auto cracks = sim.cracks().reader();
+  find_near_new_cracks(sim, cracks);
+  gather_loads(sim, cracks);
+  prepared_step_ = sim.step_count();
+  const GrainReads measured = test.grains_read_by_measure();
+  if (measured.all) return GrainReads::every();
+  const ParticleStore& ps = sim.particles();
+  reads_.assign(measured.some.begin(), measured.some.end());
+  reads_.insert(reads_.end(), near_.begin(), near_.end());
+  for (std::size_t k = seen_; k < cracks.size(); ++k) {
+    reads_.push_back(static_cast<std::uint32_t>(ps.index_of(cracks[k].id1)));
+    reads_.push_back(static_cast<std::uint32_t>(ps.index_of(cracks[k].id2)));
+  }
+  for (const auto& [root, o] : open_) {
+    reads_.insert(reads_.end(), o.source.begin(), o.source.end());
+    for (const Watched& w : o.watched) reads_.push_back(w.particle);
+  }
+  reads_.insert(reads_.end(), gathered_.grains.begin(), gathered_.grains.end());
+  for (const Simulation::PairLoad& l : gathered_.loads) reads_.push_back(l.other);
+  std::sort(reads_.begin(), reads_.end());
+  reads_.erase(std::unique(reads_.begin(), reads_.end()), reads_.end());
+  return {.all = false, .some = reads_};
+}
+
+void AeMonitor::expect_prepared(const Simulation& sim) const {
+  if (prepared_step_ != sim.step_count())
+    throw std::logic_error(
+        "AeMonitor: on a split sample, grains_read_after_step comes before after_step");
 }
 
 AeMonitor::IncomingSlots AeMonitor::incoming(std::uint32_t p) const {
@@ -284,7 +366,7 @@ void AeMonitor::gather_loads(const Simulation& sim, CrackCatalogue::Reader& crac
 // a neighbour rebuild makes a new list, whose slots are read afresh.
 void AeMonitor::find_incoming(const Simulation& sim, CrackCatalogue::Reader& cracks) {
   if (sim.split()) {
-    gather_loads(sim, cracks);
+    expect_prepared(sim);  // gathered there, with the grains the step reads
     return;
   }
   const ParticleStore& ps = sim.particles();

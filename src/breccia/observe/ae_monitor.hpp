@@ -117,11 +117,11 @@ class AeMonitor : public Recorder {
   std::string_view name() const noexcept override { return kind; }
   // Cheap unless bonds broke in the step or an event is open.
   void after_step(const Simulation& sim, const Protocol& test) override;
-  // The test's measure, the grains around the sources and their kinetic energies.
-  GrainReads grains_read_after_step(const Simulation& sim) const override {
-    return sim.cracks().size() > cracks_seen() || has_open_events() ? GrainReads::every()
-                                                                    : GrainReads{};
-  }
+  // In steps with new cracks or open events: the test's measured grains, the new cracks' grains
+  // and those within the source radius of them, the open events' sources and watched grains,
+  // and the grains in touch with the sources (collective on a split sample; every grain in one
+  // process, where nothing is gathered).
+  GrainReads grains_read_after_step(const Simulation& sim, const Protocol& test) override;
   void finish(const Simulation&) override { finish(); }
   void save_state(ArchiveWriter& a) const override { save(a); }
   std::vector<std::string> files() const override { return {}; }  // events.csv: the analysis
@@ -152,6 +152,13 @@ class AeMonitor : public Recorder {
   void merge(std::size_t kept, std::size_t gone);
   void close(std::size_t root);
   void build_grid(const Simulation& sim);
+  // The grid of `count` grains, the k-th being at(k), in ascending order.
+  template <class IndexAt>
+  void fill_grid(const ParticleStore& p, std::size_t count, IndexAt at);
+  // Calls f(i) for each grain i of the grid within the source radius of x, in the grid's order.
+  template <class F>
+  void for_grains_near(const ParticleStore& p, const Vec3& x, F&& f) const;
+  void find_near_new_cracks(const Simulation& sim, CrackCatalogue::Reader& cracks);
   void find_incoming(const Simulation& sim, CrackCatalogue::Reader& cracks);
 
   AeSettings s_;
@@ -198,6 +205,12 @@ class AeMonitor : public Recorder {
     std::vector<Simulation::PairLoad> loads;
   } gathered_;
   void gather_loads(const Simulation& sim, CrackCatalogue::Reader& cracks);
+  // Of a split sample, read at the step given before after_step (scratch, not saved): every
+  // rank's grains within the source radius of the step's new cracks, ascending (the grid of
+  // after_step holds these alone), and the grains the step reads.
+  std::vector<std::uint32_t> near_, reads_;
+  std::uint64_t prepared_step_ = ~std::uint64_t{0};
+  void expect_prepared(const Simulation& sim) const;
   // Calls f(q, force exerted by p on q) for every neighbour pair of p, in the list's order.
   template <class F>
   void for_pairs_of(const Simulation& sim, std::uint32_t p, F&& f) const;

@@ -48,8 +48,9 @@ class Recorder {
   // After every step of the loading. Called often: return at once when there is nothing to do.
   virtual void after_step(const Simulation&, const Protocol&) {}
   // The grains after_step will read in this step, besides the walls: on a sample split over
-  // ranks the run brings them current first (at_row and finish see the whole sample).
-  virtual GrainReads grains_read_after_step(const Simulation&) const { return {}; }
+  // ranks the run brings them current first (at_row and finish see the whole sample). Called
+  // on every rank before after_step: it may read what it needs to know them collectively.
+  virtual GrainReads grains_read_after_step(const Simulation&, const Protocol&) { return {}; }
   // At every history row; what is written here is flushed, so an interrupted run keeps it.
   virtual void at_row(const Simulation&, const Protocol&, const RecordedRow&) {}
   // Whether at_row will read the whole sample's pairs and bonds at this row (a snapshot's

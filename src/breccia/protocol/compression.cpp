@@ -96,6 +96,7 @@ void PlatenCompression::place_gauges(const Simulation& sim) {
   gauge_length0_ = gauge_length(sim);
   find_face_grains(sim, z0_ + 0.25 * h0_, z0_ + 0.75 * h0_, waist_);
   particle_widths(sim, waist_, waist0_);
+  measured_.clear();  // made again from these sets when asked
 }
 
 double PlatenCompression::gauge_length(const Simulation& sim) const {
@@ -350,6 +351,18 @@ AxialState PlatenCompression::measure(const Simulation& sim) const {
   const double gx = (waist0_[0] - w[0]) / waist0_[0], gy = (waist0_[1] - w[1]) / waist0_[1];
   s.gauge_lateral_strain = lateral_ == LateralBoundary::Cylinder || planar_ ? gx : 0.5 * (gx + gy);
   return s;
+}
+
+GrainReads PlatenCompression::grains_read_by_measure() const {
+  if (confined() && lateral_ == LateralBoundary::Membrane) return GrainReads::every();
+  if (measured_.empty()) {
+    for (const auto* sets : {&face_, &waist_})
+      for (const auto& s : *sets) measured_.insert(measured_.end(), s.begin(), s.end());
+    for (const auto& s : gauge_layer_) measured_.insert(measured_.end(), s.begin(), s.end());
+    std::sort(measured_.begin(), measured_.end());
+    measured_.erase(std::unique(measured_.begin(), measured_.end()), measured_.end());
+  }
+  return {.all = false, .some = measured_};
 }
 
 bool PlatenCompression::finished(const AxialState& s, std::size_t broken_bonds) {

@@ -61,6 +61,8 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   }
 
   AxialState measure(const Simulation& sim) const override;
+  // The gauges' layers and the lateral faces' grains (a membrane's chains: every grain).
+  GrainReads grains_read_by_measure() const override;
   // Updates the peak tracking; true when the test should stop. The post-peak rule applies only
   // once bonds have started to break during axial loading, so that ramp-up oscillations cannot
   // end a test.
@@ -145,6 +147,7 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   // side), and the lateral-face grains of the middle half (as face_), with their initial spans.
   std::vector<std::uint32_t> gauge_layer_[2];
   std::vector<std::uint32_t> waist_[4];
+  mutable std::vector<std::uint32_t> measured_;  // the grains above, ascending (made when asked)
   double gauge_length0_ = 0.0, waist0_[2] = {0.0, 0.0};
   double peak_ = 0.0, k_min_ = 0.0;
   std::size_t broken_at_start_ = 0;  // cracks when axial loading began

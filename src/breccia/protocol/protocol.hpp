@@ -164,6 +164,9 @@ class Protocol {
   // sample, which the run gathers at each row.
   virtual GrainReads grains_read_by_control() const { return {}; }
   virtual AxialState measure(const Simulation& sim) const = 0;
+  // The grains measure() reads besides the walls (a reader between rows, such as the AE
+  // monitor, brings them current on a split sample); by default every grain.
+  virtual GrainReads grains_read_by_measure() const { return GrainReads::every(); }
   // Updates the peak tracking; true when the test should stop.
   virtual bool finished(const AxialState& s, std::size_t broken_bonds) = 0;
   virtual const std::string& stop_reason() const noexcept = 0;

@@ -283,7 +283,7 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
     test.control(sim);
     sim.step();
     for (const auto& r : ss.recorders) {
-      sim.gather_grains(r->grains_read_after_step(sim));
+      sim.gather_grains(r->grains_read_after_step(sim, test));
       r->after_step(sim, test);
     }
     if ((sim.step_count() - 1) % interval != 0) continue;
