@@ -6,8 +6,8 @@
 #include <stdexcept>
 
 #include "breccia/core/archive.hpp"
-#include "breccia/core/error.hpp"
 #include "breccia/core/byte_text.hpp"
+#include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 #include "breccia/core/ranks.hpp"
 #include "breccia/spec/experiment.hpp"
@@ -258,7 +258,8 @@ void AeMonitor::find_near_new_cracks(const Simulation& sim, CrackCatalogue::Read
   if (cracks.size() <= seen_) return;  // alike on every rank: no exchange
   const ParticleStore& p = sim.particles();
   const IndexRange own = sim.owned_particles();
-  fill_grid(p, own.size(), [&](std::size_t k) { return static_cast<std::uint32_t>(own.begin + k); });
+  fill_grid(p, own.size(),
+            [&](std::size_t k) { return static_cast<std::uint32_t>(own.begin + k); });
   std::vector<std::uint32_t> mine;
   for (std::size_t k = seen_; k < cracks.size(); ++k)
     for_grains_near(p, cracks[k].position, [&](std::uint32_t i) { mine.push_back(i); });
