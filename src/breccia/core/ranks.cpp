@@ -24,6 +24,7 @@ struct State {
   bool waited = false;            // a collective call has run
   bool shared_failure = false;    // on_root passed a failure to every rank
   double exchange_seconds = 0.0;  // wall time inside exchange() (exchange_seconds())
+  std::uint64_t received_bytes = 0;
 };
 
 State& state() noexcept {
@@ -263,13 +264,20 @@ std::vector<std::string> exchange(const std::vector<std::string>& outgoing,
                                   const std::vector<std::size_t>& expected) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<std::string> in = exchange_messages(outgoing, expected);
-  state().exchange_seconds +=
+  State& s = state();
+  s.exchange_seconds +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (std::size_t r = 0; r < in.size(); ++r)
+    if (r != static_cast<std::size_t>(s.rank)) s.received_bytes += in[r].size();
   return in;
 }
 
 double exchange_seconds() noexcept {
   return state().exchange_seconds;
+}
+
+std::uint64_t received_bytes() noexcept {
+  return state().received_bytes;
 }
 
 std::vector<std::string> all_gather(const std::string& mine) {

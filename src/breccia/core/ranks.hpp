@@ -68,6 +68,8 @@ std::vector<std::string> exchange(const std::vector<std::string>& outgoing,
 // Wall time this rank has spent in exchange() and all_gather() so far, waiting included: the
 // communication share of a split run (bench/bench_engine.cpp).
 double exchange_seconds() noexcept;
+// Bytes this rank has received from the other ranks in exchange() and all_gather() so far.
+std::uint64_t received_bytes() noexcept;
 // Every rank's text, in rank order, on every rank (`expected`: their sizes, when known).
 std::vector<std::string> all_gather(const std::string& mine);
 std::vector<std::string> all_gather(const std::string& mine,

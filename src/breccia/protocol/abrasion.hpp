@@ -87,6 +87,8 @@ class AbrasionTest final : public Protocol {
   // The grit layer's servo reads the grit's forces (its grains come last: ascending).
   GrainReads grains_read_by_control() const override { return {.all = false, .some = grit_}; }
   AxialState measure(const Simulation& sim) const override;
+  // The grit layer's grains (a plate is a wall).
+  GrainReads grains_read_by_measure() const override { return {.all = false, .some = grit_}; }
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -101,6 +102,13 @@ std::uint64_t BrazilianTest::start(Simulation& sim, double bar_wave_speed) {
   }
   peak_ = 0.0;
   return 0;
+}
+
+GrainReads BrazilianTest::grains_read_by_measure() const {
+  if (measured_.empty())
+    std::set_union(left_.begin(), left_.end(), right_.begin(), right_.end(),
+                   std::back_inserter(measured_));
+  return {.all = false, .some = measured_};
 }
 
 AxialState BrazilianTest::measure(const Simulation& sim) const {

@@ -54,6 +54,8 @@ class BrazilianTest final : public Protocol, public StressStrainTest {
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   void control(Simulation&) override {}
   AxialState measure(const Simulation& sim) const override;
+  // The grains at the ends of the horizontal diameter.
+  GrainReads grains_read_by_measure() const override;
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 
@@ -91,7 +93,8 @@ class BrazilianTest final : public Protocol, public StressStrainTest {
 
   Params p_;
   std::size_t bottom_ = 0, top_ = 0;
-  std::vector<std::uint32_t> left_, right_;  // grains at the x extremes (horizontal diameter)
+  std::vector<std::uint32_t> left_, right_;      // grains at the x extremes (horizontal diameter)
+  mutable std::vector<std::uint32_t> measured_;  // both, ascending (made when asked)
   Vec3 centre_;
   double d0_ = 0.0, t_ = 0.0, w0_ = 0.0, y0_ = 0.0, peak_ = 0.0;
   std::string stop_reason_;

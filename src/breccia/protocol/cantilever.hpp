@@ -67,6 +67,8 @@ class CantileverTest final : public Protocol {
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   void control(Simulation& sim) override;
   AxialState measure(const Simulation& sim) const override;
+  // The vice's grains (the rod is a wall).
+  GrainReads grains_read_by_measure() const override { return {.all = false, .some = vice_}; }
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 

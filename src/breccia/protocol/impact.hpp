@@ -66,6 +66,8 @@ class ImpactTest final : public Protocol {
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   void control(Simulation& sim) override;
   AxialState measure(const Simulation& sim) const override;
+  // The ball and the floor are walls.
+  GrainReads grains_read_by_measure() const override { return {}; }
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 

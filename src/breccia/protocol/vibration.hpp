@@ -71,6 +71,8 @@ class VibrationTest final : public Protocol {
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   void control(Simulation& sim) override;
   AxialState measure(const Simulation& sim) const override;
+  // The shaken grains.
+  GrainReads grains_read_by_measure() const override { return {.all = false, .some = face_}; }
   bool finished(const AxialState& s, std::size_t broken_bonds) override;
   const std::string& stop_reason() const noexcept override { return stop_reason_; }
 

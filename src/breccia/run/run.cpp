@@ -21,6 +21,7 @@
 #include "breccia/analysis/crack_pattern.hpp"
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/core/archive.hpp"
+#include "breccia/core/byte_text.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/interrupt.hpp"
 #include "breccia/core/parallel.hpp"
@@ -556,6 +557,25 @@ void write_final_manifest(const fs::path& path, const json& manifest) {
   }
 }
 
+// What each rank of a split sample has received from the others, and its wall time inside the
+// exchanges (waiting included), in this process's life: the split, the ghosts and shares of each
+// step, the grains the test and recorders read, the rows' and checkpoints' gathers. Collective.
+json split_traffic(const LoopEnd& end) {
+  std::string mine;
+  bytes::put(mine, ranks::received_bytes());
+  bytes::put(mine, ranks::exchange_seconds());
+  json received = json::array(), seconds = json::array();
+  for (const std::string& part : ranks::all_gather(mine)) {
+    std::size_t at = 0;
+    received.push_back(bytes::take<std::uint64_t>(part, at));
+    seconds.push_back(bytes::take<double>(part, at));
+  }
+  return {{"loop_steps", end.loop_steps},
+          {"loop_seconds", end.loop_seconds},
+          {"received_bytes", received},
+          {"exchange_seconds", seconds}};
+}
+
 // After the loop: the recorders' last rows, the analysis, summary.json and the manifest.
 RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json& manifest,
                        Session& ss, const LoopEnd& end, const std::function<double()>& wall,
@@ -564,6 +584,10 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   // The last records and the analysis read the whole sample: a split one is gathered; its
   // lead rank alone goes on to the analysis, and the others' part of the run ends there.
   const bool lead = sim.lead_rank();
+  if (sim.split()) {
+    json& launch = manifest.contains("resumed") ? manifest["resumed"].back() : manifest;
+    launch["mpi"]["traffic"] = split_traffic(end);
+  }
   sim.unsplit();
   for (const auto& r : ss.recorders) r->finish(sim);
   const analysis::CompressionResult an = analysis::analyse_compression(ss.loop.series);
