@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -354,7 +355,6 @@ AxialState PlatenCompression::measure(const Simulation& sim) const {
 }
 
 GrainReads PlatenCompression::grains_read_by_measure() const {
-  if (confined() && lateral_ == LateralBoundary::Membrane) return GrainReads::every();
   if (measured_.empty()) {
     for (const auto* sets : {&face_, &waist_})
       for (const auto& s : *sets) measured_.insert(measured_.end(), s.begin(), s.end());
@@ -362,7 +362,13 @@ GrainReads PlatenCompression::grains_read_by_measure() const {
     std::sort(measured_.begin(), measured_.end());
     measured_.erase(std::unique(measured_.begin(), measured_.end()), measured_.end());
   }
-  return {.all = false, .some = measured_};
+  if (!(confined() && lateral_ == LateralBoundary::Membrane))
+    return {.all = false, .some = measured_};
+  const std::vector<std::uint32_t>& chains = membrane_.chain_grains();
+  measured_now_.clear();
+  std::set_union(measured_.begin(), measured_.end(), chains.begin(), chains.end(),
+                 std::back_inserter(measured_now_));
+  return {.all = false, .some = measured_now_};
 }
 
 bool PlatenCompression::finished(const AxialState& s, std::size_t broken_bonds) {

@@ -55,13 +55,10 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   // Servo update of the lateral walls; call before every step during loading.
   void control(Simulation& sim) override;
-  // A membrane finds its chains among every grain before each step.
-  GrainReads grains_read_by_control() const override {
-    return confined() && lateral_ == LateralBoundary::Membrane ? GrainReads::every() : GrainReads{};
-  }
 
   AxialState measure(const Simulation& sim) const override;
-  // The gauges' layers and the lateral faces' grains (a membrane's chains: every grain).
+  // The gauges' layers and the lateral faces' grains, or a membrane's chains (a membrane finds
+  // them in control, and brings its chains' grains from their owners there).
   GrainReads grains_read_by_measure() const override;
   // Updates the peak tracking; true when the test should stop. The post-peak rule applies only
   // once bonds have started to break during axial loading, so that ramp-up oscillations cannot
@@ -148,6 +145,7 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   std::vector<std::uint32_t> gauge_layer_[2];
   std::vector<std::uint32_t> waist_[4];
   mutable std::vector<std::uint32_t> measured_;  // the grains above, ascending (made when asked)
+  mutable std::vector<std::uint32_t> measured_now_;  // with the membrane's chains of the step
   double gauge_length0_ = 0.0, waist0_[2] = {0.0, 0.0};
   double peak_ = 0.0, k_min_ = 0.0;
   std::size_t broken_at_start_ = 0;  // cracks when axial loading began

@@ -2,43 +2,87 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
+#include "breccia/core/byte_text.hpp"
+#include "breccia/core/ranks.hpp"
 #include "breccia/engine/simulation.hpp"
 
 namespace breccia {
 
-void Membrane2D::find_chains(const ParticleStore& p, double y_bottom, double y_top) {
+namespace {
+
+// How far a grain's surface reaches out on a side: towards -x on the left (0), +x on the right.
+double reach(const PosRad& q, int side) {
+  return side == 0 ? -(q.x.x - q.r) : q.x.x + q.r;
+}
+
+}  // namespace
+
+void Membrane2D::find_chains(const ParticleStore& p, double y_bottom, double y_top,
+                             std::size_t from, std::size_t to) {
   double r_sum = 0.0;
   for (const PosRad& q : p.pos_rad) r_sum += q.r;
   const double bin = 2.0 * r_sum / static_cast<double>(std::max<std::size_t>(p.size(), 1));
   const double height = y_top - y_bottom;
   const auto bins = static_cast<std::size_t>(std::max(1.0, std::ceil(height / bin)));
   for (int side = 0; side < 2; ++side) best_[side].assign(bins, -1);
-  for (std::size_t i = 0; i < p.size(); ++i) {
+  for (std::size_t i = from; i < to; ++i) {
     const PosRad& q = p.pos_rad[i];
     if (q.x.y < y_bottom || q.x.y > y_top) continue;
     const auto k = std::min(bins - 1, static_cast<std::size_t>((q.x.y - y_bottom) / bin));
-    // Left: the surface reaching furthest towards -x; right: towards +x.
     for (int side = 0; side < 2; ++side) {
       std::int64_t& b = best_[side][k];
-      const double reach = side == 0 ? -(q.x.x - q.r) : q.x.x + q.r;
-      if (b < 0) {
+      if (b < 0 || reach(q, side) > reach(p.pos_rad[static_cast<std::size_t>(b)], side))
         b = static_cast<std::int64_t>(i);
-        continue;
-      }
-      const PosRad& o = p.pos_rad[static_cast<std::size_t>(b)];
-      if (reach > (side == 0 ? -(o.x.x - o.r) : o.x.x + o.r)) b = static_cast<std::int64_t>(i);
     }
   }
+}
+
+void Membrane2D::choose_over_ranks(const ParticleStore& p) {
+  // Each rank's choice with its reach, which only its owner knows current.
+  std::string mine;
+  for (int side = 0; side < 2; ++side)
+    for (const std::int64_t b : best_[side]) {
+      bytes::put(mine, b);
+      bytes::put(mine, b < 0 ? 0.0 : reach(p.pos_rad[static_cast<std::size_t>(b)], side));
+    }
+  std::array<std::vector<double>, 2> best_reach;
+  for (int side = 0; side < 2; ++side) {
+    best_[side].assign(best_[side].size(), -1);
+    best_reach[side].assign(best_[side].size(), 0.0);
+  }
+  // In rank order, a later rank's grain only when it reaches strictly further: the first grain
+  // in index order that reaches furthest, as one process's search keeps.
+  for (const std::string& part : ranks::all_gather(mine)) {
+    std::size_t at = 0;
+    for (int side = 0; side < 2; ++side)
+      for (std::size_t k = 0; k < best_[side].size(); ++k) {
+        const auto b = bytes::take<std::int64_t>(part, at);
+        const auto r = bytes::take<double>(part, at);
+        if (b >= 0 && (best_[side][k] < 0 || r > best_reach[side][k])) {
+          best_[side][k] = b;
+          best_reach[side][k] = r;
+        }
+      }
+  }
+}
+
+void Membrane2D::make_chains() {
   for (int side = 0; side < 2; ++side) {
     chains_[side].clear();
     for (std::int64_t b : best_[side])
       if (b >= 0) chains_[side].push_back(static_cast<std::uint32_t>(b));
   }
+  chain_grains_.assign(chains_[0].begin(), chains_[0].end());
+  chain_grains_.insert(chain_grains_.end(), chains_[1].begin(), chains_[1].end());
+  std::sort(chain_grains_.begin(), chain_grains_.end());
+  chain_grains_.erase(std::unique(chain_grains_.begin(), chain_grains_.end()), chain_grains_.end());
 }
 
 void Membrane2D::find(const ParticleStore& p, double y_bottom, double y_top) {
-  find_chains(p, y_bottom, y_top);
+  find_chains(p, y_bottom, y_top, 0, p.size());
+  make_chains();
   measure_lengths(p, y_bottom, y_top);
 }
 
@@ -61,7 +105,16 @@ void Membrane2D::measure_lengths(const ParticleStore& p, double y_bottom, double
 
 void Membrane2D::apply(Simulation& sim, double sigma3, double y_bottom, double y_top) {
   const ParticleStore& p = sim.particles();
-  find(p, y_bottom, y_top);
+  if (sim.split()) {
+    const IndexRange own = sim.owned_particles();
+    find_chains(p, y_bottom, y_top, own.begin, own.end);
+    choose_over_ranks(p);
+    make_chains();
+    sim.gather_grains({.all = false, .some = chain_grains_});
+    measure_lengths(p, y_bottom, y_top);
+  } else {
+    find(p, y_bottom, y_top);
+  }
   std::vector<Vec3>& load = sim.external_force();
   const double pressure_per_length = sigma3 * p.thickness();
   double inward = 0.0;

@@ -8,6 +8,10 @@
 // chain. The chain's polyline runs through the grain centres, from a point on the bottom platen
 // below the first grain to a point on the top platen above the last one.
 //
+// On a sample split over MPI ranks each rank searches its own grains, the ranks' choices are
+// combined bin by bin in rank order (the first grain that reaches furthest, as one process's
+// search in index order finds it), and the chains' grains are brought from their owners.
+//
 // Loading it: each segment of the polyline, of length l and unit inward normal n, carries the
 // pressure's force sigma_3 t l n (t the thickness), half to each end grain (the end segments
 // wholly to their grain). The inward-normal components sum to sigma_3 t (y_top - y_bottom) on
@@ -40,9 +44,16 @@ class Membrane2D {
   const std::array<std::vector<std::uint32_t>, 2>& chains() const noexcept { return chains_; }
   // Finds the chains and the chain length each grain carries, without loading them.
   void find(const ParticleStore& p, double y_bottom, double y_top);
+  // Both chains' grains, ascending (as of the last search).
+  const std::vector<std::uint32_t>& chain_grains() const noexcept { return chain_grains_; }
 
  private:
-  void find_chains(const ParticleStore& p, double y_bottom, double y_top);
+  // The bins' choices among the grains [from, to).
+  void find_chains(const ParticleStore& p, double y_bottom, double y_top, std::size_t from,
+                   std::size_t to);
+  // Each bin's choice over every rank's (collective).
+  void choose_over_ranks(const ParticleStore& p);
+  void make_chains();
   // The chain length each grain carries: half of each neighbouring segment, the end segments
   // to the platens wholly.
   void measure_lengths(const ParticleStore& p, double y_bottom, double y_top);
@@ -50,6 +61,7 @@ class Membrane2D {
   std::array<std::vector<std::uint32_t>, 2> chains_;
   std::array<std::vector<double>, 2> lengths_;  // the chain length each grain carries
   std::vector<std::int64_t> best_[2];           // per bin: chosen grain, -1 for none
+  std::vector<std::uint32_t> chain_grains_;
   double stress_ = 0.0;
 };
 
