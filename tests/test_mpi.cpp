@@ -288,6 +288,14 @@ TEST(Mpi, ARunSplitOverRanksWritesTheFilesOfOneProcess) {
   EXPECT_EQ(m["mpi"]["ranks"], 2);
   EXPECT_EQ(m["mpi"]["sample_split_over_ranks"], true);
   EXPECT_EQ(m["mpi"]["particles"], nlohmann::json::parse("[1024, 1242]"));
+  // What each rank received: at least the other's grains at every row (184 B a grain in 3D).
+  const auto& traffic = m["mpi"]["traffic"];
+  ASSERT_EQ(traffic["received_bytes"].size(), 2u) << m["mpi"].dump();
+  const auto rows = static_cast<std::uint64_t>(count(read(b / "history.csv"), "\n") - 1);
+  ASSERT_GT(rows, 5u);
+  EXPECT_GE(traffic["received_bytes"][0].get<std::uint64_t>(), rows * 1242u * 184u);
+  EXPECT_GE(traffic["received_bytes"][1].get<std::uint64_t>(), rows * 1024u * 184u);
+  EXPECT_EQ(traffic["exchange_seconds"].size(), 2u);
   fs::remove_all(out);
 }
 
