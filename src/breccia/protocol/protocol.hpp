@@ -159,9 +159,9 @@ class Protocol {
   virtual std::uint64_t start(Simulation& sim, double bar_wave_speed) = 0;
   // Before every loading step (servo walls, driven grips).
   virtual void control(Simulation& sim) = 0;
-  // The grains control() reads besides the walls (a membrane's, a grit layer's): on a sample
-  // split over ranks the run brings them current first. measure() and the rest read the whole
-  // sample, which the run gathers at each row.
+  // The grains control() reads besides the walls (a grit layer's): on a sample split over ranks
+  // the run brings them current first. A control that must search first (a membrane's chains)
+  // gathers what it finds itself. At each row the run gathers the whole sample.
   virtual GrainReads grains_read_by_control() const { return {}; }
   virtual AxialState measure(const Simulation& sim) const = 0;
   // The grains measure() reads besides the walls (a reader between rows, such as the AE
