@@ -112,10 +112,18 @@ void bond_sample(Simulation& sim, bool broken, double gap_tolerance) {
 
 namespace {
 
-// A count summed over the ranks (every rank's own part of a split sample).
+// Every rank's count, in rank order (each rank's own part of a split sample).
+std::vector<std::size_t> each_rank(std::size_t mine) {
+  std::vector<std::size_t> counts;
+  for (const std::string& s : ranks::all_gather(std::to_string(mine)))
+    counts.push_back(std::stoull(s));
+  return counts;
+}
+
+// A count summed over the ranks.
 std::size_t over_ranks(std::size_t mine) {
   std::size_t total = 0;
-  for (const std::string& s : ranks::all_gather(std::to_string(mine))) total += std::stoull(s);
+  for (const std::size_t n : each_rank(mine)) total += n;
   return total;
 }
 
@@ -205,6 +213,7 @@ int main(int argc, char** argv) {
   std::vector<double> rates;
   std::size_t bond_steps_total = 0;
   std::vector<double> bond_rates, exchange_shares;
+  double exchanged_all = 0.0, timed_all = 0.0;  // this rank's, over every repeat
   for (int r = 0; r < repeats; ++r) {
     const std::size_t bonds_before = over_ranks(sim.intact_bonds());
     ranks::barrier();
@@ -215,6 +224,8 @@ int main(int argc, char** argv) {
     ranks::barrier();
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     exchange_shares.push_back(exchanged / s);
+    exchanged_all += exchanged;
+    timed_all += s;
     rates.push_back(static_cast<double>(sim.particles().size()) * steps / s);
     // Bond-steps: intact bonds evaluated per step (mean of the bounds of the repeat).
     const double mean_bonds =
@@ -233,6 +244,21 @@ int main(int argc, char** argv) {
   std::size_t peak_rss = 0;  // the largest rank's
   for (const std::string& r : ranks::all_gather(std::to_string(peak_rss_bytes())))
     peak_rss = std::max<std::size_t>(peak_rss, std::stoull(r));
+  // Every rank's share of the timed steps spent inside exchanges, lowest first. The lowest is the
+  // slowest rank's, which waits for no one: the exchanges' own cost. What the others spend beyond
+  // it is waiting for that rank (load imbalance, or a core shared with other work).
+  std::vector<double> rank_exchange_shares;
+  for (const std::string& r : ranks::all_gather(std::to_string(exchanged_all / timed_all)))
+    rank_exchange_shares.push_back(std::stod(r));
+  // Each rank's work, in rank order: what a balance by grain count leaves unequal.
+  const nlohmann::json per_rank{{"exchange_share", rank_exchange_shares},
+                                {"grains", each_rank(sim.owned_particles().size())},
+                                {"intact_bonds", each_rank(sim.intact_bonds())},
+                                {"contacts", each_rank(sim.active_contacts())},
+                                {"neighbour_pairs", each_rank(sim.neighbour_pairs())},
+                                {"ghosts", each_rank(sim.split_traffic().ghosts)},
+                                {"shares_sent", each_rank(sim.split_traffic().shares_sent)}};
+  std::sort(rank_exchange_shares.begin(), rank_exchange_shares.end());
   const Simulation::SplitTraffic traffic = sim.split_traffic();
   const std::size_t ghosts = over_ranks(traffic.ghosts), shares = over_ranks(traffic.shares_sent);
   if (!ranks::root()) return 0;
@@ -249,11 +275,12 @@ int main(int argc, char** argv) {
   std::fprintf(stderr,
                "%-16s ranks %d x threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts, "
                "%zu pairs (%zu across blocks); %.3g particle-steps/s (%.3g per core), %.3g "
-               "bond-steps/s, %.0f%% of the time in exchanges (%zu ghosts, %zu shares a step), "
-               "%.0f B/particle peak (largest rank)\n",
+               "bond-steps/s, %.0f%% of the time in exchanges (ranks: %.0f-%.0f%%; %zu ghosts, %zu "
+               "shares a step), %.0f B/particle peak (largest rank)\n",
                name.c_str(), n_ranks, threads, sim.particles().size(), intact_end, bonds0,
                contacts_end, pairs_end, cross_end, rate, rate / cores, bond_rate,
-               100.0 * exchange_share, ghosts, shares,
+               100.0 * exchange_share, 100.0 * rank_exchange_shares.front(),
+               100.0 * rank_exchange_shares.back(), ghosts, shares,
                static_cast<double>(peak_rss) / static_cast<double>(sim.particles().size()));
   nlohmann::json j{{"case", name},
                    {"dim", dim},
@@ -279,6 +306,9 @@ int main(int argc, char** argv) {
                    {"bond_steps_per_s_per_thread", bond_rate / cores},
                    {"all_particle_steps_per_s", rates},
                    {"exchange_share", exchange_share},
+                   {"exchange_share_lowest_rank", rank_exchange_shares.front()},
+                   {"exchange_share_highest_rank", rank_exchange_shares.back()},
+                   {"per_rank", per_rank},
                    {"ghosts", ghosts},
                    {"shares_per_step", shares},
                    {"setup_s", setup_s},

@@ -9,7 +9,8 @@
 # Calibrations (examples/calibrate-*.toml) spread their trials over ranks instead: each trial is a
 # whole run on one rank (tests/test_mpi.cpp compares such a calibration with one process).
 # Environment: BRECCIA (default build/breccia), OUT (default runs/mpi-identity), THREADS (per rank
-# and for the one process, default 1). Prints a table; exits 1 if any file differs.
+# and for the one process, default 1), MPIRUN (default mpirun), PYTHON (default /usr/bin/python3).
+# Prints a table; exits 1 if any file differs.
 set -uo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 ranks="${1:-4}"
@@ -17,6 +18,8 @@ shift || true
 breccia="${BRECCIA:-$root/build/breccia}"
 out="${OUT:-$root/runs/mpi-identity}"
 threads="${THREADS:-1}"
+mpirun="${MPIRUN:-mpirun}"
+python="${PYTHON:-/usr/bin/python3}"
 examples=("$@")
 if [ ${#examples[@]} -eq 0 ]; then
   for f in "$root"/examples/*.toml; do
@@ -39,7 +42,7 @@ for ex in "${examples[@]}"; do
   t0=$(date +%s)
   a=$("$breccia" "${common[@]}" --output "$out/$name/one" 2>"$out/$name/one.log" | tail -1)
   t1=$(date +%s)
-  b=$(mpirun --oversubscribe --bind-to none -np "$ranks" "$breccia" "${common[@]}" \
+  b=$("$mpirun" --oversubscribe --bind-to none -np "$ranks" "$breccia" "${common[@]}" \
         --output "$out/$name/ranks" 2>"$out/$name/ranks.log" | tail -1)
   t2=$(date +%s)
   if [ -z "$a" ] || [ -z "$b" ] || [ ! -d "$a" ] || [ ! -d "$b" ]; then
@@ -47,7 +50,7 @@ for ex in "${examples[@]}"; do
     status=1
     continue
   fi
-  result=$(/usr/bin/python3 "$compare" "$a" "$b") || status=1
+  result=$("$python" "$compare" "$a" "$b") || status=1
   echo "| $name | $((t1 - t0)) s | $((t2 - t1)) s | $result |"
 done
 exit $status
