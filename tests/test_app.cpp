@@ -446,12 +446,13 @@ TEST(App, ResumedRunGivesTheSameResultAsAnUninterruptedOne) {
   fs::remove_all(out);
 }
 
-// Acoustic emission across a restart: stopped before the first crack, while the first event is
-// open, late in the test (--stop-at-step), and by SIGINT at an arbitrary moment, each resumed run
-// writes the crack catalogue (with its stages and events), the event catalogue and the indicator
-// series of the uninterrupted run byte for byte. The stopped runs hold only 7 crack records in
-// memory and the rest in their folders' checkpoint-cracks.bin, the uninterrupted one all of them:
-// where the records lie changes nothing.
+// Acoustic emission across restarts: a run stopped before the first crack, resumed and stopped
+// while the first event is open, then late in the test (--stop-at-step), and another stopped by
+// SIGINT at an arbitrary moment, each finished by a last resume, write the crack catalogue (with
+// its stages and events), the event catalogue and the indicator series of the uninterrupted run
+// byte for byte. The stopped runs hold only 7 crack records in memory and the rest in their
+// folders' checkpoint-cracks.bin, the uninterrupted one all of them: where the records lie changes
+// nothing.
 TEST(App, ResumeIsExactForAcousticEmissionWhereverTheRunStops) {
   const fs::path out = fs::temp_directory_path() / "breccia_app_resume_ae";
   fs::remove_all(out);
@@ -473,27 +474,31 @@ TEST(App, ResumeIsExactForAcousticEmissionWhereverTheRunStops) {
     for (const std::string& f : files)
       EXPECT_EQ(read(a / f), read(b / f)) << f << " after a stop " << what;
   };
+  // One run stopped three times: each sitting resumes from the last one's checkpoint.
+  const char* const record_files[] = {"checkpoint-cracks.bin", "checkpoint-ae-events.bin",
+                                      "checkpoint-ae-context.bin"};
+  fs::path split;
   for (const auto& [stop, what] :
        {std::pair{first_crack - 50, "before the first crack"},
         std::pair{first_crack + 1, "while the first event is open"},
         std::pair{first_crack + (steps - first_crack) * 3 / 4, "late in the test"}}) {
-    const Result r = run("run --quiet --output " + (out / "split").string() + opts +
-                         " --set output.resident_cracks=7 --stop-at-step " + std::to_string(stop));
+    const std::string at = " --stop-at-step " + std::to_string(stop);
+    const Result r = split.empty() ? run("run --quiet --output " + (out / "split").string() + opts +
+                                         " --set output.resident_cracks=7" + at)
+                                   : run("resume --quiet" + at + " " + split.string());
     ASSERT_EQ(r.code, 130) << what << ": " << r.out;
-    const fs::path split = last_line(r.out);
-    const char* const record_files[] = {"checkpoint-cracks.bin", "checkpoint-ae-events.bin",
-                                        "checkpoint-ae-context.bin"};
+    split = last_line(r.out);
     for (const char* f : record_files) EXPECT_TRUE(fs::exists(split / f)) << f << " " << what;
     // Late in the test the AE monitor's older crack contexts (24 B each) are in their file.
     if (stop > first_crack + 1) {
       EXPECT_GT(fs::file_size(split / "checkpoint-ae-context.bin"), 100u + 10u * 24u);
     }
-    const Result resumed = run("resume --quiet " + split.string());
-    ASSERT_EQ(resumed.code, 0) << what << ": " << resumed.out;
-    expect_same(split, what);
-    for (const char* f : record_files)
-      EXPECT_FALSE(fs::exists(split / f)) << f << " goes with the checkpoint";
   }
+  const Result finished = run("resume --quiet " + split.string());
+  ASSERT_EQ(finished.code, 0) << finished.out;
+  expect_same(split, "before the first crack, while the first event is open and late in the test");
+  for (const char* f : record_files)
+    EXPECT_FALSE(fs::exists(split / f)) << f << " goes with the checkpoint";
   const Result signalled = run_with_prefix("timeout --preserve-status -s INT 1.5 ",
                                            "run --quiet --output " + (out / "signal").string() +
                                                opts + " --set output.resident_cracks=7");

@@ -15,7 +15,7 @@ import breccia
 CLI = os.environ["BRECCIA_CLI"]
 SOURCE = os.environ["BRECCIA_SOURCE_DIR"]
 
-# A 300-grain UCS sample from a file, loaded through the peak to 0.8 % strain in about 2 s
+# A 2,266-grain UCS sample from a file, loaded through the peak to 0.8 % strain in about 5 s
 # (the micro-parameters test_outputs.py uses, so that bonds break at this strain).
 SMALL = [
     'sample.source="file"', f'sample.file="{SOURCE}/tests/data/ucs-small.geom"',
@@ -54,11 +54,19 @@ def test_package_imports_from_the_build_tree():
     assert "berea" in list(breccia.materials()["name"])
 
 
-def test_a_run_from_python_matches_the_command_line_byte_for_byte():
+@pytest.fixture(scope="module")
+def small_run():
+    """SMALL run once from Python for the tests that read it, with its progress calls."""
+    calls = []
+    with tempfile.TemporaryDirectory() as out:
+        run = breccia.run(breccia.Experiment(overrides=SMALL), output=out, progress=calls.append)
+        yield run, calls
+
+
+def test_a_run_from_python_matches_the_command_line_byte_for_byte(small_run):
+    py, _ = small_run
     with tempfile.TemporaryDirectory() as out:
         cli = cli_run(os.path.join(out, "cli"))
-        py = breccia.run(breccia.Experiment(overrides=SMALL), output=os.path.join(out, "py"),
-                         progress=False)
         assert isinstance(py, breccia.RunFolder) and py.complete
         assert py.summary["bonds_broken"] > 0  # the run breaks bonds: the tables have rows
         for t in TABLES:
@@ -73,30 +81,29 @@ def test_a_run_from_python_matches_the_command_line_byte_for_byte():
         assert py.manifest["command"].startswith("python: breccia.run")
 
 
-def test_dataframes_have_the_documented_columns():
-    with tempfile.TemporaryDirectory() as out:
-        run = breccia.run(breccia.Experiment(overrides=SMALL), output=out, progress=False)
-        h = run.history
-        assert isinstance(h, pd.DataFrame) and len(h) > 10
-        for c in ("step", "time_s", "axial_strain", "deviatoric_stress_pa",
-                  "confining_stress_pa", "lateral_strain", "volumetric_strain",
-                  "broken_bonds", "tensile_cracks", "shear_cracks", "kinetic_j"):
-            assert c in h.columns, c
-        assert len(run.cracks) == run.summary["bonds_broken"]
-        for c in ("step", "time_s", "x_m", "y_m", "z_m", "mode", "energy_j", "event_id"):
-            assert c in run.cracks.columns, c
-        assert set(run.cracks["mode"]) <= {"tensile", "shear"}
-        for c in ("event_id", "cracks", "mw", "source_type"):
-            assert c in run.events.columns, c
-        for c in ("axial_strain", "b_value", "d2", "shear_fraction", "mc_var", "ae_var_j2",
-                  "damage_index"):
-            assert c in run.indicators.columns, c
-        for c in ("fragment_id", "particles", "mass_kg", "class"):
-            assert c in run.fragments.columns, c
-        arrays = run.arrays("history")
-        assert isinstance(arrays["axial_strain"], np.ndarray)
-        assert run.dimension == 3
-        assert breccia.read(run.path).path == run.path
+def test_dataframes_have_the_documented_columns(small_run):
+    run, _ = small_run
+    h = run.history
+    assert isinstance(h, pd.DataFrame) and len(h) > 10
+    for c in ("step", "time_s", "axial_strain", "deviatoric_stress_pa",
+              "confining_stress_pa", "lateral_strain", "volumetric_strain",
+              "broken_bonds", "tensile_cracks", "shear_cracks", "kinetic_j"):
+        assert c in h.columns, c
+    assert len(run.cracks) == run.summary["bonds_broken"]
+    for c in ("step", "time_s", "x_m", "y_m", "z_m", "mode", "energy_j", "event_id"):
+        assert c in run.cracks.columns, c
+    assert set(run.cracks["mode"]) <= {"tensile", "shear"}
+    for c in ("event_id", "cracks", "mw", "source_type"):
+        assert c in run.events.columns, c
+    for c in ("axial_strain", "b_value", "d2", "shear_fraction", "mc_var", "ae_var_j2",
+              "damage_index"):
+        assert c in run.indicators.columns, c
+    for c in ("fragment_id", "particles", "mass_kg", "class"):
+        assert c in run.fragments.columns, c
+    arrays = run.arrays("history")
+    assert isinstance(arrays["axial_strain"], np.ndarray)
+    assert run.dimension == 3
+    assert breccia.read(run.path).path == run.path
 
 
 def test_bad_arguments_raise_the_command_lines_messages():
@@ -126,11 +133,9 @@ def test_experiments_from_a_dict_keywords_and_toml_text_agree():
     assert a.seed == 5 and a["sample.max_particles"] == 900
 
 
-def test_an_interrupted_run_resumes_from_python_to_the_uninterrupted_result():
-    calls = []
+def test_an_interrupted_run_resumes_from_python_to_the_uninterrupted_result(small_run):
+    whole, calls = small_run
     with tempfile.TemporaryDirectory() as out:
-        whole = breccia.run(breccia.Experiment(overrides=SMALL), output=os.path.join(out, "a"),
-                            progress=calls.append)
         half = whole.manifest["consolidation_steps"] + whole.summary["steps"] // 2
         cut = breccia.run(breccia.Experiment(overrides=SMALL), output=os.path.join(out, "b"),
                           progress=False, stop_at_step=half)
