@@ -127,6 +127,27 @@ std::size_t over_ranks(std::size_t mine) {
   return total;
 }
 
+// Every rank's work, in rank order (what a balance by grain count leaves unequal), with its share
+// of the timed steps spent inside exchanges. `shares` returns those shares, lowest first: the
+// lowest is the slowest rank's, which waits for no one, so it bounds the exchanges' own cost; what
+// the others spend beyond it is waiting for that rank (load imbalance, or a core shared with other
+// work).
+nlohmann::json work_of_each_rank(const Simulation& sim, double my_exchange_share,
+                                 std::vector<double>& shares) {
+  shares.clear();
+  for (const std::string& r : ranks::all_gather(std::to_string(my_exchange_share)))
+    shares.push_back(std::stod(r));
+  const nlohmann::json per_rank{{"exchange_share", shares},
+                                {"grains", each_rank(sim.owned_particles().size())},
+                                {"intact_bonds", each_rank(sim.intact_bonds())},
+                                {"contacts", each_rank(sim.active_contacts())},
+                                {"neighbour_pairs", each_rank(sim.neighbour_pairs())},
+                                {"ghosts", each_rank(sim.split_traffic().ghosts)},
+                                {"shares_sent", each_rank(sim.split_traffic().shares_sent)}};
+  std::sort(shares.begin(), shares.end());
+  return per_rank;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -244,21 +265,9 @@ int main(int argc, char** argv) {
   std::size_t peak_rss = 0;  // the largest rank's
   for (const std::string& r : ranks::all_gather(std::to_string(peak_rss_bytes())))
     peak_rss = std::max<std::size_t>(peak_rss, std::stoull(r));
-  // Every rank's share of the timed steps spent inside exchanges, lowest first. The lowest is the
-  // slowest rank's, which waits for no one: the exchanges' own cost. What the others spend beyond
-  // it is waiting for that rank (load imbalance, or a core shared with other work).
   std::vector<double> rank_exchange_shares;
-  for (const std::string& r : ranks::all_gather(std::to_string(exchanged_all / timed_all)))
-    rank_exchange_shares.push_back(std::stod(r));
-  // Each rank's work, in rank order: what a balance by grain count leaves unequal.
-  const nlohmann::json per_rank{{"exchange_share", rank_exchange_shares},
-                                {"grains", each_rank(sim.owned_particles().size())},
-                                {"intact_bonds", each_rank(sim.intact_bonds())},
-                                {"contacts", each_rank(sim.active_contacts())},
-                                {"neighbour_pairs", each_rank(sim.neighbour_pairs())},
-                                {"ghosts", each_rank(sim.split_traffic().ghosts)},
-                                {"shares_sent", each_rank(sim.split_traffic().shares_sent)}};
-  std::sort(rank_exchange_shares.begin(), rank_exchange_shares.end());
+  const nlohmann::json per_rank =
+      work_of_each_rank(sim, exchanged_all / timed_all, rank_exchange_shares);
   const Simulation::SplitTraffic traffic = sim.split_traffic();
   const std::size_t ghosts = over_ranks(traffic.ghosts), shares = over_ranks(traffic.shares_sent);
   if (!ranks::root()) return 0;
