@@ -398,6 +398,83 @@ TEST(MpiDomain, JointedBlockOverRanksIsThatOfOneProcess) {
 
 namespace {
 
+// A bonded block thrown apart: every grain starts with a velocity that grows with its distance
+// from the centre, and soft, unbreakable bonds stretch beyond the lists' reach before they pull
+// the grains back, through many neighbour rebuilds; partners beyond reach then lie on other ranks
+// (4,096 grains: one kDomainGrain grain for each of 4 ranks).
+Simulation expanding_block(double bond_modulus, double rate) {
+  const double R = 0.5e-3;
+  ParticleStore ps = fcc_block(8, 8, 16, R, 2650);
+  Vec3 centre{};
+  for (const PosRad& q : ps.pos_rad) centre += q.x / static_cast<double>(ps.size());
+  for (std::size_t i = 0; i < ps.size(); ++i) ps.vel[i] = (ps.pos_rad[i].x - centre) * rate;
+  EngineConfig cfg;
+  cfg.local_damping = 0.0;
+  cfg.energy_interval = 50;
+  LinearContact::Params lp;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, lp));
+  ParallelBond::Params bp;
+  bp.modulus = bond_modulus;
+  bp.tensile_strength = bp.cohesion = 1e15;
+  sim.set_bond_params<ParallelBond>(bp);
+  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  sim.initialise();
+  return sim;
+}
+
+// The bonds whose grains lie on two ranks and beyond the lists' reach (positions of `sim`, made
+// whole first).
+std::size_t far_bonds_across_ranks(
+    Simulation& sim, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& bonds,
+    double skin) {
+  sim.gather_particles();
+  const auto ranges = split_indexes(sim.particles().size(), ranks::size());
+  const auto rank_of = [&](std::uint32_t i) {
+    std::size_t r = 0;
+    while (!ranges[r].contains(i)) ++r;
+    return r;
+  };
+  std::size_t n = 0;
+  for (const auto& [i, j] : bonds)
+    n += rank_of(i) != rank_of(j) &&
+                 !within_reach(sim.particles().pos_rad[i], sim.particles().pos_rad[j], skin)
+             ? 1
+             : 0;
+  return n;
+}
+
+}  // namespace
+
+// Bonded partners beyond the lists' reach stay ghosts of the ranks that hold their bonds, at the
+// split and at every rebuild: the stretched block steps as one process through rebuilds made
+// while such bonds cross ranks.
+TEST(MpiDomain, BondPartnersBeyondReachStayGhostsThroughRebuilds) {
+  if (ranks::size() == 1) GTEST_SKIP() << "one rank has no partner on another";
+  set_threads(1);
+  // Strain rate 2.5e4 /s against bonds whose lattice swings at about 6e4 rad/s: the block
+  // stretches by up to about 40 %, and past the skin (0.4 radii) after about 250 steps.
+  Simulation reference = expanding_block(5e5, 2.5e4);
+  Simulation split = expanding_block(5e5, 2.5e4);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> bonds;
+  reference.for_each_intact_bond(
+      [&](std::uint32_t i, std::uint32_t j) { bonds.emplace_back(i, j); });
+  const double skin = 0.4 * 0.5e-3;  // the default: 0.4 x the mean radius
+  split.split_over_ranks();
+  bool rebuilt_with_far_bonds = false;
+  for (int chunk = 0; chunk < 8; ++chunk) {
+    const std::size_t far = far_bonds_across_ranks(split, bonds, skin);
+    const std::uint64_t rebuilds = split.neighbour_rebuilds();
+    step_both(reference, split, 50);
+    rebuilt_with_far_bonds =
+        rebuilt_with_far_bonds || (far > 0 && split.neighbour_rebuilds() > rebuilds);
+  }
+  EXPECT_TRUE(rebuilt_with_far_bonds) << "the test must rebuild while far bonds cross ranks";
+  ASSERT_EQ(split.sample_counts().intact_bonds, bonds.size()) << "no bond may break";
+  expect_same_state(split, reference);
+}
+
+namespace {
+
 // The simulation's checkpoint bytes.
 std::string checkpoint_of(const Simulation& sim) {
   std::ostringstream out;
