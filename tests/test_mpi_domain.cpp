@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <sstream>
 #include <string>
@@ -584,13 +585,32 @@ TYPED_TEST(EveryContactLawOverRanks, StepsAreThoseOfOneProcess) {
   expect_law_block_over_ranks<TypeParam, ParallelBond>();
 }
 
+namespace {
+
+// What the other ranks print: their failed assertions alone, each with its rank and test (named
+// when the test starts: asking gtest for the current test while it reports a result deadlocks).
+class FailurePrinter : public ::testing::EmptyTestEventListener {
+  std::string test_;
+  void OnTestStart(const ::testing::TestInfo& t) override {
+    test_ = std::string(t.test_suite_name()) + "." + t.name();
+  }
+  void OnTestPartResult(const ::testing::TestPartResult& r) override {
+    if (!r.failed()) return;
+    std::fprintf(stderr, "rank %d: %s failed at %s:%d\n%s\n", ranks::rank(), test_.c_str(),
+                 r.file_name() ? r.file_name() : "?", r.line_number(), r.message());
+  }
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
   const ranks::World world(argc, argv);
   ::testing::InitGoogleTest(&argc, argv);
-  // Only root prints the tests' progress; every rank reports its failures.
+  // Only root prints the tests' progress; every other rank prints its failures.
   if (!ranks::root()) {
     auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
     delete listeners.Release(listeners.default_result_printer());
+    listeners.Append(new FailurePrinter);
   }
   return RUN_ALL_TESTS();
 }

@@ -203,7 +203,20 @@ void Simulation::transfer(Archive& a) {
     p_.load(a);
   else
     p_.save(a);
-  a.value(cfg_);
+  // Field by field: the struct's padding after its last member holds whatever the memory it was
+  // made in held, and a checkpoint must be the same bytes wherever it is written.
+  a.value(cfg_.time_step);
+  a.value(cfg_.safety_factor);
+  a.value(cfg_.hertz_rayleigh_factor);
+  a.value(cfg_.local_damping);
+  a.value(cfg_.bond_normal_damping_ratio);
+  a.value(cfg_.bond_shear_damping_ratio);
+  a.value(cfg_.gravity);
+  a.value(cfg_.skin);
+  a.value(cfg_.seed);
+  a.value(cfg_.energy_interval);
+  a.value(cfg_.keep_pair_forces);
+  static_assert(sizeof(EngineConfig) == 104, "EngineConfig changed: save its new fields above");
 
   transfer_contacts(a);
 
