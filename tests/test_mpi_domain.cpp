@@ -511,7 +511,16 @@ TEST(MpiDomain, AGatheredSplitIsOneProcessToTheBit) {
   Simulation reference = test::compressed_block(5, 5, 20, 8.0, 3e6, 0.7, with_inclined_joint);
   Simulation split = test::compressed_block(5, 5, 20, 8.0, 3e6, 0.7, with_inclined_joint);
   split.split_over_ranks();
-  step_both(reference, split, 1100);
+  // Every rank steps its copy here: a checkpoint holds structs raw, padding included, and the
+  // padding of a law's parameters is what the memory they were made in held, which differs
+  // between processes (the engine's configuration is saved field by field for that reason).
+  const auto step_both_everywhere = [&](int steps) {
+    for (int k = 0; k < steps; ++k) {
+      reference.step();
+      split.step();
+    }
+  };
+  step_both_everywhere(1100);
   ASSERT_GT(split.neighbour_rebuilds(), 1u);
   ASSERT_GT(split.cracks().size(), 100u);
   // The pair loads around grains of every rank's range, as one process lists them.
@@ -538,16 +547,13 @@ TEST(MpiDomain, AGatheredSplitIsOneProcessToTheBit) {
   EXPECT_TRUE(loads_here == from_root(loads_there)) << "rank " << ranks::rank();
   split.unsplit();
   EXPECT_FALSE(split.split());
-  const auto root_checkpoint = [&] {
-    return from_root(ranks::root() ? checkpoint_of(reference) : std::string());
-  };
-  EXPECT_EQ(first_difference(checkpoint_of(split), root_checkpoint()), "")
+  EXPECT_EQ(first_difference(checkpoint_of(split), checkpoint_of(reference)), "")
       << "rank " << ranks::rank();
   split.split_over_ranks();
-  step_both(reference, split, 150);
+  step_both_everywhere(150);
   expect_same_state(split, reference);
   split.unsplit();
-  EXPECT_EQ(first_difference(checkpoint_of(split), root_checkpoint()), "")
+  EXPECT_EQ(first_difference(checkpoint_of(split), checkpoint_of(reference)), "")
       << "rank " << ranks::rank();
 }
 
