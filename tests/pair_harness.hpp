@@ -75,7 +75,8 @@ struct PairStepper {
   void install(std::uint64_t seed = 1, std::uint64_t tag = 1) {
     // As the engine does: the run's geometry, then the derived parameters.
     if constexpr (requires { params.run; })
-      params.run = {planar, planar && planar_sphere, thickness};
+      params.run = {
+          .planar = planar, .planar_sphere = planar && planar_sphere, .thickness = thickness};
     if constexpr (requires { Law::prepare(params); }) Law::prepare(params);
     if constexpr (is_joint_law<Law>)
       state = Law::install(params, make_geometry(a, b, planar, thickness, planar_sphere),

@@ -347,8 +347,10 @@ TEST(BeamSection, ReciprocalsAndStiffnessesAreThoseOfTheSection) {
     bool slab;
   };
   for (const Case& k :
-       {Case{{false, false, 1.0}, false, false}, Case{{true, false, 1e-3}, false, true},
-        Case{{true, true, 2e-3}, true, false}, Case{{true, true, 2e-3}, false, true}}) {
+       {Case{{.planar = false, .thickness = 1.0}, false, false},
+        Case{{.planar = true, .thickness = 1e-3}, false, true},
+        Case{{.planar = true, .planar_sphere = true, .thickness = 2e-3}, true, false},
+        Case{{.planar = true, .planar_sphere = true, .thickness = 2e-3}, false, true}}) {
     const beam::BeamSection c =
         beam::section(s, {E, G, chi, k.disc_for_planar_spheres, true}, k.run, radii);
     const double r = 0.37e-3, t = k.run.thickness;

@@ -18,13 +18,16 @@ using namespace breccia;
 namespace {
 
 struct Sample {
-  std::uint64_t index;
-  double value;
-  std::uint32_t code;
+  std::uint64_t index = 0;
+  double value = 0.0;
+  std::uint32_t code = 0;
+  std::uint32_t unused = 0;  // named, not padding: written raw
 };
 
 Sample sample(std::size_t k) {
-  return {k, 0.5 * static_cast<double>(k) - 3.0, static_cast<std::uint32_t>(7 * k + 1)};
+  return {.index = k,
+          .value = 0.5 * static_cast<double>(k) - 3.0,
+          .code = static_cast<std::uint32_t>(7 * k + 1)};
 }
 
 void expect_samples(const RecordLog<Sample>& log, std::size_t n) {

@@ -270,7 +270,7 @@ TEST(ParallelBondSection, StressCoefficientsAreThoseOfTheSection) {
   // R_bar = min(R1, R2) = 0.43 mm (lambda = 1) and k_n = E_bar / (R1 + R2) = 10 GPa / 1.1 mm.
   const BondRadii radii{0.67e-3, 0.43e-3};
   for (const bool planar : {false, true}) {
-    p.run = {planar, false, 2.5e-3};
+    p.run = {.planar = planar, .thickness = 2.5e-3};
     const ParallelBond::Section c = ParallelBond::section(p, radii);
     const double r = 0.43e-3, t = p.run.thickness;
     const double area = planar ? 2 * r * t : std::numbers::pi * r * r;

@@ -30,6 +30,7 @@ struct ClusterSettings {
   double source_radius = 0.0;  // r_s, m
   double duration = 0.0;       // T_d, s (source-radius linkage)
   Linkage linkage = Linkage::SourceRadius;
+  std::uint8_t unused[4]{};  // named, not padding (core/archive.hpp)
 };
 
 // v_S = sqrt(G / rho) with G = E / (2 (1 + nu)) and rho the bulk density (§4.1), and

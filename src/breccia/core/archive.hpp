@@ -3,6 +3,17 @@
 // are written as raw bytes in this machine's byte order, strings with their length. A checkpoint
 // is read back by the same build of Breccia on the same kind of machine (the header records both),
 // which is what restarting a test needs; it is not an exchange format.
+//
+// A type written raw has no padding: padding bytes hold whatever the memory held before, so the
+// same state would give different files from run to run (and from rank to rank). The check is at
+// compile time: `raw_bytes_are_values<T>()` reads every byte of a default T in a constant
+// expression, which the compiler refuses ("accessing uninitialized array element", from a
+// static_assert below) where a byte is padding or a member has no initialiser. Such a type fills
+// its holes with named members (a `std::uint8_t unused[k]{}`), widens a member or orders its
+// members so that none is needed. (GCC 12's __builtin_clear_padding misplaces the bytes it clears
+// in some structs with arrays of structs, so padding cannot be cleared when writing instead.)
+#include <array>
+#include <bit>
 #include <cstdint>
 #include <cstring>
 #include <istream>
@@ -15,6 +26,26 @@
 
 namespace breccia {
 
+// A type holding a pointer cannot be read in a constant expression; one that is written raw all
+// the same (the pointer blanked, restored on reading) checks its layout beside the code that
+// writes it and says so by specialising this to true.
+template <class T>
+inline constexpr bool layout_checked_beside_it = false;
+
+// True when every byte of a default T is a member's value (no padding, no member left without an
+// initialiser); otherwise not a constant expression, so a static_assert on it fails to compile.
+template <class T>
+consteval bool raw_bytes_are_values() {
+  if constexpr (layout_checked_beside_it<T>) {
+    return true;
+  } else {
+    const auto bytes = std::bit_cast<std::array<unsigned char, sizeof(T)>>(T{});
+    unsigned read = 0;
+    for (const unsigned char b : bytes) read |= b;
+    return read <= 0xffu;
+  }
+}
+
 // Both archives offer the same calls (value, vector, string, label, sized), so that one template
 // field list serves writing and reading (`reading` tells them apart where they must differ).
 class ArchiveWriter {
@@ -25,11 +56,13 @@ class ArchiveWriter {
   template <class T>
   void value(const T& v) {
     static_assert(std::is_trivially_copyable_v<T>, "only plain data is written raw");
+    static_assert(raw_bytes_are_values<T>(), "a type written raw has no padding (see above)");
     out_.write(reinterpret_cast<const char*>(&v), sizeof(T));
   }
   template <class T>
   void vector(const std::vector<T>& v) {
     static_assert(std::is_trivially_copyable_v<T>, "only plain data is written raw");
+    static_assert(raw_bytes_are_values<T>(), "a type written raw has no padding (see above)");
     value(static_cast<std::uint64_t>(v.size()));
     if (!v.empty())
       out_.write(reinterpret_cast<const char*>(v.data()),

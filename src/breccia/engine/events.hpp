@@ -20,6 +20,7 @@ struct CrackRecord {
   Vec3 position;  // bond contact point
   Vec3 normal;    // unit normal from 1 to 2
   CrackMode mode = CrackMode::Tensile;
+  std::uint8_t unused[7]{};  // named, not padding (core/archive.hpp)
   double bond_radius = 0.0;
   double Fn = 0.0, Fs = 0.0, Mt = 0.0, Mb = 0.0;
   double sigma = 0.0, tau = 0.0;

@@ -555,8 +555,9 @@ class Simulation {
   template <class Law>
   void prepare_params(typename Law::Params& params) const noexcept {
     if constexpr (requires { params.run; })
-      params.run = {p_.planar(), p_.planar() && p_.planar_body() == PlanarBody::PlanarSphere,
-                    p_.thickness()};
+      params.run = {.planar = p_.planar(),
+                    .planar_sphere = p_.planar() && p_.planar_body() == PlanarBody::PlanarSphere,
+                    .thickness = p_.thickness()};
     if constexpr (requires { Law::prepare(params); }) Law::prepare(params);
   }
   // Orientations for the bond laws that need them (2D: rotations about z by the angles).

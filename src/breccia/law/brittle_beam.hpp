@@ -34,6 +34,7 @@ struct BrittleBeam : beam::BeamLaw<BrittleBeam> {
     double twist_factor = 1.0;    // beta_2: moments in the shear stress
     bool min_radius = false;      // R_b = min(R1, R2) (ESyS meanR_scaling = false), else d0 / 2
     bool contact_while_bonded = true;  // false: no contact force between bonded grains (ESyS)
+    std::uint8_t unused[6]{};          // named, not padding (core/archive.hpp)
     RunGeometry run;                   // set by the engine: the section's shape
   };
   static void prepare(Params&) noexcept {}

@@ -146,6 +146,7 @@ struct FlatJoint {
     // Derived by prepare(), not input.
     double tan_friction = 0.0, shear_fraction = 0.4;
     int elements = 3;
+    std::uint8_t unused[4]{};  // named, not padding (core/archive.hpp)
     std::array<flat::ElementShape, flat::kMaxElements> shapes{};
     RunGeometry run;  // set by the engine: disc (3D) or segment across the thickness (2D)
   };

@@ -21,6 +21,7 @@ struct HertzMindlinParams {
   double normal_damping_ratio = 0;
   double shear_damping_ratio = 0;
   bool unloading_rescale = true;
+  std::uint8_t unused[7]{};     // named, not padding (core/archive.hpp)
   double rolling_friction = 0;  // mu_r (§3.5)
   double twisting_friction = 0;
   double rolling_damping_ratio = 0;

@@ -24,6 +24,7 @@ struct LinearContactParams {
   double twisting_friction = 0;     // mu_t
   double rolling_damping_ratio = 0;
   bool ball_stiffness = false;  // PFC 3.x/4 convention (Potyondy & Cundall 2004)
+  std::uint8_t unused[7]{};     // named, not padding (core/archive.hpp)
 };
 
 // Rolling: whether each contact's state holds the rolling and twisting moments (§3.5). The

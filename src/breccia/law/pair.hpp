@@ -51,6 +51,7 @@ inline BondRadii radii_of(const PairGeometry& g) noexcept {
 struct RunGeometry {
   bool planar = false;
   bool planar_sphere = false;
+  std::uint8_t unused[6]{};  // named, not padding: checkpoints copy the bytes (core/archive.hpp)
   double thickness = 1.0;
 };
 

@@ -28,6 +28,7 @@ struct QuaternionBond : beam::BeamLaw<QuaternionBond> {
     double shear_strength = 20e6;      // c_b: F_s^max = c A, M_t^max = c J / R_b
     bool signed_normal = false;        // LAMMPS: -F_n (compression lowers B), else max(0, -F_n)
     bool contact_while_bonded = true;  // false: no contact between bonded grains
+    std::uint8_t unused[6]{};          // named, not padding (core/archive.hpp)
     RunGeometry run;                   // set by the engine: the section's shape
     // Derived by prepare(), not input: the strengths' reciprocals, for the per-step test.
     double inv_tensile_strength = 1.0 / 20e6, inv_shear_strength = 1.0 / 20e6;

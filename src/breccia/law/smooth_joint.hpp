@@ -33,6 +33,7 @@ struct SmoothJoint {
     double dilation_angle_deg = 0;   // psi_j
     double radius_multiplier = 1.0;  // lambda_j
     bool bonded = false;
+    std::uint8_t unused[7]{};       // named, not padding (core/archive.hpp)
     double tensile_strength = 0;    // sigma_c^j
     double cohesion = 0;            // c^j
     double friction_angle_deg = 0;  // phi_b^j
@@ -101,8 +102,9 @@ struct SmoothJoint {
     double joint_radius = 0.0;  // R_bar
     double release_gap = 0.0;   // surface gap beyond which an unbonded joint is deleted
     bool bonded = false;
-    bool attached = false;  // false: the pair is apart; the joint is re-created when it touches
-    bool fresh = false;     // no step since (re)creation: the first shear increment is zero
+    bool attached = false;     // false: the pair is apart; the joint is re-created when it touches
+    bool fresh = false;        // no step since (re)creation: the first shear increment is zero
+    std::uint8_t unused[5]{};  // named, not padding (core/archive.hpp)
   };
 
   // A joint between a pair, stress-free at the current geometry. `joint_normal` is the plane's

@@ -242,7 +242,8 @@ void AeMonitor::for_grains_near(const ParticleStore& p, const Vec3& x, F&& f) co
 void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
   const ParticleStore& p = sim.particles();
   std::vector<Watched> add;
-  for_grains_near(p, x, [&](std::uint32_t i) { add.push_back({i, kinetic(p, i)}); });
+  for_grains_near(p, x,
+                  [&](std::uint32_t i) { add.push_back({.particle = i, .ke0 = kinetic(p, i)}); });
   for (const Watched& w : add) {
     const auto pos =
         std::lower_bound(o.watched.begin(), o.watched.end(), w.particle,

@@ -38,6 +38,7 @@ struct AeSettings {
   double shear_wave_speed = 0.0;      // v_S, m/s (0: estimated by the run at the first crack)
   std::uint64_t moment_interval = 1;  // steps between moment-tensor evaluations of open events
   bool moment_tensors = true;
+  std::uint8_t unused[3]{};  // named, not padding (core/archive.hpp)
   analysis::Linkage linkage = analysis::Linkage::SourceRadius;
 };
 
@@ -133,7 +134,8 @@ class AeMonitor : public Recorder {
   };
   struct Watched {
     std::uint32_t particle = 0;
-    double ke0 = 0.0;  // kinetic energy when it joined
+    std::uint32_t unused = 0;  // named, not padding (core/archive.hpp)
+    double ke0 = 0.0;          // kinetic energy when it joined
   };
   struct Open {
     AeEvent ev;

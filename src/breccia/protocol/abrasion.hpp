@@ -46,6 +46,7 @@ class AbrasionTest final : public Protocol {
     double normal_stress = 1e6, sliding_speed = 0.1, slide_distance = 2e-3, ramp_time = 0.0;
     double base_depth = 0.0, servo_relaxation = 0.2, grit_radius = 0.0;
     bool flat_plate = false;
+    std::uint8_t unused[7]{};  // named, not padding (core/archive.hpp)
   };
   static constexpr std::array<ParamField<Params>, 8> fields() {
     return {{

@@ -33,6 +33,7 @@ class ImpactTest final : public Protocol {
     double projectile_diameter = 3e-3, projectile_density = 11000.0, impact_speed = 100.0;
     double standoff = 5e-3, duration = 0.0;
     bool floor = true;
+    std::uint8_t unused[7]{};  // named, not padding (core/archive.hpp)
   };
   static constexpr std::array<ParamField<Params>, 6> fields() {
     return {{

@@ -37,6 +37,7 @@ class VibrationTest final : public Protocol {
     double frequency = 8157.0, amplitude = 50e-6, cycles = 10.0, grip_length = 10e-3;
     double grip_depth = 0.0, ramp_cycles = 1.0;
     bool normal = true;
+    std::uint8_t unused[7]{};  // named, not padding (core/archive.hpp)
   };
   static constexpr std::array<ParamField<Params>, 7> fields() {
     return {{
