@@ -194,10 +194,21 @@ void check_jobs_on_ranks(int jobs) {
                               "leave --jobs out (or give more ranks)");
 }
 
+// A sweep's runs split over groups of `each` ranks: the groups must fill the launch.
+void check_ranks_per_run(const std::string& command, int each) {
+  const int n = breccia::ranks::size();
+  if (n % each != 0)
+    throw breccia::InputError(
+        command, "--ranks-per-run", std::to_string(each),
+        fmt::format("the runs are split over groups of ranks that must divide the launch's {} "
+                    "rank{} (mpirun -np N, N a multiple of --ranks-per-run)",
+                    n, n == 1 ? "" : "s"));
+}
+
 Command add_resume(CLI::App& app, const std::string& command_line) {
   struct Options {
     std::string folder;
-    int threads = -1, jobs = 0;
+    int threads = -1, jobs = 0, ranks_per_run = 1;
     bool quiet = false;
     std::int64_t stop_at_step = 0;
   };
@@ -218,6 +229,10 @@ Command add_resume(CLI::App& app, const std::string& command_line) {
                 "a sweep: runs at once, as separate processes (0: as many as the cores allow, "
                 "1: one after another)")
       ->check(CLI::Range(0, 1024));
+  c->add_option("--ranks-per-run", o->ranks_per_run,
+                "a sweep under mpirun: split each run over this many ranks (default 1: each "
+                "rank runs whole runs)")
+      ->check(CLI::Range(1, 1 << 20));
   return {c, [o, command_line] {
             catch_signals();
             breccia::RunOptions opt;
@@ -232,7 +247,9 @@ Command add_resume(CLI::App& app, const std::string& command_line) {
                     "resume", "--threads", std::to_string(o->threads),
                     "a sweep's runs keep the threads of their experiment; give --jobs instead");
               check_jobs_on_ranks(o->jobs);
+              check_ranks_per_run("resume", o->ranks_per_run);
               opt.jobs = o->jobs;
+              opt.ranks_per_run = o->ranks_per_run;
               opt.executable = own_executable();
               return finish_sweep(breccia::resume_sweep(o->folder, opt));
             }
@@ -273,7 +290,7 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
     std::vector<std::string> overrides;
     std::vector<double> confining_mpa, strain_rates;
     std::vector<std::string> over;
-    int jobs = 0;
+    int jobs = 0, ranks_per_run = 1;
     std::int64_t stop_at_step = 0;
   };
   auto o = std::make_shared<Options>();
@@ -302,6 +319,10 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
                 "runs at once, as separate processes sharing the cores (0: as many as the cores "
                 "allow, 1: one after another)")
       ->check(CLI::Range(0, 1024));
+  c->add_option("--ranks-per-run", o->ranks_per_run,
+                "under mpirun: split each run over this many ranks, the runs shared out over "
+                "the groups (default 1: each rank runs whole runs)")
+      ->check(CLI::Range(1, 1 << 20));
   c->add_option("--stop-at-step", o->stop_at_step,
                 "stop each run with a checkpoint once it has taken this many steps; finish the "
                 "sweep with `breccia resume SWEEP_FOLDER`")
@@ -317,7 +338,9 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
             opt.show_progress = spec.progress && isatty(fileno(stderr));
             if (breccia::ranks::root()) opt.log = log_to_stderr;
             check_jobs_on_ranks(o->jobs);
+            check_ranks_per_run("sweep", o->ranks_per_run);
             opt.jobs = o->jobs;
+            opt.ranks_per_run = o->ranks_per_run;
             opt.stop_at_step = static_cast<std::uint64_t>(o->stop_at_step);
             opt.executable = own_executable();
             if (o->confining_mpa.empty() && o->strain_rates.empty() && o->over.empty())

@@ -8,7 +8,9 @@
 #
 # Five minutes before the time limit Slurm signals this script (USR1), which passes the signal to
 # mpirun, which passes it to every rank: each run stops with a checkpoint, and resubmitting with
-# the sweep folder continues them where they stopped.
+# the sweep folder continues them where they stopped. For runs too large for one rank, add
+# `--ranks-per-run K` to the sweep (and the resume): each run is then split over K ranks, and
+# 8 / K runs go at once.
 #SBATCH --job-name=breccia-sweep
 #SBATCH --nodes=2
 #SBATCH --ntasks-per-node=4

@@ -112,23 +112,33 @@ void expect_as_one_process(const fs::path& b, const std::string& how) {
 
 // Two ranks (one runs two of the three runs) and four (one rank has none): the folders of one
 // process; root alone writes sweep.json and prints, once.
+// On 2 ranks each rank runs whole runs; on 4, in groups of 2 (--ranks-per-run 2), each run is
+// split over the 2 ranks of a group.
 TEST(Mpi, ASweepOverRanksGivesTheFoldersOfOneProcess) {
   for (int ranks : {2, 4}) {
+    const int each = ranks == 4 ? 2 : 1;
     const fs::path out = fs::temp_directory_path() / ("breccia_mpi_sweep_" + std::to_string(ranks));
     fs::remove_all(out);
-    const Result r = run_with_prefix(mpirun(ranks), "sweep --output " + out.string() + kSweep);
+    const Result r =
+        run_with_prefix(mpirun(ranks), "sweep --ranks-per-run " + std::to_string(each) +
+                                           " --output " + out.string() + kSweep);
     ASSERT_EQ(r.code, 0) << r.out;
     const fs::path b = only_folder(out);
     expect_as_one_process(b, std::to_string(ranks) + " ranks");
-    EXPECT_EQ(nlohmann::json::parse(read(b / "sweep.json"))["ranks"], ranks);
-    // Each run's manifest says where it ran.
-    const auto first_run = nlohmann::json::parse(read(b / "sweep.json"))["runs"][0]["folder"];
+    const auto sweep = nlohmann::json::parse(read(b / "sweep.json"));
+    EXPECT_EQ(sweep["ranks"], ranks);
+    EXPECT_EQ(sweep.value("ranks_per_run", 1), each);
+    // Each run's manifest says where it ran: on one rank of the launch, or split over a group.
+    const auto first_run = sweep["runs"][0]["folder"];
     const auto manifest =
         nlohmann::json::parse(read(b / first_run.get<std::string>() / "manifest.json"));
-    EXPECT_EQ(manifest["mpi"]["ranks"], ranks);
-    EXPECT_EQ(manifest["mpi"]["sample_split_over_ranks"], false);
+    EXPECT_EQ(manifest["mpi"]["ranks"], each == 1 ? ranks : each);
+    EXPECT_EQ(manifest["mpi"]["sample_split_over_ranks"], each > 1);
+    if (each > 1) {
+      EXPECT_EQ(manifest["mpi"]["launch_ranks"], ranks);
+    }
     EXPECT_EQ(count(r.out, "sweep ucs-berea (complete)"), 1) << r.out;
-    EXPECT_EQ(count(r.out, "complete on rank"), 3) << r.out;
+    EXPECT_EQ(count(r.out, each == 1 ? "complete on rank " : "complete on ranks "), 3) << r.out;
     for (const char* name : {"25e6", "30e6", "35e6"})
       EXPECT_TRUE(fs::exists(b / "experiments" /
                              ("ucs-berea-tensile_strength-" + std::string(name) + ".log")));
@@ -151,11 +161,13 @@ TEST(Mpi, ASweepStoppedOnThreeRanksResumesOnTwo) {
     EXPECT_EQ(run_entry["status"], "interrupted");
     EXPECT_TRUE(fs::exists(b / run_entry["folder"].get<std::string>() / "checkpoint.bin"));
   }
-  const Result resumed = run_with_prefix(mpirun(2), "resume " + b.string());
+  // Stopped whole on single ranks, the runs resume each split over both ranks.
+  const Result resumed = run_with_prefix(mpirun(2), "resume --ranks-per-run 2 " + b.string());
   ASSERT_EQ(resumed.code, 0) << resumed.out;
   expect_as_one_process(b, "resumed on 2 ranks");
   const auto plan = nlohmann::json::parse(read(b / "sweep-plan.json"));
   EXPECT_EQ(plan["resumed"][0]["ranks"], 2);
+  EXPECT_EQ(plan["resumed"][0]["ranks_per_run"], 2);
   fs::remove_all(out);
 }
 
@@ -195,6 +207,10 @@ TEST(Mpi, OneProcessCommandsAndBadInputAreRefusedOnce) {
   const Result jobs = run_with_prefix(mpirun(2), "sweep --jobs 2" + kSweep);
   EXPECT_NE(jobs.code, 0);
   EXPECT_EQ(count(jobs.out, "'--jobs' = 2"), 1) << jobs.out;
+  const Result groups = run_with_prefix(mpirun(2), "sweep --ranks-per-run 3" + kSweep);
+  EXPECT_EQ(groups.code, 2);
+  EXPECT_EQ(count(groups.out, "'--ranks-per-run' = 3"), 1) << groups.out;
+  EXPECT_EQ(count(groups.out, "divide the launch's 2 ranks"), 1) << groups.out;
 }
 
 namespace {

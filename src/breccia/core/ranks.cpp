@@ -25,11 +25,20 @@ struct State {
   bool shared_failure = false;    // on_root passed a failure to every rank
   double exchange_seconds = 0.0;  // wall time inside exchange() (exchange_seconds())
   std::uint64_t received_bytes = 0;
+#ifdef BRECCIA_HAVE_MPI
+  MPI_Comm comm = MPI_COMM_WORLD;  // the ranks the collectives reach: the world, or a Group
+#endif
 };
 
 State& state() noexcept {
   static State s;
   return s;
+}
+
+// The states that the Groups now alive replaced, innermost last.
+std::vector<State>& outer_states() {
+  static std::vector<State> saved;
+  return saved;
 }
 
 std::optional<int> env_int(const char* name) {
@@ -136,6 +145,44 @@ World::~World() {
 #endif
 }
 
+Group::Group(int ranks_each) {
+  State& s = state();
+  if (ranks_each < 1 || s.size % ranks_each != 0)
+    throw std::invalid_argument(
+        fmt::format("groups of {} ranks do not divide the {} ranks", ranks_each, s.size));
+  index_ = s.rank / ranks_each;
+  count_ = s.size / ranks_each;
+  first_rank_ = index_ * ranks_each;
+  outer_states().push_back(s);
+#ifdef BRECCIA_HAVE_MPI
+  if (s.mpi) {
+    MPI_Comm group;
+    check(MPI_Comm_split(s.comm, index_, s.rank, &group), "MPI_Comm_split");
+    s.comm = group;
+    MPI_Comm_rank(group, &s.rank);
+    MPI_Comm_size(group, &s.size);
+  }
+#endif
+  begin_task();
+}
+
+Group::~Group() {
+  State& s = state();
+#ifdef BRECCIA_HAVE_MPI
+  if (s.mpi) MPI_Comm_free(&s.comm);
+#endif
+  State outer = outer_states().back();
+  outer_states().pop_back();
+  outer.exchange_seconds = s.exchange_seconds;  // the counters keep counting
+  outer.received_bytes = s.received_bytes;
+  s = outer;
+}
+
+void Group::begin_task() noexcept {
+  state().waited = false;
+  state().shared_failure = false;
+}
+
 int rank() noexcept {
   return state().rank;
 }
@@ -148,10 +195,18 @@ int local_size() noexcept {
   return state().local_size;
 }
 
+int launch_rank() noexcept {
+  return outer_states().empty() ? state().rank : outer_states().front().rank;
+}
+
+int launch_size() noexcept {
+  return outer_states().empty() ? state().size : outer_states().front().size;
+}
+
 void barrier() {
   state().waited = true;
 #ifdef BRECCIA_HAVE_MPI
-  if (state().mpi) check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+  if (state().mpi) check(MPI_Barrier(state().comm), "MPI_Barrier");
 #endif
 }
 
@@ -160,7 +215,7 @@ std::uint32_t any_flags(std::uint32_t mine) {
 #ifdef BRECCIA_HAVE_MPI
   if (!state().mpi) return mine;
   std::uint32_t all = 0;
-  check(MPI_Allreduce(&mine, &all, 1, MPI_UINT32_T, MPI_BOR, MPI_COMM_WORLD), "MPI_Allreduce");
+  check(MPI_Allreduce(&mine, &all, 1, MPI_UINT32_T, MPI_BOR, state().comm), "MPI_Allreduce");
   return all;
 #else
   return mine;
@@ -172,9 +227,9 @@ std::string broadcast(const std::string& from_root) {
 #ifdef BRECCIA_HAVE_MPI
   if (!state().mpi) return from_root;
   std::uint64_t n = from_root.size();
-  check(MPI_Bcast(&n, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  check(MPI_Bcast(&n, 1, MPI_UINT64_T, 0, state().comm), "MPI_Bcast");
   std::string text = root() ? from_root : std::string(n, '\0');
-  check(MPI_Bcast(text.data(), int_count(n), MPI_CHAR, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  check(MPI_Bcast(text.data(), int_count(n), MPI_CHAR, 0, state().comm), "MPI_Bcast");
   return text;
 #else
   return from_root;
@@ -187,7 +242,7 @@ std::vector<std::string> gather(const std::string& mine) {
   if (!state().mpi) return {mine};
   const int n = int_count(mine.size());
   std::vector<int> lengths(root() ? size() : 0), offsets(lengths.size());
-  check(MPI_Gather(&n, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+  check(MPI_Gather(&n, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, state().comm), "MPI_Gather");
   std::size_t total = 0;
   for (std::size_t r = 0; r < lengths.size(); ++r) {
     offsets[r] = int_count(total);
@@ -195,7 +250,7 @@ std::vector<std::string> gather(const std::string& mine) {
   }
   std::string all(total, '\0');
   check(MPI_Gatherv(mine.data(), n, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR,
-                    0, MPI_COMM_WORLD),
+                    0, state().comm),
         "MPI_Gatherv");
   std::vector<std::string> out;
   for (std::size_t r = 0; r < lengths.size(); ++r)
@@ -229,9 +284,9 @@ std::vector<std::string> exchange_messages(const std::vector<std::string>& outgo
     sent += outgoing[r];
   }
   if (expected.empty())
-    check(MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT,
-                       MPI_COMM_WORLD),
-          "MPI_Alltoall");
+    check(
+        MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, state().comm),
+        "MPI_Alltoall");
   else
     for (std::size_t r = 0; r < n; ++r) recv_counts[r] = int_count(expected[r]);
   std::size_t total = 0;
@@ -242,7 +297,7 @@ std::vector<std::string> exchange_messages(const std::vector<std::string>& outgo
   std::string received(total, '\0');
   check(
       MPI_Alltoallv(sent.data(), send_counts.data(), send_offsets.data(), MPI_CHAR, received.data(),
-                    recv_counts.data(), recv_offsets.data(), MPI_CHAR, MPI_COMM_WORLD),
+                    recv_counts.data(), recv_offsets.data(), MPI_CHAR, state().comm),
       "MPI_Alltoallv");
   std::vector<std::string> incoming;
   for (std::size_t r = 0; r < n; ++r)

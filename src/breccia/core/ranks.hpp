@@ -42,9 +42,34 @@ class World {
   World& operator=(const World&) = delete;
 };
 
+// The launch's ranks cut into groups of `ranks_each` consecutive ranks, which must divide size()
+// (std::invalid_argument otherwise). While a Group lives, everything below speaks of this rank's
+// group: rank() and size() within it, root() its first rank, collectives among its ranks only,
+// so that a command run inside it runs on the group as it would on a launch of that size (a
+// sweep's runs each split over a group). Every rank makes and ends its Group at the same point.
+class Group {
+ public:
+  explicit Group(int ranks_each);
+  ~Group();
+  Group(const Group&) = delete;
+  Group& operator=(const Group&) = delete;
+  int index() const noexcept { return index_; }  // 0 .. count() - 1
+  int count() const noexcept { return count_; }
+  int first_rank() const noexcept { return first_rank_; }  // in the launch
+  // A new piece of work for the group: whether a failure is shared (failure_is_shared) is judged
+  // from here on.
+  void begin_task() noexcept;
+
+ private:
+  int index_ = 0, count_ = 1, first_rank_ = 0;
+};
+
 int rank() noexcept;
 int size() noexcept;
 int local_size() noexcept;  // ranks on this machine, to share its cores
+// The whole launch's, whatever Group is alive.
+int launch_rank() noexcept;
+int launch_size() noexcept;
 inline bool root() noexcept {
   return rank() == 0;
 }

@@ -693,9 +693,10 @@ json material_provenance(const ExperimentSpec& spec) {
 // Where a run ran in an MPI launch (a sweep's or a calibration's run, on one rank with the whole
 // sample); nothing in a single process.
 void add_launch(json& j) {
-  if (ranks::size() > 1)
-    j["mpi"] = {
-        {"ranks", ranks::size()}, {"rank", ranks::rank()}, {"sample_split_over_ranks", false}};
+  if (ranks::launch_size() > 1)
+    j["mpi"] = {{"ranks", ranks::launch_size()},
+                {"rank", ranks::launch_rank()},
+                {"sample_split_over_ranks", false}};
 }
 
 // One sample split over the ranks: each rank's particles (an index range of the store).
@@ -705,10 +706,16 @@ json decomposition(const Simulation& sim) {
     first.push_back(r.begin);
     count.push_back(r.size());
   }
-  return {{"ranks", ranks::size()},
-          {"sample_split_over_ranks", true},
-          {"first_particle", first},
-          {"particles", count}};
+  json j = {{"ranks", ranks::size()},
+            {"sample_split_over_ranks", true},
+            {"first_particle", first},
+            {"particles", count}};
+  // A sweep's run split over a group of the launch's ranks: which.
+  if (ranks::launch_size() != ranks::size()) {
+    j["launch_ranks"] = ranks::launch_size();
+    j["first_launch_rank"] = ranks::launch_rank() - ranks::rank();
+  }
+  return j;
 }
 
 // A folder of this rank's own under the system's temporary folder, removed with its contents

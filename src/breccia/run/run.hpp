@@ -46,6 +46,10 @@ struct RunOptions {
   // of one process to the bit. Root writes the run folder; each other rank runs the same loop
   // beside it, writing what it records into a scratch folder of its own that it removes.
   bool split_over_ranks = false;
+  // Sweeps under mpirun: the ranks in groups of this many consecutive ranks, each group running
+  // one run at a time split over its ranks (1: every rank runs whole runs alone). It divides the
+  // rank count.
+  int ranks_per_run = 1;
 };
 
 struct ResumeOptions {

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -254,20 +255,26 @@ std::vector<RunResult> sweep_in_processes(std::vector<ExperimentSpec> specs, int
   return results;
 }
 
-// One run of a sweep on this rank, in this process: its messages go to experiments/<name>.log
-// (as a child process's do), and what it throws becomes its status, so that every rank reaches
-// the gather that follows.
+// One run of a sweep on this rank's group of ranks (see sweep_over_ranks), split over them when
+// there are several: its messages go to experiments/<name>.log (as a child process's do), written
+// by the group's first rank, and what it throws becomes its status, so that every rank reaches
+// the gather that follows. A failure that the group's ranks did not all meet (one rank ran out
+// of memory) would leave the others waiting for it: it ends the launch instead.
 RunResult run_on_this_rank(ExperimentSpec one, const EarlierRun& earlier, int threads,
                            const fs::path& stem, const RunOptions& opt) {
   one.threads = threads;
   one.progress = false;
-  if (!earlier.resumable()) write_file_atomically(stem.string() + ".toml", to_toml(one));
-  auto log = std::make_shared<std::ofstream>(stem.string() + ".log");
+  const bool speaks = ranks::root();
+  if (speaks && !earlier.resumable()) write_file_atomically(stem.string() + ".toml", to_toml(one));
+  auto log = speaks ? std::make_shared<std::ofstream>(stem.string() + ".log") : nullptr;
   RunOptions mine = opt;
   mine.show_progress = false;
   mine.progress = nullptr;
   mine.jobs = 1;
-  mine.log = [log](const std::string& m) { *log << m << std::endl; };
+  mine.log = [log](const std::string& m) {
+    if (log) *log << m << std::endl;
+  };
+  mine.split_over_ranks = ranks::size() > 1;
   RunResult r;
   try {
     return earlier.resumable() ? resume_run(earlier.folder.string(), ResumeOptions{threads}, mine)
@@ -277,10 +284,21 @@ RunResult run_on_this_rank(ExperimentSpec one, const EarlierRun& earlier, int th
     r.stop_reason = std::string(e.what()) + " (not started: resume runs it)";
   } catch (const std::exception& e) {
     r.status = "failed";
-    r.stop_reason = fmt::format("rank {}: {}", ranks::rank(), e.what());
+    r.stop_reason = fmt::format("rank {}: {}", ranks::launch_rank(), e.what());
+    if (!ranks::failure_is_shared(dynamic_cast<const InputError*>(&e) != nullptr)) {
+      std::cerr << "error: " << one.name << ": " << r.stop_reason
+                << " (on one rank of the run's group only: ending every rank)\n";
+      ranks::abort(1);
+    }
   }
-  *log << "error: " << r.stop_reason << std::endl;
+  if (log) *log << "error: " << r.stop_reason << std::endl;
   return r;
+}
+
+// "rank 3", or "ranks 4-7" for a run split over a group.
+std::string ranks_named(int first, int count) {
+  return count == 1 ? fmt::format("rank {}", first)
+                    : fmt::format("ranks {}-{}", first, first + count - 1);
 }
 
 // What root must know of the sweep's runs before they start: where each stands (resuming), the
@@ -308,10 +326,43 @@ std::vector<EarlierRun> runs_before_start(const std::vector<ExperimentSpec>& spe
   return earlier;
 }
 
-// The sweep's runs shared out over the ranks of an MPI launch: the k-th run still to do goes to
-// rank k mod N, which runs it in its own process with its share of its machine's cores. Runs do
-// not depend on where they ran, so the folders are those of a sweep in one process. Root
-// gathers every rank's outcomes and reads each run's folder, as it does a child process's.
+// This group's share of the sweep's runs: the k-th run still to do goes to group k mod G. Every
+// rank of the group takes the same runs, and starts each only when none of them has been
+// interrupted. The group's first rank reports the outcomes (as JSON; the others report none).
+json runs_of_this_group(const std::vector<ExperimentSpec>& specs,
+                        const std::vector<EarlierRun>& earlier, ranks::Group& group, int threads,
+                        const fs::path& dir, const RunOptions& opt) {
+  json mine = json::array();
+  std::size_t k = 0;  // runs still to do, so far
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    if (earlier[i].complete() ||
+        k++ % static_cast<std::size_t>(group.count()) != static_cast<std::size_t>(group.index()))
+      continue;
+    RunResult r;
+    if (ranks::any_flags(opt.interrupt && opt.interrupt->load() ? 1u : 0u) != 0) {
+      r.status = "interrupted";
+      r.stop_reason = "not started: the sweep was interrupted";
+    } else {
+      group.begin_task();
+      r = run_on_this_rank(specs[i], earlier[i], threads, dir / specs[i].name, opt);
+    }
+    if (ranks::root())
+      mine.push_back({{"index", i},
+                      {"folder", r.folder},
+                      {"status", r.status},
+                      {"stop_reason", r.stop_reason},
+                      {"rank", group.first_rank()},
+                      {"ranks", ranks::size()}});
+  }
+  return mine;
+}
+
+// The sweep's runs shared out over the ranks of an MPI launch, in groups of
+// `opt.ranks_per_run` consecutive ranks: each group runs its runs one after another, each split
+// over the group's ranks (or whole on one rank, in groups of one), with the group's share of its
+// machine's cores. Runs do not depend on where they ran nor on how many ranks ran them, so the
+// folders are those of a sweep in one process. Root gathers every group's outcomes and reads
+// each run's folder, as it does a child process's.
 std::vector<RunResult> sweep_over_ranks(const std::vector<ExperimentSpec>& specs,
                                         const fs::path& folder, const RunOptions& opt,
                                         bool resuming) {
@@ -319,29 +370,19 @@ std::vector<RunResult> sweep_over_ranks(const std::vector<ExperimentSpec>& specs
   const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   const int threads = specs.front().threads > 0 ? static_cast<int>(specs.front().threads)
                                                 : std::max(1, cores / ranks::local_size());
+  const int each = std::max(1, opt.ranks_per_run);
   if (opt.log)
-    opt.log(fmt::format("sweep: {} runs over {} ranks ({} thread{} each)", specs.size(),
-                        ranks::size(), threads, threads == 1 ? "" : "s"));
+    opt.log(fmt::format("sweep: {} runs over {} ranks, {} ({} thread{} a rank)", specs.size(),
+                        ranks::size(),
+                        each == 1 ? std::string("one run a rank")
+                                  : fmt::format("each run split over {} ranks", each),
+                        threads, threads == 1 ? "" : "s"));
   const fs::path dir = folder / "experiments";
   fs::create_directories(dir);
-  json mine = json::array();
-  std::size_t k = 0;  // runs still to do, so far
-  for (std::size_t i = 0; i < specs.size(); ++i) {
-    if (earlier[i].complete() ||
-        k++ % static_cast<std::size_t>(ranks::size()) != static_cast<std::size_t>(ranks::rank()))
-      continue;
-    RunResult r;
-    if (opt.interrupt && opt.interrupt->load()) {
-      r.status = "interrupted";
-      r.stop_reason = "not started: the sweep was interrupted";
-    } else {
-      r = run_on_this_rank(specs[i], earlier[i], threads, dir / specs[i].name, opt);
-    }
-    mine.push_back({{"index", i},
-                    {"folder", r.folder},
-                    {"status", r.status},
-                    {"stop_reason", r.stop_reason},
-                    {"rank", ranks::rank()}});
+  json mine;
+  {
+    ranks::Group group(each);
+    mine = runs_of_this_group(specs, earlier, group, threads, dir, opt);
   }
   std::vector<RunResult> results(specs.size());
   for (std::size_t i = 0; i < specs.size(); ++i)
@@ -357,8 +398,8 @@ std::vector<RunResult> sweep_over_ranks(const std::vector<ExperimentSpec>& specs
         results[i].stop_reason = o.at("stop_reason").get<std::string>();
       }
       if (opt.log)
-        opt.log(fmt::format("sweep: {} {} on rank {} ({})", specs[i].name, results[i].status,
-                            o.at("rank").get<int>(),
+        opt.log(fmt::format("sweep: {} {} on {} ({})", specs[i].name, results[i].status,
+                            ranks_named(o.at("rank").get<int>(), o.at("ranks").get<int>()),
                             results[i].status == "complete"
                                 ? fmt::format("peak q {:.2f} MPa", results[i].peak_stress * 1e-6)
                                 : results[i].stop_reason));
@@ -786,6 +827,7 @@ SweepResult execute_plan(const ExperimentSpec& spec, json plan, const fs::path& 
     json sweep = job.assemble(out.runs);
     sweep["status"] = status;
     if (ranks::size() > 1) sweep["ranks"] = ranks::size();
+    if (opt.ranks_per_run > 1) sweep["ranks_per_run"] = opt.ranks_per_run;
     if (plan.contains("resumed")) sweep["resumed"] = plan["resumed"];
     SweepResult written = out;
     written.status = status;
@@ -910,6 +952,7 @@ SweepResult resume_sweep(const std::string& folder_name, const RunOptions& opt) 
                {"program", fmt::format("breccia {} ({})", kVersion, kCommit)},
                {"command", opt.command_line}};
     if (ranks::size() > 1) entry["ranks"] = ranks::size();
+    if (opt.ranks_per_run > 1) entry["ranks_per_run"] = opt.ranks_per_run;
     read["resumed"].push_back(entry);
     write_json(path, read);
     return read.dump();
