@@ -9,7 +9,9 @@
 # Calibrations (examples/calibrate-*.toml) spread their trials over ranks instead: each trial is a
 # whole run on one rank (tests/test_mpi.cpp compares such a calibration with one process).
 # Environment: BRECCIA (default build/breccia), OUT (default runs/mpi-identity), THREADS (per rank
-# and for the one process, default 1), MPIRUN (default mpirun), PYTHON (default /usr/bin/python3).
+# and for the one process, default 1), MPIRUN (default mpirun), PYTHON (default /usr/bin/python3),
+# JOBS (examples at once, default 1: each example runs in one process, then on RANKS ranks, so
+# JOBS x RANKS cores keep every rank on a core of its own).
 # Prints a table; exits 1 if any file differs.
 set -uo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -20,6 +22,7 @@ out="${OUT:-$root/runs/mpi-identity}"
 threads="${THREADS:-1}"
 mpirun="${MPIRUN:-mpirun}"
 python="${PYTHON:-/usr/bin/python3}"
+jobs="${JOBS:-1}"
 examples=("$@")
 if [ ${#examples[@]} -eq 0 ]; then
   for f in "$root"/examples/*.toml; do
@@ -31,14 +34,14 @@ export OMPI_MCA_btl="${OMPI_MCA_btl:-self,vader}"
 export OMPI_MCA_btl_vader_single_copy_mechanism="${OMPI_MCA_btl_vader_single_copy_mechanism:-none}"
 export OMP_NUM_THREADS="$threads"
 compare="$root/validation/mpi-identity/compare.py"
-status=0
-echo "| example | one process | $ranks ranks | files compared | differing |"
-echo "|---|---|---|---|---|"
-for ex in "${examples[@]}"; do
+
+# One example, both ways; prints its table row, and fails when a run failed or a file differs.
+one_example() {
+  local ex="$1" name a b t0 t1 t2 result
   name="$(basename "$ex" .toml)"
   rm -rf "$out/$name"
   mkdir -p "$out/$name/one" "$out/$name/ranks"
-  common=(run "$ex" --quiet --threads "$threads" --set output.plot=false)
+  local common=(run "$ex" --quiet --threads "$threads" --set output.plot=false)
   t0=$(date +%s)
   a=$("$breccia" "${common[@]}" --output "$out/$name/one" 2>"$out/$name/one.log" | tail -1)
   t1=$(date +%s)
@@ -47,10 +50,32 @@ for ex in "${examples[@]}"; do
   t2=$(date +%s)
   if [ -z "$a" ] || [ -z "$b" ] || [ ! -d "$a" ] || [ ! -d "$b" ]; then
     echo "| $name | $((t1 - t0)) s | $((t2 - t1)) s | - | run failed (see $out/$name/*.log) |"
-    status=1
+    return 1
+  fi
+  local rc=0
+  result=$("$python" "$compare" "$a" "$b") || rc=1
+  echo "| $name | $((t1 - t0)) s | $((t2 - t1)) s | $result |"
+  return $rc
+}
+
+status=0
+echo "| example | one process | $ranks ranks | files compared | differing |"
+echo "|---|---|---|---|---|"
+running=0
+for ex in "${examples[@]}"; do
+  if [ "$jobs" -le 1 ]; then
+    one_example "$ex" || status=1
     continue
   fi
-  result=$("$python" "$compare" "$a" "$b") || status=1
-  echo "| $name | $((t1 - t0)) s | $((t2 - t1)) s | $result |"
+  if [ "$running" -ge "$jobs" ]; then
+    wait -n || status=1
+    running=$((running - 1))
+  fi
+  one_example "$ex" &
+  running=$((running + 1))
+done
+while [ "$running" -gt 0 ]; do
+  wait -n || status=1
+  running=$((running - 1))
 done
 exit $status
