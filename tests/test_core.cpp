@@ -185,4 +185,15 @@ TEST(Ranks, OneProcessIsRankZeroOfOne) {
   EXPECT_THROW(breccia::ranks::on_root([]() -> std::string { throw std::runtime_error("no"); }),
                std::runtime_error);
   EXPECT_TRUE(breccia::ranks::failure_is_shared(false));
+  // One process is one group of one; groups of two do not divide it.
+  {
+    const breccia::ranks::Group group(1);
+    EXPECT_EQ(group.index(), 0);
+    EXPECT_EQ(group.count(), 1);
+    EXPECT_EQ(breccia::ranks::size(), 1);
+    EXPECT_EQ(breccia::ranks::launch_size(), 1);
+    EXPECT_EQ(breccia::ranks::broadcast("text"), "text");
+  }
+  EXPECT_THROW(breccia::ranks::Group(2), std::invalid_argument);
+  EXPECT_EQ(breccia::ranks::size(), 1);
 }

@@ -72,6 +72,41 @@ TEST(MpiDomain, GhostPlanIsTheReferenceInDrawnOrder) {
   check_plan(3000, false, 0.1);
 }
 
+// Groups of consecutive ranks (a sweep's runs split over groups): while a group lives, rank, size,
+// root and every collective are the group's; other groups' ranks neither see nor wait for them;
+// after it, the launch's again. Groups that do not divide the launch are refused.
+TEST(MpiDomain, GroupsOfRanksSpeakOfTheirGroup) {
+  const int n = ranks::size(), me = ranks::rank();
+  for (int each = 1; each <= n; ++each) {
+    if (n % each != 0) {
+      EXPECT_THROW(ranks::Group{each}, std::invalid_argument);
+      continue;
+    }
+    {
+      const ranks::Group group(each);
+      EXPECT_EQ(group.count(), n / each);
+      EXPECT_EQ(group.index(), me / each);
+      EXPECT_EQ(group.first_rank(), me / each * each);
+      EXPECT_EQ(ranks::size(), each);
+      EXPECT_EQ(ranks::rank(), me % each);
+      EXPECT_EQ(ranks::launch_size(), n);
+      EXPECT_EQ(ranks::launch_rank(), me);
+      // The group's root speaks for it; each group hears its own.
+      EXPECT_EQ(ranks::broadcast(std::to_string(me)), std::to_string(group.first_rank()));
+      const std::vector<std::string> all = ranks::all_gather(std::to_string(me));
+      ASSERT_EQ(all.size(), static_cast<std::size_t>(each));
+      for (int r = 0; r < each; ++r) EXPECT_EQ(all[r], std::to_string(group.first_rank() + r));
+      // A flag raised on the last group's root only reaches that group.
+      const bool last_group = group.index() == group.count() - 1;
+      const std::uint32_t flags = ranks::any_flags(last_group && ranks::root() ? 1u : 0u);
+      EXPECT_EQ(flags, last_group ? 1u : 0u) << "rank " << me;
+    }
+    EXPECT_EQ(ranks::size(), n);
+    EXPECT_EQ(ranks::rank(), me);
+    EXPECT_EQ(ranks::broadcast(std::to_string(me)), "0");
+  }
+}
+
 // Fewer grains than ranks have blocks for: the first ranks own none and must still take part.
 TEST(MpiDomain, RanksWithoutParticlesTakePart) {
   check_plan(1500, true, 0.3);

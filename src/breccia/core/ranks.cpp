@@ -153,7 +153,7 @@ Group::Group(int ranks_each) {
   index_ = s.rank / ranks_each;
   count_ = s.size / ranks_each;
   first_rank_ = index_ * ranks_each;
-  outer_states().push_back(s);
+  const State outer = s;
 #ifdef BRECCIA_HAVE_MPI
   if (s.mpi) {
     MPI_Comm group;
@@ -163,6 +163,7 @@ Group::Group(int ranks_each) {
     MPI_Comm_size(group, &s.size);
   }
 #endif
+  outer_states().push_back(outer);
   begin_task();
 }
 
