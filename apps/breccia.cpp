@@ -59,10 +59,23 @@ bool unknown_command(int argc, char** argv, const CLI::App& app) {
   return true;
 }
 
+// Runs split over groups of `each` ranks (a sweep's, a calibration's): the groups must fill the
+// launch.
+void check_ranks_per_run(const std::string& command, int each) {
+  const int n = breccia::ranks::size();
+  if (n % each != 0)
+    throw breccia::InputError(
+        command, "--ranks-per-run", std::to_string(each),
+        fmt::format("the runs are split over groups of ranks that must divide the launch's {} "
+                    "rank{} (mpirun -np N, N a multiple of --ranks-per-run)",
+                    n, n == 1 ? "" : "s"));
+}
+
 // `breccia calibrate FILE`: the calibration folder is <output>/<name>; running the same command
 // again after an interruption continues it.
 int calibrate_command(const std::string& file, const std::string& output, bool check_only,
-                      const std::string& command_line) {
+                      int ranks_per_run, const std::string& command_line) {
+  check_ranks_per_run("calibrate", ranks_per_run);
   const breccia::CalibrationSpec spec = breccia::load_calibration(file);
   if (!breccia::ranks::root()) {
     // Under mpirun the other ranks run the tests root hands out (none for --check).
@@ -82,7 +95,8 @@ int calibrate_command(const std::string& file, const std::string& output, bool c
     return 0;
   }
   catch_signals();
-  breccia::RankPool pool;  // under mpirun: each trial's tests at once over the ranks
+  // Under mpirun: each trial's tests at once over the ranks (or their groups).
+  breccia::RankPool pool(ranks_per_run);
   breccia::CalibrationOptions opt;
   opt.pool = &pool;
   opt.output_directory = output;
@@ -192,17 +206,6 @@ void check_jobs_on_ranks(int jobs) {
     throw breccia::InputError("sweep", "--jobs", std::to_string(jobs),
                               "under mpirun the ranks run the sweep's runs, one each at a time: "
                               "leave --jobs out (or give more ranks)");
-}
-
-// A sweep's runs split over groups of `each` ranks: the groups must fill the launch.
-void check_ranks_per_run(const std::string& command, int each) {
-  const int n = breccia::ranks::size();
-  if (n % each != 0)
-    throw breccia::InputError(
-        command, "--ranks-per-run", std::to_string(each),
-        fmt::format("the runs are split over groups of ranks that must divide the launch's {} "
-                    "rank{} (mpirun -np N, N a multiple of --ranks-per-run)",
-                    n, n == 1 ? "" : "s"));
 }
 
 Command add_resume(CLI::App& app, const std::string& command_line) {
@@ -458,6 +461,7 @@ Command add_calibrate(CLI::App& app, const std::string& command_line) {
   struct Options {
     std::string file, output = "calibrations";
     bool check = false;
+    int ranks_per_run = 1;
   };
   auto o = std::make_shared<Options>();
   auto* c = app.add_subcommand(
@@ -466,8 +470,12 @@ Command add_calibrate(CLI::App& app, const std::string& command_line) {
   c->add_option("--output", o->output, "folder that receives <output>/<name>/")
       ->capture_default_str();
   c->add_flag("--check", o->check, "only validate the calibration file");
+  c->add_option("--ranks-per-run", o->ranks_per_run,
+                "under mpirun: split each test over this many ranks, the tests shared out over "
+                "the groups (default 1: each rank runs whole tests)")
+      ->check(CLI::Range(1, 1 << 20));
   return {c, [o, command_line] {
-            return calibrate_command(o->file, o->output, o->check, command_line);
+            return calibrate_command(o->file, o->output, o->check, o->ranks_per_run, command_line);
           }};
 }
 

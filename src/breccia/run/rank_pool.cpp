@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
+#include <iostream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -16,35 +17,56 @@ namespace {
 
 constexpr const char* kStop = "stop";
 
-// This rank's share of a batch: the k-th run goes to rank k mod N. A run's threads: its own, or
-// this machine's cores shared among its ranks.
-json run_share(const json& batch, const RunOptions& opt) {
-  json out = json::array();
-  const auto n = static_cast<std::size_t>(ranks::size());
-  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  for (std::size_t k = static_cast<std::size_t>(ranks::rank()); k < batch.size(); k += n) {
-    PooledRun r;
-    const auto t0 = std::chrono::steady_clock::now();
-    try {
-      ExperimentSpec spec = parse_experiment(batch[k].at("experiment").get<std::string>(),
-                                             batch[k].at("source").get<std::string>(), {});
-      if (spec.threads == 0 && ranks::size() > 1)
-        spec.threads = std::max(1, cores / ranks::local_size());
-      const RunResult result = run_experiment(spec, opt);
-      r.folder = result.folder;
-      r.status = result.status;
-      r.stop_reason = result.stop_reason;
-    } catch (const std::exception& e) {
-      r.status = "failed";
-      r.error = "rank " + std::to_string(ranks::rank()) + ": " + e.what();
+// One run of a batch on this rank's group, split over the group's ranks when it has several.
+PooledRun run_one(const json& entry, const RunOptions& opt, int threads) {
+  PooledRun r;
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    ExperimentSpec spec = parse_experiment(entry.at("experiment").get<std::string>(),
+                                           entry.at("source").get<std::string>(), {});
+    if (spec.threads == 0) spec.threads = threads;
+    RunOptions mine = opt;
+    mine.split_over_ranks = ranks::size() > 1;
+    if (!ranks::root()) mine.log = nullptr;
+    const RunResult result = run_experiment(spec, mine);
+    r.folder = result.folder;
+    r.status = result.status;
+    r.stop_reason = result.stop_reason;
+  } catch (const std::exception& e) {
+    r.status = "failed";
+    r.error = "rank " + std::to_string(ranks::launch_rank()) + ": " + e.what();
+    // The group's other ranks would wait for this one forever.
+    if (!ranks::failure_is_shared(false)) {
+      std::cerr << "error: " << r.error << " (on one rank of the run's group only: ending every "
+                << "rank)\n";
+      ranks::abort(1);
     }
-    r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    out.push_back({{"index", k},
-                   {"folder", r.folder},
-                   {"status", r.status},
-                   {"stop_reason", r.stop_reason},
-                   {"wall_seconds", r.wall_seconds},
-                   {"error", r.error}});
+  }
+  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+// This rank's share of a batch: the ranks form groups of `ranks_per_run` consecutive ranks, and
+// the k-th run goes to group k mod G, split over its ranks (in groups of one, whole on one rank).
+// A run's threads: its own, or this machine's cores shared among its ranks. The group's first
+// rank reports its runs.
+json run_share(const json& batch, const RunOptions& opt) {
+  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int threads = ranks::size() > 1 ? std::max(1, cores / ranks::local_size()) : 0;
+  const json& runs = batch.at("runs");
+  json out = json::array();
+  ranks::Group group(batch.at("ranks_per_run").get<int>());
+  for (std::size_t k = static_cast<std::size_t>(group.index()); k < runs.size();
+       k += static_cast<std::size_t>(group.count())) {
+    group.begin_task();
+    const PooledRun r = run_one(runs[k], opt, threads);
+    if (ranks::root())
+      out.push_back({{"index", k},
+                     {"folder", r.folder},
+                     {"status", r.status},
+                     {"stop_reason", r.stop_reason},
+                     {"wall_seconds", r.wall_seconds},
+                     {"error", r.error}});
   }
   return out;
 }
@@ -63,9 +85,9 @@ RankPool::~RankPool() {
 
 std::vector<PooledRun> RankPool::run(const std::vector<ExperimentSpec>& specs,
                                      const RunOptions& opt) {
-  json batch = json::array();
+  json batch = {{"ranks_per_run", ranks_per_run_}, {"runs", json::array()}};
   for (const ExperimentSpec& s : specs)
-    batch.push_back({{"experiment", to_toml(s)}, {"source", s.source}});
+    batch["runs"].push_back({{"experiment", to_toml(s)}, {"source", s.source}});
   if (ranks::size() > 1) ranks::broadcast(batch.dump());
   const json mine = run_share(batch, opt);
   std::vector<PooledRun> runs(specs.size());
