@@ -6,6 +6,7 @@
 #include <chrono>
 #include <climits>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <exception>
 
@@ -371,6 +372,12 @@ bool failure_is_shared(bool bad_input) noexcept {
 
 void failure_released_the_others() noexcept {
   state().shared_failure = true;
+}
+
+void abort_unless_shared(bool bad_input, const std::string& what) {
+  if (failure_is_shared(bad_input)) return;
+  std::fprintf(stderr, "error: %s (met on this rank only: ending every rank)\n", what.c_str());
+  abort(1);
 }
 
 void abort(int code) {

@@ -124,4 +124,9 @@ void failure_released_the_others() noexcept;
 // Ends every rank of the launch (MPI_Abort) with `code`; a single process exits with it.
 [[noreturn]] void abort(int code);
 
+// For a failure caught where the work goes on (a sweep's or a calibration's run in a Group):
+// when the other ranks did not meet it too (failure_is_shared), they would wait for this one
+// forever, so it prints `what` and ends the launch.
+void abort_unless_shared(bool bad_input, const std::string& what);
+
 }  // namespace breccia::ranks

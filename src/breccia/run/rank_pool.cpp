@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
-#include <iostream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "breccia/core/error.hpp"
 #include "breccia/core/ranks.hpp"
 
 namespace breccia {
@@ -35,12 +35,7 @@ PooledRun run_one(const json& entry, const RunOptions& opt, int threads) {
   } catch (const std::exception& e) {
     r.status = "failed";
     r.error = "rank " + std::to_string(ranks::launch_rank()) + ": " + e.what();
-    // The group's other ranks would wait for this one forever.
-    if (!ranks::failure_is_shared(false)) {
-      std::cerr << "error: " << r.error << " (on one rank of the run's group only: ending every "
-                << "rank)\n";
-      ranks::abort(1);
-    }
+    ranks::abort_unless_shared(dynamic_cast<const InputError*>(&e) != nullptr, r.error);
   }
   r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;

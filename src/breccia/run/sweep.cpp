@@ -13,7 +13,6 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -285,11 +284,8 @@ RunResult run_on_this_rank(ExperimentSpec one, const EarlierRun& earlier, int th
   } catch (const std::exception& e) {
     r.status = "failed";
     r.stop_reason = fmt::format("rank {}: {}", ranks::launch_rank(), e.what());
-    if (!ranks::failure_is_shared(dynamic_cast<const InputError*>(&e) != nullptr)) {
-      std::cerr << "error: " << one.name << ": " << r.stop_reason
-                << " (on one rank of the run's group only: ending every rank)\n";
-      ranks::abort(1);
-    }
+    ranks::abort_unless_shared(dynamic_cast<const InputError*>(&e) != nullptr,
+                               one.name + ": " + r.stop_reason);
   }
   if (log) *log << "error: " << r.stop_reason << std::endl;
   return r;
