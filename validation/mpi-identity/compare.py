@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Compares two run folders file by file: prints "<files compared> | <differing files>" and exits
 1 when a file differs or is missing. manifest.json (the launch, the clock) is left out, and so are
-summary.json's timings, the sample cache's path and the output folder in the resolved
-experiment."""
+summary.json's timings, the sample cache's path, and the output folder and thread count in the
+resolved experiment (launch settings that results do not depend on)."""
 import json
 import sys
 from pathlib import Path
@@ -10,6 +10,8 @@ from pathlib import Path
 # What depends on the clock, the machine or the output folder, at any depth of summary.json.
 MACHINE_KEYS = {"wall_seconds", "loading_loop", "particle_steps_per_second", "resumed",
                 "packing_seconds", "seconds", "cached_file"}
+# Lines of the resolved experiment that name the launch, not the physics.
+LAUNCH_LINES = ("directory = ", "threads = ")
 
 
 def without_machine(v):
@@ -18,8 +20,12 @@ def without_machine(v):
     if isinstance(v, list):
         return [without_machine(x) for x in v]
     if isinstance(v, str) and "\ndirectory = " in v:
-        return "\n".join(l for l in v.split("\n") if not l.startswith("directory = "))
+        return "\n".join(l for l in v.split("\n") if not is_launch_line(l))
     return v
+
+
+def is_launch_line(line):
+    return line.startswith(LAUNCH_LINES)
 
 
 def summary(path):
@@ -27,7 +33,7 @@ def summary(path):
 
 
 def experiment(path):
-    return [l for l in path.read_text().splitlines() if not l.startswith("directory = ")]
+    return [l for l in path.read_text().splitlines() if not is_launch_line(l)]
 
 
 def main(a, b):

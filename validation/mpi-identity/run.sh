@@ -8,8 +8,9 @@
 #
 # Calibrations (examples/calibrate-*.toml) spread their trials over ranks instead: each trial is a
 # whole run on one rank (tests/test_mpi.cpp compares such a calibration with one process).
-# Environment: BRECCIA (default build/breccia), OUT (default runs/mpi-identity), THREADS (per rank
-# and for the one process, default 1), MPIRUN (default mpirun), PYTHON (default /usr/bin/python3),
+# Environment: BRECCIA (default build/breccia), OUT (default runs/mpi-identity), THREADS (per rank,
+# default 1), ONE_THREADS (for the one process, default THREADS: results do not depend on it, so
+# the reference run may take every core), MPIRUN (default mpirun), PYTHON (default /usr/bin/python3),
 # JOBS (examples at once, default 1: each example runs in one process, then on RANKS ranks, so
 # JOBS x RANKS cores keep every rank on a core of its own).
 # Prints a table; exits 1 if any file differs.
@@ -20,6 +21,7 @@ shift || true
 breccia="${BRECCIA:-$root/build/breccia}"
 out="${OUT:-$root/runs/mpi-identity}"
 threads="${THREADS:-1}"
+one_threads="${ONE_THREADS:-$threads}"
 mpirun="${MPIRUN:-mpirun}"
 python="${PYTHON:-/usr/bin/python3}"
 jobs="${JOBS:-1}"
@@ -41,12 +43,13 @@ one_example() {
   name="$(basename "$ex" .toml)"
   rm -rf "$out/$name"
   mkdir -p "$out/$name/one" "$out/$name/ranks"
-  local common=(run "$ex" --quiet --threads "$threads" --set output.plot=false)
+  local common=(run "$ex" --quiet --set output.plot=false)
   t0=$(date +%s)
-  a=$("$breccia" "${common[@]}" --output "$out/$name/one" 2>"$out/$name/one.log" | tail -1)
+  a=$(OMP_NUM_THREADS="$one_threads" "$breccia" "${common[@]}" --threads "$one_threads" \
+        --output "$out/$name/one" 2>"$out/$name/one.log" | tail -1)
   t1=$(date +%s)
   b=$("$mpirun" --oversubscribe --bind-to none -np "$ranks" "$breccia" "${common[@]}" \
-        --output "$out/$name/ranks" 2>"$out/$name/ranks.log" | tail -1)
+        --threads "$threads" --output "$out/$name/ranks" 2>"$out/$name/ranks.log" | tail -1)
   t2=$(date +%s)
   if [ -z "$a" ] || [ -z "$b" ] || [ ! -d "$a" ] || [ ! -d "$b" ]; then
     echo "| $name | $((t1 - t0)) s | $((t2 - t1)) s | - | run failed (see $out/$name/*.log) |"

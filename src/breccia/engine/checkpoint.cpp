@@ -118,6 +118,24 @@ void transfer_sets(Archive& a, std::tuple<BondSet<Laws>...>& sets) {
 }
 
 // Emplaces alternative `index` of a variant (default-constructed).
+// Field by field: the struct's padding after its last member holds whatever the memory it was
+// made in held, and a checkpoint must be the same bytes wherever it is written.
+template <class Archive>
+void transfer_engine_config(Archive& a, EngineConfig& c) {
+  a.value(c.time_step);
+  a.value(c.safety_factor);
+  a.value(c.hertz_rayleigh_factor);
+  a.value(c.local_damping);
+  a.value(c.bond_normal_damping_ratio);
+  a.value(c.bond_shear_damping_ratio);
+  a.value(c.gravity);
+  a.value(c.skin);
+  a.value(c.seed);
+  a.value(c.energy_interval);
+  a.value(c.keep_pair_forces);
+  static_assert(sizeof(EngineConfig) == 104, "EngineConfig changed: save its new fields above");
+}
+
 template <class Variant, std::size_t... I>
 void emplace_index(Variant& v, std::size_t index, std::index_sequence<I...>) {
   ((index == I ? (v.template emplace<I>(), 0) : 0), ...);
@@ -203,20 +221,7 @@ void Simulation::transfer(Archive& a) {
     p_.load(a);
   else
     p_.save(a);
-  // Field by field: the struct's padding after its last member holds whatever the memory it was
-  // made in held, and a checkpoint must be the same bytes wherever it is written.
-  a.value(cfg_.time_step);
-  a.value(cfg_.safety_factor);
-  a.value(cfg_.hertz_rayleigh_factor);
-  a.value(cfg_.local_damping);
-  a.value(cfg_.bond_normal_damping_ratio);
-  a.value(cfg_.bond_shear_damping_ratio);
-  a.value(cfg_.gravity);
-  a.value(cfg_.skin);
-  a.value(cfg_.seed);
-  a.value(cfg_.energy_interval);
-  a.value(cfg_.keep_pair_forces);
-  static_assert(sizeof(EngineConfig) == 104, "EngineConfig changed: save its new fields above");
+  transfer_engine_config(a, cfg_);
 
   transfer_contacts(a);
 
