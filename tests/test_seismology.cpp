@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <sstream>
 
 #include "breccia/analysis/ae_clustering.hpp"
 #include "breccia/analysis/compression.hpp"
@@ -14,6 +15,7 @@
 #include "breccia/analysis/gutenberg_richter.hpp"
 #include "breccia/analysis/moment_tensor.hpp"
 #include "breccia/analysis/stages.hpp"
+#include "breccia/core/archive.hpp"
 #include "breccia/observe/ae_monitor.hpp"
 
 using namespace breccia;
@@ -268,6 +270,58 @@ TEST(Clustering, BridgingCrackMergesEvents) {
   std::vector<std::size_t> closed;
   c.close_before(1.0, [&](std::size_t e) { closed.push_back(e); });
   EXPECT_EQ(closed, std::vector<std::size_t>{0});
+}
+
+TEST(Clustering, SourceRegionWorkedExampleWindowFromTheFirstCrack) {
+  // The worked example's cracks: c3 falls 3e-7 s after E1's first crack, past T_d, so it opens
+  // an event of its own where the rolling window kept it in E1; c5 comes after that one closed.
+  const double td = event_duration(120e-6, shear_wave_speed(20e9, 0.25, 2650 * 0.8));
+  const std::vector<double> t{0, 1.0e-7, 3.0e-7, 3.5e-7, 8.0e-7};
+  const std::vector<Vec3> x{
+      {0, 0, 0}, {100e-6, 0, 0}, {200e-6, 0, 0}, {1000e-6, 0, 0}, {250e-6, 0, 0}};
+  EXPECT_EQ(cluster_cracks(t, x, {120e-6, td, Linkage::SourceRegion}),
+            (std::vector<std::size_t>{0, 0, 1, 2, 3}));
+}
+
+TEST(Clustering, SourceRegionBoundsARunningRuptureAndNeverMerges) {
+  // A rupture running along x within one window: single linkage makes one event of it; source
+  // regions cut it where it leaves r_s of the first crack. The last crack lies 110 um from the
+  // first region's first crack and 90 um from the second's: it joins the nearer, and merges none.
+  const std::vector<double> t{0, 1e-9, 2e-9, 3e-9, 4e-9};
+  const std::vector<Vec3> x{
+      {0, 0, 0}, {100e-6, 0, 0}, {200e-6, 0, 0}, {300e-6, 0, 0}, {110e-6, 0, 0}};
+  EXPECT_EQ(cluster_cracks(t, x, {120e-6, 1e-7}), (std::vector<std::size_t>{0, 0, 0, 0, 0}));
+  EXPECT_EQ(cluster_cracks(t, x, {120e-6, 1e-7, Linkage::SourceRegion}),
+            (std::vector<std::size_t>{0, 0, 1, 1, 1}));
+  // Exactly at r_s joins (as the other linkages); ties go to the older region.
+  const std::vector<Vec3> y{{0, 0, 0}, {240e-6, 0, 0}, {120e-6, 0, 0}};
+  EXPECT_EQ(cluster_cracks({0, 1e-9, 2e-9}, y, {120e-6, 1e-7, Linkage::SourceRegion}),
+            (std::vector<std::size_t>{0, 1, 0}));
+}
+
+TEST(Clustering, SourceRegionResumesExactlyFromACheckpoint) {
+  const std::vector<double> t{0, 1e-9, 2e-9, 3e-9, 4e-9, 5e-8, 2e-7};
+  const std::vector<Vec3> x{{0, 0, 0},      {100e-6, 0, 0}, {200e-6, 0, 0}, {300e-6, 0, 0},
+                            {110e-6, 0, 0}, {20e-6, 0, 0},  {10e-6, 0, 0}};
+  const ClusterSettings s{120e-6, 1e-7, Linkage::SourceRegion};
+  EventClusterer whole(s);
+  for (std::size_t k = 0; k < t.size(); ++k) whole.add(k, t[k], x[k]);
+  EventClusterer first(s);
+  for (std::size_t k = 0; k < 4; ++k) first.add(k, t[k], x[k]);
+  std::stringstream buf;
+  ArchiveWriter w(buf);
+  first.save(w);
+  ASSERT_TRUE(w.good());
+  ArchiveReader r(buf, "in-memory checkpoint");
+  EventClusterer resumed(s);
+  resumed.load(r);
+  for (std::size_t k = 4; k < t.size(); ++k) resumed.add(k, t[k], x[k]);
+  for (std::size_t k = 0; k < t.size(); ++k)
+    EXPECT_EQ(resumed.event_of(k), whole.event_of(k)) << "crack " << k;
+  // The second-last crack joins the first region within its window (5e-8 s after its first
+  // crack); the last comes after it closed at 1e-7 s.
+  EXPECT_EQ(whole.event_of(5), 0u);
+  EXPECT_NE(whole.event_of(6), 0u);
 }
 
 // ---- fragments (§9) ----

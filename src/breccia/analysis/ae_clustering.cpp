@@ -17,6 +17,9 @@ double shear_wave_speed(double e, double nu, double rho) {
 
 EventClusterer::EventClusterer(ClusterSettings s) : s_(s) {
   if (s.linkage == Linkage::Grain) return;  // windows come with each crack
+  if (s.linkage != Linkage::SourceRadius && s.linkage != Linkage::SourceRegion)
+    throw InputError("AE clustering", "linkage", std::to_string(static_cast<int>(s.linkage)),
+                     "one of source_radius, grain, source_region");
   if (!(s.source_radius > 0.0) || !std::isfinite(s.source_radius))
     throw InputError("AE clustering", "source_radius", num(s.source_radius), "must be > 0 m");
   if (!(s.duration > 0.0) || !std::isfinite(s.duration))
@@ -85,9 +88,8 @@ std::size_t EventClusterer::join(std::size_t id, double deadline, std::vector<st
   return event;
 }
 
-std::size_t EventClusterer::add(std::size_t id, double time, const Vec3& x) {
-  close_before(time, closed);
-  // Open events with a crack within r_s: look in the 27 cells around x.
+// Open events with a crack within r_s of x: in the 27 cells around x (cells of size r_s).
+std::vector<std::size_t> EventClusterer::linked_by_radius(const Vec3& x) {
   const double h = s_.source_radius, r2 = h * h;
   const long long a = static_cast<long long>(std::floor(x.x / h));
   const long long b = static_cast<long long>(std::floor(x.y / h));
@@ -110,9 +112,49 @@ std::size_t EventClusterer::add(std::size_t id, double time, const Vec3& x) {
             }
         }
       }
-  const std::size_t event = join(id, time + s_.duration, hits);
-  live_.at(event).members.push_back({id, x});
-  index(event, x);
+  return hits;
+}
+
+// The open event whose first crack lies nearest x and within r_s (the smaller id on a tie); none
+// or one. Only first cracks are indexed under this linkage.
+std::vector<std::size_t> EventClusterer::region_holding(const Vec3& x) {
+  const double h = s_.source_radius;
+  const long long a = static_cast<long long>(std::floor(x.x / h));
+  const long long b = static_cast<long long>(std::floor(x.y / h));
+  const long long c = static_cast<long long>(std::floor(x.z / h));
+  std::size_t best = 0;
+  double best_d2 = h * h;
+  bool found = false;
+  for (long long da = -1; da <= 1; ++da)
+    for (long long db = -1; db <= 1; ++db)
+      for (long long dc = -1; dc <= 1; ++dc) {
+        const auto it = cells_.find(cell_key(a + da, b + db, c + dc));
+        if (it == cells_.end()) continue;
+        for (std::size_t e : it->second) {
+          const auto open = live_.find(e);
+          if (open == live_.end()) continue;  // closed
+          const double d2 = norm2(open->second.members.front().x - x);
+          if (d2 < best_d2 || (d2 == best_d2 && (!found || e < best))) {
+            best = e;
+            best_d2 = d2;
+            found = true;
+          }
+        }
+      }
+  return found ? std::vector<std::size_t>{best} : std::vector<std::size_t>{};
+}
+
+std::size_t EventClusterer::add(std::size_t id, double time, const Vec3& x) {
+  close_before(time, closed);
+  const bool region = s_.linkage == Linkage::SourceRegion;
+  std::vector<std::size_t> hits = region ? region_holding(x) : linked_by_radius(x);
+  // A region's window runs from its first crack: joining does not extend it.
+  const double deadline =
+      region && !hits.empty() ? live_.at(hits.front()).deadline : time + s_.duration;
+  const std::size_t event = join(id, deadline, hits);
+  Live& l = live_.at(event);
+  l.members.push_back({id, x});
+  if (!region || l.members.size() == 1) index(event, x);
   return event;
 }
 
@@ -215,7 +257,11 @@ void EventClusterer::transfer(Archive& a) {
     touch_index_.clear();
     for (std::size_t e : open_) {
       const Live& l = live_.at(e);
-      for (const Member& m : l.members) index(e, m.x);
+      if (s_.linkage == Linkage::SourceRegion) {
+        if (!l.members.empty()) index(e, l.members.front().x);  // the first crack only
+      } else {
+        for (const Member& m : l.members) index(e, m.x);
+      }
       for (std::uint32_t p : l.touched) touch_index_[p].push_back(e);
     }
   }

@@ -20,15 +20,17 @@ class ArchiveReader;
 
 namespace breccia::analysis {
 
-// Two linkage rules (docs/analysis.md §4.1): by source radius (the default of the reference: within
-// r_s of any crack of the event, window T_d after its latest crack), or by grain (option b of the
-// reference: the crack shares a particle with, or touches a contact of, the event's particles;
-// window T_c = 2 D_c / v_S of its latest cracks, D_c the larger grain's diameter).
-enum class Linkage { SourceRadius, Grain };
+// Three linkage rules (docs/analysis.md §4.1): by source radius (the default of the reference:
+// within r_s of any crack of the event, window T_d after its latest crack), by grain (option b of
+// the reference: the crack shares a particle with, or touches a contact of, the event's particles;
+// window T_c = 2 D_c / v_S of its latest cracks, D_c the larger grain's diameter), or by source
+// region (the event is the sphere of radius r_s about its first crack, open for T_d after that
+// crack: its size and duration are bounded by the source's crossing time, and events never merge).
+enum class Linkage { SourceRadius, Grain, SourceRegion };
 
 struct ClusterSettings {
   double source_radius = 0.0;  // r_s, m
-  double duration = 0.0;       // T_d, s (source-radius linkage)
+  double duration = 0.0;       // T_d, s (source-radius and source-region linkage)
   Linkage linkage = Linkage::SourceRadius;
   std::uint8_t unused[4]{};  // named, not padding (core/archive.hpp)
 };
@@ -46,7 +48,7 @@ class EventClusterer {
 
   // Adds crack `id` (ids in order of time; equal times in id order). Returns its event id.
   // Events merged by a bridging crack keep the smallest id; `merged` is called with (kept, gone).
-  // Source-radius linkage:
+  // Source-radius and source-region linkage:
   std::size_t add(std::size_t id, double time, const Vec3& position);
   // Grain linkage: `own` are the crack's two particles, `touched` those and the particles in
   // contact with them; `duration` is the crack's window T_c.
@@ -93,6 +95,8 @@ class EventClusterer {
   std::unordered_map<std::size_t, Live> live_;  // per open root
   std::unordered_map<std::uint32_t, std::vector<std::size_t>> touch_index_;  // particle -> events
   std::size_t join(std::size_t id, double deadline, std::vector<std::size_t>& hits);
+  std::vector<std::size_t> linked_by_radius(const Vec3& x);
+  std::vector<std::size_t> region_holding(const Vec3& x);
   std::vector<std::size_t> open_;                                  // open roots
   std::unordered_map<long long, std::vector<std::size_t>> cells_;  // cell -> open roots
   long long cell_key(long long a, long long b, long long c) const noexcept {

@@ -109,8 +109,9 @@ std::unique_ptr<Recorder> AeMonitor::create(const RecorderSetup& setup) {
   s.shear_wave_speed = spec.ae_shear_wave_speed;
   s.moment_tensors = spec.ae_moment_tensors;
   s.moment_interval = static_cast<std::uint64_t>(spec.ae_moment_interval);
-  s.linkage =
-      spec.ae_clustering == "grain" ? analysis::Linkage::Grain : analysis::Linkage::SourceRadius;
+  s.linkage = spec.ae_clustering == "grain"           ? analysis::Linkage::Grain
+              : spec.ae_clustering == "source_region" ? analysis::Linkage::SourceRegion
+                                                      : analysis::Linkage::SourceRadius;
   auto ae = std::make_unique<AeMonitor>(s);
   if (spec.ae_shear_wave_speed > 0.0) ae->configure(spec.ae_shear_wave_speed);
   if (!setup.folder.empty()) ae->keep_logs_in(setup.folder, resident_records(spec));

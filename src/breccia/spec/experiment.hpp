@@ -88,9 +88,9 @@ struct ExperimentSpec {
   double checkpoint_interval = 600.0;    // wall-clock s between checkpoints; 0 = on interrupt only
   std::int64_t resident_cracks = 16384;  // crack records held in memory; older ones on disk
   // [ae] acoustic emission and indicator series (docs/analysis.md §3-§6)
-  std::string ae_clustering = "grain";  // grain | source_radius (docs/analysis.md §4.1)
-  double ae_source_radius = 0.0;        // m; 0 = 3 x the largest particle diameter
-  double ae_shear_wave_speed = 0.0;     // m/s; 0 = estimated at the first crack
+  std::string ae_clustering = "source_region";  // source_region | grain | source_radius (§4.1)
+  double ae_source_radius = 0.0;                // m; 0 = 3 x the largest particle diameter
+  double ae_shear_wave_speed = 0.0;             // m/s; 0 = estimated at the first crack
   bool ae_moment_tensors = true;
   std::int64_t ae_moment_interval = 1;
   double ae_magnitude_constant = -6.0;

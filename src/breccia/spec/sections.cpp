@@ -499,14 +499,15 @@ std::vector<SpecField> ae_fields() {
        "",
        at<&S::ae_clustering>,
        "how cracks link into events (docs/analysis.md §4.1): \"source_radius\" (within r_s of "
-       "any crack of the event, window T_d = 4 r_s / v_S after its latest crack) or \"grain\" "
+       "any crack of the event, window T_d = 4 r_s / v_S after its latest crack), \"grain\" "
        "(shares a grain with, or touches a contact of, the event's grains; window 2 D_c / v_S "
-       "with D_c the larger grain's diameter)",
+       "with D_c the larger grain's diameter) or \"source_region\" (within r_s of the event's "
+       "first crack and within T_d of it: events bounded in size and duration, never merged)",
        0,
        kText,
        true,
        true,
-       {"source_radius", "grain"}},
+       {"source_radius", "grain", "source_region"}},
       {"ae", "source_radius", "m", at<&S::ae_source_radius>,
        "r_s: a crack joins an event within this distance of any of its cracks (docs/analysis.md "
        "§4.1); 0 = 3 x the largest particle diameter",
