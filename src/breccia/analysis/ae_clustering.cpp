@@ -28,7 +28,22 @@ EventClusterer::EventClusterer(ClusterSettings s) : s_(s) {
 
 namespace {
 constexpr std::uint32_t kNoEvent = 0xffffffffu;
+
+// Calls f(e) for every event id indexed in the 27 cells (of size h) around x; `key` hashes a cell.
+template <class Cells, class Key, class F>
+void each_indexed_near(const Cells& cells, double h, const Vec3& x, Key key, F f) {
+  const long long a = static_cast<long long>(std::floor(x.x / h));
+  const long long b = static_cast<long long>(std::floor(x.y / h));
+  const long long c = static_cast<long long>(std::floor(x.z / h));
+  for (long long da = -1; da <= 1; ++da)
+    for (long long db = -1; db <= 1; ++db)
+      for (long long dc = -1; dc <= 1; ++dc) {
+        const auto it = cells.find(key(a + da, b + db, c + dc));
+        if (it == cells.end()) continue;
+        for (std::size_t e : it->second) f(e);
+      }
 }
+}  // namespace
 
 std::size_t EventClusterer::find(std::size_t e) const {
   while (parent_[e] != e) e = parent_[e];
@@ -88,30 +103,22 @@ std::size_t EventClusterer::join(std::size_t id, double deadline, std::vector<st
   return event;
 }
 
-// Open events with a crack within r_s of x: in the 27 cells around x (cells of size r_s).
+// Open events with a crack within r_s of x (cells of size r_s).
 std::vector<std::size_t> EventClusterer::linked_by_radius(const Vec3& x) {
   const double h = s_.source_radius, r2 = h * h;
-  const long long a = static_cast<long long>(std::floor(x.x / h));
-  const long long b = static_cast<long long>(std::floor(x.y / h));
-  const long long c = static_cast<long long>(std::floor(x.z / h));
+  const auto key = [this](long long a, long long b, long long c) { return cell_key(a, b, c); };
   std::vector<std::size_t> hits;
-  for (long long da = -1; da <= 1; ++da)
-    for (long long db = -1; db <= 1; ++db)
-      for (long long dc = -1; dc <= 1; ++dc) {
-        const auto it = cells_.find(cell_key(a + da, b + db, c + dc));
-        if (it == cells_.end()) continue;
-        for (std::size_t e : it->second) {
-          const std::size_t root = find(e);
-          if (std::find(hits.begin(), hits.end(), root) != hits.end()) continue;
-          const auto open = live_.find(root);
-          if (open == live_.end()) continue;  // closed
-          for (const Member& m : open->second.members)
-            if (norm2(m.x - x) <= r2) {
-              hits.push_back(root);
-              break;
-            }
-        }
+  each_indexed_near(cells_, h, x, key, [&](std::size_t e) {
+    const std::size_t root = find(e);
+    if (std::find(hits.begin(), hits.end(), root) != hits.end()) return;
+    const auto open = live_.find(root);
+    if (open == live_.end()) return;  // closed
+    for (const Member& m : open->second.members)
+      if (norm2(m.x - x) <= r2) {
+        hits.push_back(root);
+        return;
       }
+  });
   return hits;
 }
 
@@ -119,28 +126,20 @@ std::vector<std::size_t> EventClusterer::linked_by_radius(const Vec3& x) {
 // or one. Only first cracks are indexed under this linkage.
 std::vector<std::size_t> EventClusterer::region_holding(const Vec3& x) {
   const double h = s_.source_radius;
-  const long long a = static_cast<long long>(std::floor(x.x / h));
-  const long long b = static_cast<long long>(std::floor(x.y / h));
-  const long long c = static_cast<long long>(std::floor(x.z / h));
+  const auto key = [this](long long a, long long b, long long c) { return cell_key(a, b, c); };
   std::size_t best = 0;
   double best_d2 = h * h;
   bool found = false;
-  for (long long da = -1; da <= 1; ++da)
-    for (long long db = -1; db <= 1; ++db)
-      for (long long dc = -1; dc <= 1; ++dc) {
-        const auto it = cells_.find(cell_key(a + da, b + db, c + dc));
-        if (it == cells_.end()) continue;
-        for (std::size_t e : it->second) {
-          const auto open = live_.find(e);
-          if (open == live_.end()) continue;  // closed
-          const double d2 = norm2(open->second.members.front().x - x);
-          if (d2 < best_d2 || (d2 == best_d2 && (!found || e < best))) {
-            best = e;
-            best_d2 = d2;
-            found = true;
-          }
-        }
-      }
+  each_indexed_near(cells_, h, x, key, [&](std::size_t e) {
+    const auto open = live_.find(e);
+    if (open == live_.end()) return;  // closed
+    const double d2 = norm2(open->second.members.front().x - x);
+    if (d2 < best_d2 || (d2 == best_d2 && (!found || e < best))) {
+      best = e;
+      best_d2 = d2;
+      found = true;
+    }
+  });
   return found ? std::vector<std::size_t>{best} : std::vector<std::size_t>{};
 }
 
