@@ -26,6 +26,7 @@ struct State {
   bool shared_failure = false;    // on_root passed a failure to every rank
   double exchange_seconds = 0.0;  // wall time inside exchange() (exchange_seconds())
   std::uint64_t received_bytes = 0;
+  std::uint64_t collectives = 0;  // MPI collective calls (collectives())
 #ifdef BRECCIA_HAVE_MPI
   MPI_Comm comm = MPI_COMM_WORLD;  // the ranks the collectives reach: the world, or a Group
 #endif
@@ -177,6 +178,7 @@ Group::~Group() {
   outer_states().pop_back();
   outer.exchange_seconds = s.exchange_seconds;  // the counters keep counting
   outer.received_bytes = s.received_bytes;
+  outer.collectives = s.collectives;
   s = outer;
 }
 
@@ -208,7 +210,10 @@ int launch_size() noexcept {
 void barrier() {
   state().waited = true;
 #ifdef BRECCIA_HAVE_MPI
-  if (state().mpi) check(MPI_Barrier(state().comm), "MPI_Barrier");
+  if (state().mpi) {
+    ++state().collectives;
+    check(MPI_Barrier(state().comm), "MPI_Barrier");
+  }
 #endif
 }
 
@@ -217,6 +222,7 @@ std::uint32_t any_flags(std::uint32_t mine) {
 #ifdef BRECCIA_HAVE_MPI
   if (!state().mpi) return mine;
   std::uint32_t all = 0;
+  ++state().collectives;
   check(MPI_Allreduce(&mine, &all, 1, MPI_UINT32_T, MPI_BOR, state().comm), "MPI_Allreduce");
   return all;
 #else
@@ -229,8 +235,10 @@ std::string broadcast(const std::string& from_root) {
 #ifdef BRECCIA_HAVE_MPI
   if (!state().mpi) return from_root;
   std::uint64_t n = from_root.size();
+  ++state().collectives;
   check(MPI_Bcast(&n, 1, MPI_UINT64_T, 0, state().comm), "MPI_Bcast");
   std::string text = root() ? from_root : std::string(n, '\0');
+  ++state().collectives;
   check(MPI_Bcast(text.data(), int_count(n), MPI_CHAR, 0, state().comm), "MPI_Bcast");
   return text;
 #else
@@ -244,6 +252,7 @@ std::vector<std::string> gather(const std::string& mine) {
   if (!state().mpi) return {mine};
   const int n = int_count(mine.size());
   std::vector<int> lengths(root() ? size() : 0), offsets(lengths.size());
+  ++state().collectives;
   check(MPI_Gather(&n, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, state().comm), "MPI_Gather");
   std::size_t total = 0;
   for (std::size_t r = 0; r < lengths.size(); ++r) {
@@ -251,6 +260,7 @@ std::vector<std::string> gather(const std::string& mine) {
     total += static_cast<std::size_t>(lengths[r]);
   }
   std::string all(total, '\0');
+  ++state().collectives;
   check(MPI_Gatherv(mine.data(), n, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR,
                     0, state().comm),
         "MPI_Gatherv");
@@ -285,12 +295,15 @@ std::vector<std::string> exchange_messages(const std::vector<std::string>& outgo
     send_offsets[r] = int_count(sent.size());
     sent += outgoing[r];
   }
-  if (expected.empty())
+  ++state().collectives;
+  if (expected.empty()) {
+    ++state().collectives;
     check(
         MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, state().comm),
         "MPI_Alltoall");
-  else
+  } else {
     for (std::size_t r = 0; r < n; ++r) recv_counts[r] = int_count(expected[r]);
+  }
   std::size_t total = 0;
   for (std::size_t r = 0; r < n; ++r) {
     recv_offsets[r] = int_count(total);
@@ -335,6 +348,10 @@ double exchange_seconds() noexcept {
 
 std::uint64_t received_bytes() noexcept {
   return state().received_bytes;
+}
+
+std::uint64_t collectives() noexcept {
+  return state().collectives;
 }
 
 std::vector<std::string> all_gather(const std::string& mine) {

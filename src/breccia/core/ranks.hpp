@@ -95,6 +95,9 @@ std::vector<std::string> exchange(const std::vector<std::string>& outgoing,
 double exchange_seconds() noexcept;
 // Bytes this rank has received from the other ranks in exchange() and all_gather() so far.
 std::uint64_t received_bytes() noexcept;
+// MPI collective calls this rank has made so far (each a point where every rank of the group
+// waits for the others): their count per step bounds a split run's latency.
+std::uint64_t collectives() noexcept;
 // Every rank's text, in rank order, on every rank (`expected`: their sizes, when known).
 std::vector<std::string> all_gather(const std::string& mine);
 std::vector<std::string> all_gather(const std::string& mine,

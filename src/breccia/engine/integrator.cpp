@@ -181,7 +181,19 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
     }
     block_int_[blk] = acc;
   });
-  if (split_) complete_block_partials(block_int_, kBlock, split_->ranges);
+  if (split_) {
+    // A sampled step's kinetic energy is read within it; the other steps' partials travel with
+    // the next step's ghosts (one waiting point fewer a step) and are added at its start.
+    if (!sample) {
+      split_->integration_pending = true;
+      return;
+    }
+    complete_block_partials(block_int_, kBlock, split_->ranges);
+  }
+  add_integration_totals(sample);
+}
+
+void Simulation::add_integration_totals(bool sample) {
   const IntegrateBlock total = sum_blocks(block_int_);
   d_local_ += total.local_damping;
   w_gravity_ += total.gravity;

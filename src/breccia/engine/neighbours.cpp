@@ -136,6 +136,7 @@ void Simulation::rebuild_for(ContactSet<CL>& contacts) {
 }
 
 void Simulation::rebuild() {
+  finish_integration();  // the totals hold the displacement since the last build
   std::visit([&](auto& contacts) { rebuild_for(contacts); }, contact_);
 }
 

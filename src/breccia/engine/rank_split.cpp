@@ -237,6 +237,7 @@ void Simulation::split_over_ranks() {
         for (std::size_t k = 0; k < built.size(); ++k)
           built[k] = {x_at_build_[s.own.begin + k], p_.pos_rad[s.own.begin + k].r};
         s.plan = plan_ghosts(built, s.ranges, skin_, reached);
+        s.shares_from.clear();
       },
       contact_);
   cross_slots_.clear();
@@ -284,6 +285,7 @@ void Simulation::build_own_pairs(PairList& out) {
   std::vector<PosRad> local(p_.pos_rad.begin() + static_cast<std::ptrdiff_t>(s.own.begin),
                             p_.pos_rad.begin() + static_cast<std::ptrdiff_t>(s.own.end));
   s.plan = plan_ghosts(local, s.ranges, skin_, bond_partners_beyond());
+  s.shares_from.clear();
   refresh_ghosts();
   local.insert(local.end(), s.plan.ghost_pos_rad.begin(), s.plan.ghost_pos_rad.end());
   PairList found;
@@ -303,9 +305,16 @@ void Simulation::build_own_pairs(PairList& out) {
   }
 }
 
-void Simulation::refresh_ghosts() {
+void Simulation::refresh_ghosts(bool with_integration) {
   const RankSplit& s = *split_;
   const bool turns = !p_.orientation.empty(), angles = !p_.angle.empty();
+  const auto int_blocks = [&](std::size_t r) { return owned_blocks(s.ranges[r], kBlock); };
+  std::string partials;  // to every rank
+  if (with_integration) {
+    const IndexRange mine = int_blocks(static_cast<std::size_t>(ranks::rank()));
+    partials.assign(reinterpret_cast<const char*>(block_int_.data() + mine.begin),
+                    mine.size() * sizeof(IntegrateBlock));
+  }
   std::vector<std::string> out(s.plan.send.size());
   for (std::size_t r = 0; r < out.size(); ++r) {
     out[r].resize(s.plan.send[r].size() * sizeof(GhostState));
@@ -315,16 +324,22 @@ void Simulation::refresh_ghosts() {
                    angles ? p_.angle[i] : 0.0};
       std::memcpy(out[r].data() + k * sizeof(GhostState), &g, sizeof(GhostState));
     }
+    out[r] += partials;
   }
-  std::vector<std::size_t> expected(out.size(), 0);
+  std::vector<std::size_t> ghost_bytes(out.size(), 0), expected(out.size(), 0);
   std::size_t owner = 0;
   for (const std::uint32_t g : s.plan.ghosts) {
     while (!s.ranges[owner].contains(g)) ++owner;
-    expected[owner] += sizeof(GhostState);
+    ghost_bytes[owner] += sizeof(GhostState);
   }
+  for (std::size_t r = 0; r < out.size(); ++r)
+    expected[r] =
+        ghost_bytes[r] + (with_integration ? int_blocks(r).size() * sizeof(IntegrateBlock) : 0);
+  const std::vector<std::string> in = ranks::exchange(out, expected);
   std::size_t next = 0;
-  for (const std::string& from : ranks::exchange(out, expected))
-    for (std::size_t at = 0; at + sizeof(GhostState) <= from.size(); at += sizeof(GhostState)) {
+  for (std::size_t r = 0; r < in.size(); ++r) {
+    const std::string& from = in[r];
+    for (std::size_t at = 0; at < ghost_bytes[r]; at += sizeof(GhostState)) {
       GhostState g;
       std::memcpy(&g, from.data() + at, sizeof(GhostState));
       const std::uint32_t i = s.plan.ghosts[next++];
@@ -334,6 +349,25 @@ void Simulation::refresh_ghosts() {
       if (turns) p_.orientation[i] = g.orientation;
       if (angles) p_.angle[i] = g.angle;
     }
+    if (with_integration)
+      std::memcpy(block_int_.data() + int_blocks(r).begin, from.data() + ghost_bytes[r],
+                  int_blocks(r).size() * sizeof(IntegrateBlock));
+  }
+}
+
+void Simulation::finish_integration() {
+  if (!split_ || !split_->integration_pending) return;
+  complete_block_partials(block_int_, kBlock, split_->ranges);
+  split_->integration_pending = false;
+  add_integration_totals(false);
+}
+
+void Simulation::request_stop(bool stop) noexcept {
+  if (split_) split_->stop_here = stop;
+}
+
+bool Simulation::stop_requested_anywhere() const noexcept {
+  return split_ && split_->stop_anywhere;
 }
 
 using bytes::put;
@@ -343,15 +377,21 @@ using bytes::take_range;
 
 // To each rank: the cross slots of this rank's pairs whose second grain it owns (grain by grain,
 // each grain's in slot order), then, the same to all, this rank's block partials of the pair and
-// wall passes and its cracks of the step. A receiver takes the shares in rank order (pair order),
-// fills the others' blocks, and records every rank's cracks in rank order (pair order).
+// wall passes, its stop request and its count of the step's cracks. Every size is known to the
+// receiver (the shares' counts are fixed between ghost plans, counted once after each), so one
+// exchange carries it all. A receiver takes the shares in rank order (pair order) and fills the
+// others' blocks; the cracks follow in a second exchange in the steps that have any.
 void Simulation::exchange_step_loads(const PairList& pairs) {
   RankSplit& s = *split_;
-  static const std::vector<std::string_view> names = law_names();
   const std::size_t n_ranks = s.ranges.size(), walls = walls_.size();
   const std::size_t wall_nb = walls > 0 ? wall_blocks_.size() / walls : 0;
   const auto pair_blocks = [&](std::size_t r) { return owned_blocks(s.ranges[r], kParticleBlock); };
   const auto wall_blocks = [&](std::size_t r) { return owned_blocks(s.ranges[r], kBlock); };
+  const auto common_bytes = [&](std::size_t r) {
+    return pair_blocks(r).size() * (sizeof(block_dis_[0]) + sizeof(block_joint_dis_[0])) +
+           walls * wall_blocks(r).size() * sizeof(WallBlock) + sizeof(std::uint32_t) +
+           sizeof(std::uint64_t);
+  };
   // What every rank gets.
   std::string common;
   const IndexRange pb = pair_blocks(static_cast<std::size_t>(ranks::rank()));
@@ -360,14 +400,8 @@ void Simulation::exchange_step_loads(const PairList& pairs) {
   put_range(common, block_joint_dis_.data() + pb.begin, pb.size());
   for (std::size_t w = 0; w < walls; ++w)
     put_range(common, wall_blocks_.data() + w * wall_nb + wb.begin, wb.size());
+  put(common, static_cast<std::uint32_t>(s.stop_here ? 1 : 0));
   put(common, static_cast<std::uint64_t>(s.cracks.size()));
-  for (CrackRecord r : s.cracks) {
-    put(common,
-        static_cast<std::uint32_t>(std::find(names.begin(), names.end(), r.law) - names.begin()));
-    r.law = {};
-    put(common, r);
-  }
-  s.cracks.clear();
   // The shares, by owner.
   std::vector<std::string> out(n_ranks);
   std::size_t owner = 0;
@@ -382,24 +416,64 @@ void Simulation::exchange_step_loads(const PairList& pairs) {
   s.shares_sent = 0;
   for (std::size_t r = 0; r < n_ranks; ++r) {
     s.shares_sent += count[r];
-    std::string head;
-    put(head, count[r]);
-    out[r] = head + out[r] + common;
+    out[r] += common;
   }
-  const std::vector<std::string> in = ranks::exchange(out);
+  if (s.shares_from.empty()) {
+    std::vector<std::string> counts(n_ranks);
+    for (std::size_t r = 0; r < n_ranks; ++r) put(counts[r], count[r]);
+    for (const std::string& from :
+         ranks::exchange(counts, std::vector<std::size_t>(n_ranks, sizeof(std::uint64_t)))) {
+      std::size_t at = 0;
+      s.shares_from.push_back(take<std::uint64_t>(from, at));
+    }
+  }
+  std::vector<std::size_t> expected(n_ranks);
+  for (std::size_t r = 0; r < n_ranks; ++r)
+    expected[r] = s.shares_from[r] * sizeof(Share<CrossSlot>) + common_bytes(r);
+  const std::vector<std::string> in = ranks::exchange(out, expected);
   std::vector<Share<CrossSlot>>& shares = s.received;
   shares.clear();
+  std::vector<std::uint64_t> crack_counts(n_ranks, 0);
+  bool stop = false;
   for (std::size_t r = 0; r < n_ranks; ++r) {
     const std::string& from = in[r];
     std::size_t at = 0;
-    for (auto k = take<std::uint64_t>(from, at); k > 0; --k)
-      shares.push_back(take<Share<CrossSlot>>(from, at));
+    for (auto k = s.shares_from[r]; k > 0; --k) shares.push_back(take<Share<CrossSlot>>(from, at));
     const IndexRange their_pb = pair_blocks(r), their_wb = wall_blocks(r);
     take_range(from, at, block_dis_.data() + their_pb.begin, their_pb.size());
     take_range(from, at, block_joint_dis_.data() + their_pb.begin, their_pb.size());
     for (std::size_t w = 0; w < walls; ++w)
       take_range(from, at, wall_blocks_.data() + w * wall_nb + their_wb.begin, their_wb.size());
-    for (auto k = take<std::uint64_t>(from, at); k > 0; --k) {
+    stop = stop || take<std::uint32_t>(from, at) != 0;
+    crack_counts[r] = take<std::uint64_t>(from, at);
+    if (at != from.size())
+      throw std::logic_error("Simulation::exchange_step_loads: a message of another layout");
+  }
+  s.stop_anywhere = stop;
+  arrange_shares(s.own, shares, s.incoming);
+  if (std::any_of(crack_counts.begin(), crack_counts.end(), [](auto n) { return n > 0; }))
+    exchange_step_cracks(crack_counts);
+}
+
+// Every rank's cracks of the step, to every rank, recorded in rank order (pair order).
+void Simulation::exchange_step_cracks(const std::vector<std::uint64_t>& crack_counts) {
+  RankSplit& s = *split_;
+  static const std::vector<std::string_view> names = law_names();
+  constexpr std::size_t kCrackBytes = sizeof(std::uint32_t) + sizeof(CrackRecord);
+  std::string mine;
+  mine.reserve(s.cracks.size() * kCrackBytes);
+  for (CrackRecord r : s.cracks) {
+    put(mine,
+        static_cast<std::uint32_t>(std::find(names.begin(), names.end(), r.law) - names.begin()));
+    r.law = {};
+    put(mine, r);
+  }
+  s.cracks.clear();
+  std::vector<std::size_t> sizes(crack_counts.size());
+  for (std::size_t r = 0; r < sizes.size(); ++r) sizes[r] = crack_counts[r] * kCrackBytes;
+  for (const std::string& from : ranks::all_gather(mine, sizes)) {
+    std::size_t at = 0;
+    while (at < from.size()) {
       const auto law = take<std::uint32_t>(from, at);
       CrackRecord record = take<CrackRecord>(from, at);
       record.law = names.at(law);
@@ -407,7 +481,6 @@ void Simulation::exchange_step_loads(const PairList& pairs) {
       cracks_.push_back(record);
     }
   }
-  arrange_shares(s.own, shares, s.incoming);
 }
 
 namespace {
@@ -503,6 +576,7 @@ void Simulation::gather_grains(const GrainReads& reads) {
 
 void Simulation::unsplit() {
   if (!split_) return;
+  finish_integration();
   const std::vector<IndexRange> ranges = split_->ranges;
   gather_particles();
   complete_particle_values(x_at_build_, ranges);

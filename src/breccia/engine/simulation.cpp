@@ -195,9 +195,17 @@ void Simulation::step() {
   if (retired_)
     throw std::logic_error("Simulation::step: the simulation's interactions are retired");
   if (!initialised_) initialise();
+  // A split sample's ghosts, and the last step's integrator partials with them, before the
+  // rebuild test reads the largest displacement those partials hold.
+  const bool ghosts_fresh = split_ && split_->integration_pending;
+  if (ghosts_fresh) {
+    refresh_ghosts(true);
+    split_->integration_pending = false;
+    add_integration_totals(false);
+  }
   if (needs_rebuild())
     rebuild();  // on a split sample, with the ghosts' values
-  else if (split_)
+  else if (split_ && !ghosts_fresh)
     refresh_ghosts();
   const bool sample =
       sample_requested_ || (cfg_.energy_interval > 0 && step_ % cfg_.energy_interval == 0);

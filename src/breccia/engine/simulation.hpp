@@ -156,10 +156,19 @@ struct RankSplit {
   // by grain).
   std::vector<Share<CrossSlot>> received;
   std::size_t shares_sent = 0;  // in the last step
+  // The shares each rank sends this one a step: fixed from one ghost plan to the next (the pairs
+  // are), counted once after each plan is made (empty until then), so that a step's loads travel
+  // in one exchange of known sizes.
+  std::vector<std::uint64_t> shares_from;
   IncomingShares<CrossSlot> incoming;
   std::vector<CrackRecord> cracks;  // this rank's cracks of the step, in pair order
   bool bonds_anywhere = false;      // a bond or joint on some rank (central_forces_only)
   bool particles_whole = true;      // every grain's entries current (gathered since the step)
+  // The integrator's block partials of the last step travel with the next step's ghosts, and are
+  // added then (Simulation::finish_integration), in step order, as one process adds them.
+  bool integration_pending = false;
+  bool stop_here = false;      // this rank's stop request, sent with the next step's loads
+  bool stop_anywhere = false;  // some rank's, received with the last step's loads
 };
 
 // The grains a reader of a split sample needs current besides its own and the walls: none, a
@@ -295,6 +304,11 @@ class Simulation {
   // checkpoint is that process's). Afterwards every rank steps the whole sample; split_over_ranks
   // splits it again. Nothing when not split.
   void unsplit();
+  // The ranks of a split sample stop at one step: each passes its own request (a signal that
+  // reached it) before a step, the step carries it to every rank with its loads, and after it
+  // stop_requested_anywhere() is the same on all of them. A sample not split: nothing, and false.
+  void request_stop(bool stop) noexcept;
+  bool stop_requested_anywhere() const noexcept;
 
   // The bonds of the whole sample, in one process's order (collective on a split sample; a copy
   // of the sets, without their pair index, otherwise).
@@ -444,10 +458,21 @@ class Simulation {
   // (a new ghost plan, the ghosts' values sent).
   void build_own_pairs(PairList& out);
   std::vector<std::uint32_t> bond_partners_beyond() const;
-  void refresh_ghosts();
+  // The ghosts' values from their owners (collective), and with them, when `with_integration`,
+  // every rank's integrator block partials of the last step to all.
+  void refresh_ghosts(bool with_integration = false);
   // After the pair and wall passes (collective): the shares of cross pairs to their grains'
-  // owners, and every rank's block partials of the two passes and cracks of the step to all.
+  // owners, and every rank's block partials of the two passes, stop request and crack count to
+  // all; the cracks themselves in a second exchange, in the steps that have any.
   void exchange_step_loads(const PairList& pairs);
+  void exchange_step_cracks(const std::vector<std::uint64_t>& crack_counts);
+  // The integrator's sums of a step: its block partials added in block order into the work,
+  // damping and largest-displacement totals (and the kinetic energy of a sampled step).
+  void add_integration_totals(bool sample);
+  // A split sample's integrator partials still waiting for the next step's ghost exchange, made
+  // whole and added now (collective; nothing otherwise): before a rebuild or a gather reads the
+  // totals.
+  void finish_integration();
   void add_pair_dissipation();
   // Whether this rank, or any rank, holds a bond or joint element (bonds_anywhere is noted at
   // every rebuild, where the sets change).

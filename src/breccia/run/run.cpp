@@ -263,9 +263,10 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
   };
   for (;;) {
     const bool stop_step = opt.stop_at_step > 0 && sim.step_count() >= opt.stop_at_step;
-    bool interrupted = opt.interrupt && opt.interrupt->load();
-    // The ranks of a split sample stop at one step: when a signal has reached any of them.
-    if (sim.split()) interrupted = ranks::any_flags(interrupted ? 1 : 0) != 0;
+    const bool signalled = opt.interrupt && opt.interrupt->load();
+    // The ranks of a split sample stop at one step: after the step that told every rank that a
+    // signal had reached one of them (the request travels with the step's loads).
+    const bool interrupted = sim.split() ? sim.stop_requested_anywhere() : signalled;
     if (interrupted || stop_step) {
       LoopEnd e =
           ended("interrupted",
@@ -282,6 +283,7 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
     // otherwise), and every grain at a row.
     sim.gather_grains(test.grains_read_by_control());
     test.control(sim);
+    sim.request_stop(signalled);
     sim.step();
     for (const auto& r : ss.recorders) {
       sim.gather_grains(r->grains_read_after_step(sim, test));
@@ -564,6 +566,8 @@ json split_traffic(const LoopEnd& end) {
   std::string mine;
   bytes::put(mine, ranks::received_bytes());
   bytes::put(mine, ranks::exchange_seconds());
+  // The same on every rank of the sample (they call the same collectives): root's is reported.
+  const std::uint64_t collectives = ranks::collectives();
   json received = json::array(), seconds = json::array();
   for (const std::string& part : ranks::all_gather(mine)) {
     std::size_t at = 0;
@@ -573,7 +577,8 @@ json split_traffic(const LoopEnd& end) {
   return {{"loop_steps", end.loop_steps},
           {"loop_seconds", end.loop_seconds},
           {"received_bytes", received},
-          {"exchange_seconds", seconds}};
+          {"exchange_seconds", seconds},
+          {"collectives", collectives}};
 }
 
 // After the loop: the recorders' last rows, the analysis, summary.json and the manifest.
