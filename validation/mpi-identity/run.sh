@@ -12,7 +12,9 @@
 # default 1), ONE_THREADS (for the one process, default THREADS: results do not depend on it, so
 # the reference run may take every core), MPIRUN (default mpirun), PYTHON (default /usr/bin/python3),
 # JOBS (examples at once, default 1: each example runs in one process, then on RANKS ranks, so
-# JOBS x RANKS cores keep every rank on a core of its own).
+# JOBS x RANKS cores keep every rank on a core of its own), RESUME (1: keep what an earlier call
+# left in OUT, resume a run it left unfinished from its checkpoint with the same build, and
+# reuse a complete one; the times are then this call's only).
 # Prints a table; exits 1 if any file differs.
 set -uo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -25,6 +27,7 @@ one_threads="${ONE_THREADS:-$threads}"
 mpirun="${MPIRUN:-mpirun}"
 python="${PYTHON:-/usr/bin/python3}"
 jobs="${JOBS:-1}"
+resume="${RESUME:-0}"
 examples=("$@")
 if [ ${#examples[@]} -eq 0 ]; then
   for f in "$root"/examples/*.toml; do
@@ -37,19 +40,40 @@ export OMPI_MCA_btl_vader_single_copy_mechanism="${OMPI_MCA_btl_vader_single_cop
 export OMP_NUM_THREADS="$threads"
 compare="$root/validation/mpi-identity/compare.py"
 
+# One side of an example (one | ranks): its run folder, run now, resumed from the checkpoint an
+# earlier call left (RESUME=1), or as that call completed it. `launcher` is empty for one process.
+run_side() {
+  local name="$1" side="$2" threads_here="$3"
+  shift 3
+  local launcher=("$@") dir state
+  local common=(--quiet --threads "$threads_here")
+  dir="$(ls -d "$out/$name/$side"/2*/ 2>/dev/null | head -1)"
+  if [ "$resume" = 1 ] && [ -n "$dir" ]; then
+    dir="${dir%/}"
+    state=$("$python" -c 'import json,sys; print(json.load(open(sys.argv[1]))["status"])' \
+      "$dir/manifest.json" 2>/dev/null)
+    if [ "$state" = complete ]; then
+      echo "$dir"
+      return
+    fi
+    OMP_NUM_THREADS="$threads_here" "${launcher[@]}" "$breccia" resume "$dir" "${common[@]}" \
+      2>>"$out/$name/$side.log" | tail -1
+    return
+  fi
+  OMP_NUM_THREADS="$threads_here" "${launcher[@]}" "$breccia" run "$ex" "${common[@]}" \
+    --set output.plot=false --output "$out/$name/$side" 2>"$out/$name/$side.log" | tail -1
+}
+
 # One example, both ways; prints its table row, and fails when a run failed or a file differs.
 one_example() {
   local ex="$1" name a b t0 t1 t2 result
   name="$(basename "$ex" .toml)"
-  rm -rf "$out/$name"
+  [ "$resume" = 1 ] || rm -rf "${out:?}/$name"
   mkdir -p "$out/$name/one" "$out/$name/ranks"
-  local common=(run "$ex" --quiet --set output.plot=false)
   t0=$(date +%s)
-  a=$(OMP_NUM_THREADS="$one_threads" "$breccia" "${common[@]}" --threads "$one_threads" \
-        --output "$out/$name/one" 2>"$out/$name/one.log" | tail -1)
+  a=$(run_side "$name" one "$one_threads")
   t1=$(date +%s)
-  b=$("$mpirun" --oversubscribe --bind-to none -np "$ranks" "$breccia" "${common[@]}" \
-        --threads "$threads" --output "$out/$name/ranks" 2>"$out/$name/ranks.log" | tail -1)
+  b=$(run_side "$name" ranks "$threads" "$mpirun" --oversubscribe --bind-to none -np "$ranks")
   t2=$(date +%s)
   if [ -z "$a" ] || [ -z "$b" ] || [ ! -d "$a" ] || [ ! -d "$b" ]; then
     echo "| $name | $((t1 - t0)) s | $((t2 - t1)) s | - | run failed (see $out/$name/*.log) |"
