@@ -6,6 +6,7 @@
 #include <map>
 
 #include "breccia/core/archive.hpp"
+#include "breccia/core/cell_walk.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 
@@ -32,16 +33,11 @@ constexpr std::uint32_t kNoEvent = 0xffffffffu;
 // Calls f(e) for every event id indexed in the 27 cells (of size h) around x; `key` hashes a cell.
 template <class Cells, class Key, class F>
 void each_indexed_near(const Cells& cells, double h, const Vec3& x, Key key, F f) {
-  const long long a = static_cast<long long>(std::floor(x.x / h));
-  const long long b = static_cast<long long>(std::floor(x.y / h));
-  const long long c = static_cast<long long>(std::floor(x.z / h));
-  for (long long da = -1; da <= 1; ++da)
-    for (long long db = -1; db <= 1; ++db)
-      for (long long dc = -1; dc <= 1; ++dc) {
-        const auto it = cells.find(key(a + da, b + db, c + dc));
-        if (it == cells.end()) continue;
-        for (std::size_t e : it->second) f(e);
-      }
+  for_each_cell_around(x, h, [&](long long a, long long b, long long c) {
+    const auto it = cells.find(key(a, b, c));
+    if (it == cells.end()) return;
+    for (std::size_t e : it->second) f(e);
+  });
 }
 }  // namespace
 

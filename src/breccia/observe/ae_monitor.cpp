@@ -7,6 +7,7 @@
 
 #include "breccia/core/archive.hpp"
 #include "breccia/core/byte_text.hpp"
+#include "breccia/core/cell_walk.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
 #include "breccia/core/ranks.hpp"
@@ -228,16 +229,11 @@ void AeMonitor::build_grid(const Simulation& sim) {
 template <class F>
 void AeMonitor::for_grains_near(const ParticleStore& p, const Vec3& x, F&& f) const {
   const double h = s_.source_radius;
-  const long long a = static_cast<long long>(std::floor(x.x / h));
-  const long long b = static_cast<long long>(std::floor(x.y / h));
-  const long long c = static_cast<long long>(std::floor(x.z / h));
-  for (long long da = -1; da <= 1; ++da)
-    for (long long db = -1; db <= 1; ++db)
-      for (long long dc = -1; dc <= 1; ++dc) {
-        const auto [first, last] = grid_.at(a + da, b + db, c + dc);
-        for (const std::uint32_t* it = first; it != last; ++it)
-          if (norm2(p.pos_rad[*it].x - x) <= h * h) f(*it);
-      }
+  for_each_cell_around(x, h, [&](long long a, long long b, long long c) {
+    const auto [first, last] = grid_.at(a, b, c);
+    for (const std::uint32_t* it = first; it != last; ++it)
+      if (norm2(p.pos_rad[*it].x - x) <= h * h) f(*it);
+  });
 }
 
 void AeMonitor::watch_near(const Simulation& sim, Open& o, const Vec3& x) {
