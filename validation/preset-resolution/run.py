@@ -1,0 +1,206 @@
+#!/usr/bin/python3
+"""Resolution table of the 3D presets: E, nu and UCS of each preset's own UCS test on prisms of
+three sizes with the same grains.
+
+Each run is the calibration file's [experiment] (the test the preset was calibrated and verified
+with) with the preset's calibrated [contact], [bond] and density in place of the start values, the
+prism scaled to the size, and the packing seed set. The runs are independent processes; a run
+folder that is complete is reused, so the study can be stopped and run again to continue.
+
+    validation/preset-resolution/run.py OUT [--breccia build/breccia] [--jobs 2]
+        [--presets berea,coal] [--sizes 4,6,9] [--seeds 4:1,2,3 6:1,2 9:1]
+
+writes OUT/<preset>/<size>mm-seed<n>/ (the experiment file and the run folder) and OUT/results.csv
+(one row a run); table.py turns that into the tables of the README.
+"""
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+import time
+import tomllib
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def toml_value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, list):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} as TOML")
+
+
+def write_toml(table, path):
+    """A table of scalars and one level of sub-tables, the shape of an experiment file."""
+    lines = [f"{k} = {toml_value(v)}" for k, v in table.items() if not isinstance(v, dict)]
+    for name, sub in table.items():
+        if isinstance(sub, dict):
+            lines.append(f"\n[{name}]")
+            lines += [f"{k} = {toml_value(v)}" for k, v in sub.items()]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def presets_3d():
+    out = []
+    for record in sorted((ROOT / "materials").glob("*/record.json")):
+        r = json.loads(record.read_text())
+        if r["dimension"] == 3:
+            out.append(r["name"])
+    return out
+
+
+def experiment_for(preset, size_mm, seed):
+    """The calibration's UCS experiment with the calibrated micro-parameters, on a prism of
+    size_mm x size_mm x 2 size_mm."""
+    record = json.loads((ROOT / "materials" / preset / "record.json").read_text())
+    calibration = tomllib.loads((ROOT / record["calibration_file"]).read_text())
+    material = tomllib.loads((ROOT / "materials" / preset / "material.toml").read_text())
+    e = calibration["experiment"]
+    e["name"] = f"{preset}-{size_mm:g}mm-seed{seed}"
+    e["material"] = {"preset": "custom"}
+    # The experiment's own contact keys (the platen friction) stay; the calibrated ones win.
+    e["contact"] = {**e.get("contact", {}), **material["contact"]}
+    e["bond"] = material["bond"]
+    e["sample"]["density"] = material["sample"]["density"]
+    size = size_mm * 1e-3
+    e["sample"].update(width=size, depth=size, height=2 * size)
+    e["engine"]["seed"] = seed
+    out = e.setdefault("output", {})
+    out.update(plot=False, snapshot_strain_interval=0.0)
+    e.setdefault("ae", {})["moment_tensors"] = False
+    return e
+
+
+def run_folder(where):
+    folders = sorted(p for p in where.glob("2*") if p.is_dir())
+    return folders[-1] if folders else None
+
+
+def complete(folder):
+    try:
+        return json.loads((folder / "manifest.json").read_text())["status"] == "complete"
+    except (OSError, ValueError, KeyError):
+        return False
+
+
+def claim(where):
+    """True when this process may run the folder's experiment: no other live process of the
+    study holds its lock (two calls on one OUT share the runs out)."""
+    lock = where / "lock"
+    try:
+        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+    except FileExistsError:
+        try:
+            os.kill(int(lock.read_text() or 0), 0)
+            return False
+        except (ProcessLookupError, ValueError):
+            lock.unlink(missing_ok=True)
+            return claim(where)
+    os.write(fd, str(os.getpid()).encode())
+    os.close(fd)
+    return True
+
+
+def one_run(breccia, out, preset, size_mm, seed):
+    where = out / preset / f"{size_mm:g}mm-seed{seed}"
+    where.mkdir(parents=True, exist_ok=True)
+    folder = run_folder(where)
+    took = None
+    if folder is None or not complete(folder):
+        if not claim(where):
+            print(f"{preset} {size_mm:g} mm seed {seed}: another call is running it",
+                  file=sys.stderr)
+            return None
+        try:
+            took, folder = run_experiment(breccia, where, preset, size_mm, seed)
+        finally:
+            (where / "lock").unlink(missing_ok=True)
+        if folder is None:
+            return None
+    return row(folder, preset, size_mm, seed, took)
+
+
+def run_experiment(breccia, where, preset, size_mm, seed):
+    """Runs the experiment in `where`: its wall time and run folder, or (None, None) when it
+    failed. A run folder an interrupted call left is removed (a UCS this size is not resumed)."""
+    for stale in where.glob("2*"):
+        if stale.is_dir() and not complete(stale):
+            subprocess.run(["rm", "-rf", str(stale)], check=True)
+    experiment = where / "experiment.toml"
+    write_toml(experiment_for(preset, size_mm, seed), experiment)
+    t0 = time.time()
+    with open(where / "run.log", "w") as log:
+        rc = subprocess.run([breccia, "run", str(experiment), "--quiet", "--threads", "1",
+                             "--output", str(where)], stdout=log, stderr=log).returncode
+    took = time.time() - t0
+    folder = run_folder(where)
+    if rc != 0 or folder is None or not complete(folder):
+        print(f"{preset} {size_mm:g} mm seed {seed}: run failed (see {where}/run.log)",
+              file=sys.stderr)
+        return None, None
+    return took, folder
+
+
+def row(folder, preset, size_mm, seed, took):
+    s = json.loads((folder / "summary.json").read_text())
+    m = json.loads((folder / "manifest.json").read_text())
+    broken = s.get("bonds_broken") or 0
+    return {
+        "preset": preset, "size_mm": size_mm, "seed": seed,
+        "particles": s.get("particles"),
+        "youngs_modulus_pa": s.get("youngs_modulus_pa"),
+        "poisson_ratio": s.get("poisson_ratio"),
+        "uniaxial_strength_pa": s.get("peak_deviatoric_stress_pa") if s.get("peak_reached") else None,
+        "shear_crack_fraction": (s.get("cracks_shear", 0) / broken) if broken else None,
+        "largest_end_quarter_share": (s.get("crack_pattern") or {}).get("largest_end_quarter_share"),
+        "wall_s": took if took is not None else m.get("wall_seconds"),
+        "commit": m.get("commit"),
+    }
+
+
+def parse_seeds(items, sizes):
+    seeds = {size: [1] for size in sizes}
+    for item in items or []:
+        size, _, values = item.partition(":")
+        seeds[float(size)] = [int(v) for v in values.split(",")]
+    return seeds
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("out", type=Path)
+    ap.add_argument("--breccia", default=str(ROOT / "build" / "breccia"))
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--presets", default="")
+    ap.add_argument("--sizes", default="4,6,9", help="prism widths in mm (height twice)")
+    ap.add_argument("--seeds", nargs="*", default=["4:1,2,3", "6:1,2", "9:1"],
+                    help="SIZE:SEED,SEED... (default one seed, 1)")
+    a = ap.parse_args()
+    presets = [p for p in a.presets.split(",") if p] or presets_3d()
+    sizes = [float(s) for s in a.sizes.split(",")]
+    seeds = parse_seeds(a.seeds, sizes)
+    # The largest runs first, so that the pool does not end on one long run.
+    runs = [(p, size, seed) for size in sorted(sizes, reverse=True) for p in presets
+            for seed in seeds[size]]
+    with ThreadPoolExecutor(a.jobs) as pool:
+        rows = list(pool.map(lambda r: one_run(a.breccia, a.out, *r), runs))
+    rows = [r for r in rows if r]
+    with open(a.out / "results.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(sorted(rows, key=lambda r: (r["preset"], r["size_mm"], r["seed"])))
+    print(f"{len(rows)} of {len(runs)} runs; {a.out / 'results.csv'}")
+    return 0 if len(rows) == len(runs) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
