@@ -1,14 +1,18 @@
 #!/usr/bin/python3
-"""Resolution table of the 3D presets: E, nu and UCS of each preset's own UCS test on prisms of
+"""Resolution table of the presets: E, nu and UCS of each preset's own UCS test on samples of
 three sizes with the same grains.
 
 Each run is the calibration file's [experiment] (the test the preset was calibrated and verified
 with) with the preset's calibrated [contact], [bond] and density in place of the start values, the
-prism scaled to the size, and the packing seed set. The runs are independent processes; a run
+sample scaled to the width (its shape kept), the platen speed scaled with it (the calibration's
+strain rate), and the packing seed set. The runs are independent processes; a run
 folder that is complete is reused, so the study can be stopped and run again to continue.
 
     validation/preset-resolution/run.py OUT [--breccia build/breccia] [--jobs 2]
         [--presets berea,coal] [--sizes 4,6,9] [--seeds 4:1,2,3 6:1,2 9:1]
+
+The default presets are the 3D ones (their samples are 6 mm wide or 8 mm, brenna); the 2D ones
+want their own widths (--presets berea_2d,... --sizes 1.9,3.8,7.6).
 
 writes OUT/<preset>/<size>mm-seed<n>/ (the experiment file and the run folder) and OUT/results.csv
 (one row a run); table.py turns that into the tables of the README.
@@ -59,8 +63,9 @@ def presets_3d():
 
 
 def experiment_for(preset, size_mm, seed):
-    """The calibration's UCS experiment with the calibrated micro-parameters, on a prism of
-    size_mm x size_mm x 2 size_mm."""
+    """The calibration's UCS experiment with the calibrated micro-parameters, its sample scaled
+    to a width of size_mm (the same shape and grains) and its platen speed with it, so that every
+    size is loaded at the calibration's strain rate."""
     record = json.loads((ROOT / "materials" / preset / "record.json").read_text())
     calibration = tomllib.loads((ROOT / record["calibration_file"]).read_text())
     material = tomllib.loads((ROOT / "materials" / preset / "material.toml").read_text())
@@ -70,9 +75,13 @@ def experiment_for(preset, size_mm, seed):
     # The experiment's own contact keys (the platen friction) stay; the calibrated ones win.
     e["contact"] = {**e.get("contact", {}), **material["contact"]}
     e["bond"] = material["bond"]
-    e["sample"]["density"] = material["sample"]["density"]
-    size = size_mm * 1e-3
-    e["sample"].update(width=size, depth=size, height=2 * size)
+    sample = e["sample"]
+    sample["density"] = material["sample"]["density"]
+    scale = size_mm * 1e-3 / sample["width"]
+    for side in ("width", "depth", "height"):
+        if side in sample:
+            sample[side] *= scale
+    e["test"]["platen_speed"] *= scale
     e["engine"]["seed"] = seed
     out = e.setdefault("output", {})
     out.update(plot=False, snapshot_strain_interval=0.0)
@@ -181,9 +190,9 @@ def main():
     ap.add_argument("--breccia", default=str(ROOT / "build" / "breccia"))
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--presets", default="")
-    ap.add_argument("--sizes", default="4,6,9", help="prism widths in mm (height twice)")
+    ap.add_argument("--sizes", default="4,6,9", help="sample widths in mm")
     ap.add_argument("--seeds", nargs="*", default=["4:1,2,3", "6:1,2", "9:1"],
-                    help="SIZE:SEED,SEED... (default one seed, 1)")
+                    help="SIZE:SEED,SEED... (a size not named: seed 1)")
     a = ap.parse_args()
     presets = [p for p in a.presets.split(",") if p] or presets_3d()
     sizes = [float(s) for s in a.sizes.split(",")]
