@@ -31,6 +31,7 @@
 #include "breccia/io/run_folder.hpp"
 #include "breccia/material/library.hpp"
 #include "breccia/run/failure_analysis.hpp"
+#include "breccia/run/quality.hpp"
 #include "breccia/run/sample_build.hpp"
 #include "breccia/run/session.hpp"
 #include "breccia/version.hpp"
@@ -317,59 +318,6 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
   }
 }
 
-// The quality monitors over the pre-peak rows once the load exceeds 10 % of the peak (the
-// ramp-up start is excluded), judged against docs/physics.md §6.1's limits.
-struct QualityVerdict {
-  double imbalance_pre = 0.0, ke_ratio_pre = 0.0, confine_err_pre = 0.0, confine_err_all = 0.0;
-  // Before the first crack, kinetic energy comes from the loading alone; after, breaking bonds
-  // release it too (dynamic crack release that a lower platen speed does not remove).
-  double ke_ratio_intact = 0.0, imbalance_intact = 0.0;
-  bool quasi_static() const { return imbalance_pre <= 0.05 && ke_ratio_pre <= 1e-3; }
-  bool quasi_static_until_cracking() const {
-    return imbalance_intact <= 0.05 && ke_ratio_intact <= 1e-3;
-  }
-};
-
-QualityVerdict judge_quality(const LoopState& L, const analysis::CompressionResult& an) {
-  const analysis::CompressionSeries& series = L.series;
-  QualityVerdict q;
-  for (std::size_t k = 0; k < series.deviatoric.size(); ++k) {
-    if (k < L.confine_err.size()) q.confine_err_all = std::max(q.confine_err_all, L.confine_err[k]);
-    const bool pre = series.axial_strain[k] <= an.strain_at_peak &&
-                     series.deviatoric[k] >= 0.1 * an.peak_deviatoric;
-    if (!pre) continue;
-    q.imbalance_pre = std::max(q.imbalance_pre, L.imbalance[k]);
-    q.ke_ratio_pre = std::max(q.ke_ratio_pre, L.ke_ratio[k]);
-    if (series.broken_bonds[k] == 0.0) {
-      q.ke_ratio_intact = std::max(q.ke_ratio_intact, L.ke_ratio[k]);
-      q.imbalance_intact = std::max(q.imbalance_intact, L.imbalance[k]);
-    }
-    if (k < L.confine_err.size()) q.confine_err_pre = std::max(q.confine_err_pre, L.confine_err[k]);
-  }
-  return q;
-}
-
-std::vector<std::string> quality_warnings(const QualityVerdict& q, const Protocol& test) {
-  std::vector<std::string> w;
-  const StressStrainTest* curve = test.stress_strain();
-  if (!curve) return w;  // dynamic by design
-  if (!q.quasi_static())
-    w.push_back(fmt::format(
-        "the test was not quasi-static before the peak: platen force imbalance {:.3g} (limit "
-        "0.05; {:.3g} before the first crack), kinetic/strain energy {:.3g} (limit 1e-3; {:.3g} "
-        "before the first crack); {}",
-        q.imbalance_pre, q.imbalance_intact, q.ke_ratio_pre, q.ke_ratio_intact,
-        q.quasi_static_until_cracking()
-            ? "the loading was quasi-static until bonds broke: the excess comes from bursts of "
-              "breaking bonds near the peak, which a lower platen speed does not remove"
-            : "lower test.platen_speed"));
-  if (curve->confining_stress() > 0.0 && q.confine_err_pre > 0.02)
-    w.push_back(fmt::format(
-        "the confining stress left its 2 % band before the peak (largest error {:.3g} %)",
-        100 * q.confine_err_pre));
-  return w;
-}
-
 // The headline numbers of a finished (or interrupted) run, for the caller.
 RunResult run_result(const fs::path& folder, const Session& ss, const LoopEnd& end,
                      const analysis::CompressionResult& an, double wall_seconds) {
@@ -441,8 +389,11 @@ json quality_fields(const QualityVerdict& q) {
            {{"ok", q.quasi_static()},
             {"max_platen_force_imbalance_before_peak", q.imbalance_pre},
             {"max_kinetic_to_strain_energy_before_peak", q.ke_ratio_pre},
-            {"max_kinetic_to_strain_energy_before_first_crack", q.ke_ratio_intact},
-            {"max_platen_force_imbalance_before_first_crack", q.imbalance_intact}}},
+            {"rows_before_first_crack", q.intact_rows},
+            {"max_kinetic_to_strain_energy_before_first_crack",
+             q.intact_rows > 0 ? json(q.ke_ratio_intact) : json(nullptr)},
+            {"max_platen_force_imbalance_before_first_crack",
+             q.intact_rows > 0 ? json(q.imbalance_intact) : json(nullptr)}}},
           {"confining_stress_error",
            {{"max_relative_before_peak", q.confine_err_pre},
             {"max_relative_overall", q.confine_err_all}}}};
@@ -598,9 +549,12 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
   const analysis::CompressionResult an = analysis::analyse_compression(ss.loop.series);
   RunResult result = run_result(folder, ss, end, an, wall());
   if (!lead) return result;
-  const QualityVerdict q = judge_quality(ss.loop, an);
-  std::vector<std::string> warnings = ss.loop.warnings;  // those of the set-up, logged already
-  for (const std::string& w : quality_warnings(q, *ss.test)) {
+  const QualityVerdict q =
+      judge_quality(ss.loop.series, ss.loop.imbalance, ss.loop.ke_ratio, ss.loop.confine_err, an);
+  std::vector<std::string> warnings = ss.loop.warnings;      // those of the set-up, logged already
+  const StressStrainTest* curve = ss.test->stress_strain();  // none: dynamic by design
+  for (const std::string& w :
+       curve ? quality_warnings(q, curve->confining_stress()) : std::vector<std::string>{}) {
     log("warning: " + w);
     warnings.push_back(w);
   }
