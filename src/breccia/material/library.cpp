@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 namespace breccia {
@@ -97,6 +99,90 @@ std::string verdict(bool pass) {
   return pass ? "passes" : "**FAILS**";
 }
 
+// Mean and sample standard deviation of a list's finite numbers (NaN where there are none).
+struct Spread {
+  double mean = std::nan("");
+  double sd = std::nan("");
+  std::size_t n = 0;
+};
+
+Spread spread_of(const json& values) {
+  std::vector<double> xs;
+  for (const auto& v : values)
+    if (v.is_number() && std::isfinite(v.get<double>())) xs.push_back(v.get<double>());
+  Spread s;
+  s.n = xs.size();
+  if (xs.empty()) return s;
+  double sum = 0.0;
+  for (double x : xs) sum += x;
+  s.mean = sum / static_cast<double>(s.n);
+  if (s.n < 2) return s;
+  double ss = 0.0;
+  for (double x : xs) ss += (x - s.mean) * (x - s.mean);
+  s.sd = std::sqrt(ss / static_cast<double>(s.n - 1));
+  return s;
+}
+
+std::string spread_text(const Spread& s, double scale, const char* fmt_spec) {
+  if (s.n == 0) return "n/a";
+  std::string t = fmt::format(fmt::runtime(fmt_spec), scale * s.mean);
+  if (std::isfinite(s.sd)) t += " +/- " + fmt::format(fmt::runtime(fmt_spec), scale * s.sd);
+  return t;
+}
+
+// The sample of a resolution block that the preset was calibrated on.
+const json* reference_sample(const json& res) {
+  for (const auto& s : res["samples"])
+    if (std::abs(number(s, "width_m") - number(res, "reference_width_m")) < 1e-9) return &s;
+  return nullptr;
+}
+
+// The largest relative move of a property's size means from the calibration size's mean.
+double largest_move(const json& res, const char* key) {
+  const json* ref = reference_sample(res);
+  if (!ref) return std::nan("");
+  const double r0 = spread_of((*ref)[key]).mean;
+  double worst = 0.0;
+  for (const auto& s : res["samples"]) {
+    const double move = (spread_of(s[key]).mean - r0) / r0;
+    if (std::isfinite(move) && std::abs(move) > std::abs(worst)) worst = move;
+  }
+  return worst;
+}
+
+constexpr double kResolutionTolerance = 0.10;
+
+// Each sample size the preset was run at (validation/preset-resolution): grains, E, nu, UCS and
+// shear share, means over the packings.
+std::string resolution_table(const json& r) {
+  if (!r.contains("resolution")) return "";
+  const json& res = r["resolution"];
+  std::string commits;
+  for (const auto& c : res.value("commits", json::array()))
+    commits += (commits.empty() ? "" : ", ") + c.get<std::string>();
+  std::string s = fmt::format(
+      "\nResolution across sample sizes (the same grains, the calibration's strain rate; "
+      "`{}`, commit {}; mean +/- sd over the packings):\n\n"
+      "| sample | grains | packings | E_t50 | Poisson ratio | UCS | shear cracks | "
+      "wall time, 1 thread |\n|---|---|---|---|---|---|---|---|\n",
+      res.value("study", "?"), commits);
+  const json* ref = reference_sample(res);
+  for (const auto& x : res["samples"]) {
+    std::string size = fmt::format("{:g}", 1e3 * number(x, "width_m"));
+    if (x.contains("depth_m")) size += fmt::format(" x {:g}", 1e3 * number(x, "depth_m"));
+    size += fmt::format(" x {:g} mm", 1e3 * number(x, "height_m"));
+    if (&x == ref) size += " (calibration size)";
+    s += fmt::format("| {} | {} | {} | {} GPa | {} | {} MPa | {} % | {} s |\n", size,
+                     spread_text(spread_of(x["particles"]), 1, "{:.0f}"), x["seeds"].size(),
+                     spread_text(spread_of(x["youngs_modulus"]), 1e-9, "{:.2f}"),
+                     spread_text(spread_of(x["poisson_ratio"]), 1, "{:.3f}"),
+                     spread_text(spread_of(x["uniaxial_strength"]), 1e-6, "{:.1f}"),
+                     spread_text(spread_of(x["shear_crack_fraction"]), 100, "{:.1f}"),
+                     spread_text(spread_of(x["wall_seconds"]), 1, "{:.0f}"));
+  }
+  return s;
+}
+
 std::string record_section(const EmbeddedMaterial& m) {
   const json r = record_of(m);
   std::string s = fmt::format("\n## `{}`: {}\n\n", m.name, r.value("rock", std::string(m.name)));
@@ -163,7 +249,7 @@ std::string record_section(const EmbeddedMaterial& m) {
                                           kMaxEndQuarterShare)
                          : std::string());
   }
-  return s;
+  return s + resolution_table(r);
 }
 
 // The rocks of the seeds the library does not hold yet, and why: listed so that the table shows
@@ -392,6 +478,41 @@ std::string law_limits_notes() {
          "depend on it, so a sample of other grains should be calibrated again.\n";
 }
 
+// One row per preset with a resolution block: how far E and the UCS move over its sample sizes.
+std::string resolution_notes() {
+  std::string rows;
+  for (const auto& m : embedded_materials()) {
+    const json r = record_of(m);
+    if (!r.contains("resolution")) continue;
+    const json& res = r["resolution"];
+    std::string grains;
+    double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+    for (const auto& x : res["samples"]) {
+      const double n = spread_of(x["particles"]).mean;
+      lo = std::min(lo, n), hi = std::max(hi, n);
+      grains += (grains.empty() ? "" : " / ") + fmt::format("{:.0f}", n);
+    }
+    const double e = largest_move(res, "youngs_modulus");
+    const double ucs = largest_move(res, "uniaxial_strength");
+    const bool holds = std::abs(e) <= kResolutionTolerance && std::abs(ucs) <= kResolutionTolerance;
+    rows += fmt::format("| `{}` | {}D | {} ({:.1f} x) | {:+.1f} % | {:+.1f} % | {} |\n", m.name,
+                        r.value("dimension", 3), grains, hi / lo, 100 * e, 100 * ucs,
+                        holds ? "holds" : "**moves**");
+  }
+  if (rows.empty()) return "";
+  return "\n## Resolution across sample sizes\n\n"
+         "Each preset's own UCS test (its calibration file's experiment with the calibrated "
+         "values) on samples of three sizes with the same grains, loaded at the calibration's "
+         "strain rate (validation/preset-resolution). The moves are the largest change of the "
+         "mean E_t50 and UCS of a size from those of the size the preset was calibrated on; a "
+         "preset holds when both stay within " +
+         fmt::format("{:g}", 100 * kResolutionTolerance) +
+         " %. Each preset's section below has its table.\n\n"
+         "| preset | dimension | grains | E move | UCS move | verdict |\n"
+         "|---|---|---|---|---|---|\n" +
+         rows;
+}
+
 // The verification mean of one target of a record; NaN when the record has no such target.
 double verdict_mean(const json& r, const std::string& target) {
   for (const auto& v : r.value("verdicts", json::array()))
@@ -476,8 +597,8 @@ std::string law_reach_notes() {
 }  // namespace
 
 std::string materials_docs() {
-  std::string s =
-      verdict_table() + provenance_notes() + gauge_notes() + law_limits_notes() + law_reach_notes();
+  std::string s = verdict_table() + provenance_notes() + gauge_notes() + law_limits_notes() +
+                  resolution_notes() + law_reach_notes();
   s += pending_section();
   for (const auto& m : embedded_materials()) s += record_section(m);
   return s;
