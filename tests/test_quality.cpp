@@ -104,3 +104,32 @@ TEST(Quality, TheConfinementBandIsCheckedOnlyUnderConfinement) {
   ASSERT_EQ(quality_warnings(q, 10e6).size(), 1u);
   EXPECT_TRUE(contains(quality_warnings(q, 10e6)[0], "3 %"));
 }
+
+using breccia::kPresetLoadingTolerance;
+using breccia::preset_loading_warning;
+
+TEST(PresetLoading, ASlowerOrEqualLoadingIsQuiet) {
+  // berea_2d's verification: 0.03 m/s at density scaling 100, v sqrt(s) = 0.3 m/s.
+  EXPECT_FALSE(preset_loading_warning("berea_2d", 0.03, 100, 0.03, 100));
+  EXPECT_FALSE(preset_loading_warning("berea_2d", 0.03, 100, 0.015, 100));
+  EXPECT_FALSE(preset_loading_warning("berea_2d", 0.03, 100, 0.06, 25));  // 0.3 m/s again
+  // Just inside the tolerance: 1.5 x 0.3 = 0.45 m/s.
+  EXPECT_FALSE(preset_loading_warning("berea_2d", 0.03, 100, 0.0449, 100));
+}
+
+TEST(PresetLoading, TheSixtyThousandDiskBenchmarksLoadingWarns) {
+  // bench/biaxial-60k: 0.15 m/s at density scaling 500 is 0.15 x sqrt(500) = 3.354 m/s, 11.18
+  // times the preset's 0.3 m/s.
+  const auto w = preset_loading_warning("berea_2d", 0.03, 100, 0.15, 500);
+  ASSERT_TRUE(w);
+  EXPECT_NE(w->find("11.2 times"), std::string::npos) << *w;
+  EXPECT_NE(w->find("3.35 m/s"), std::string::npos) << *w;
+  EXPECT_NE(w->find("berea_2d"), std::string::npos) << *w;
+  EXPECT_TRUE(preset_loading_warning("berea_2d", 0.03, 100, 0.0451, 100));
+  EXPECT_GT(kPresetLoadingTolerance, 1.0);
+}
+
+TEST(PresetLoading, NoPlatensOrNoRecordedLoadingIsQuiet) {
+  EXPECT_FALSE(preset_loading_warning("berea", 0.03, 10, 0.0, 10));  // no platens
+  EXPECT_FALSE(preset_loading_warning("berea", 0.0, 0.0, 0.3, 10));  // record without loading
+}

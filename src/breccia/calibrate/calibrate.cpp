@@ -588,6 +588,11 @@ void Calibrator::write_outputs(const CalibrationResult& r) const {
   for (const auto& t : c_.tied)
     params[t.key] = t.factor * r.values[static_cast<std::size_t>(free_index(t.follows))];
   const json& sample = lab_.sample_report(c_.fit_sets().front());
+  // The loading behind the verdicts (a run of the preset that loads faster warns).
+  const ExperimentSpec verified =
+      parse_experiment_table(c_.text, c_.path, "experiment", c_.verify_set);
+  const json loading{{"platen_speed_m_per_s", platen_speed(verified)},
+                     {"density_scaling", verified.density_scaling}};
   json record{{"name", c_.name},
               {"rock", c_.rock.empty() ? c_.name : c_.rock},
               {"version", kVersion},
@@ -602,6 +607,7 @@ void Calibrator::write_outputs(const CalibrationResult& r) const {
               {"fit_seeds", c_.fit_seeds},
               {"verify_seeds", c_.verify_seeds},
               {"verify_set", c_.verify_set},
+              {"loading", loading},
               {"calibration_sample", sample},
               {"verification", verification_},
               {"evaluations", r.evaluations},

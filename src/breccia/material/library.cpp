@@ -204,6 +204,15 @@ std::string record_section(const EmbeddedMaterial& m) {
         r.value("verify_set", json::array()).empty() ? std::string("the same sample settings")
                                                      : "`" + r["verify_set"].dump() + "`");
   }
+  if (r.contains("loading")) {
+    const double v = number(r["loading"], "platen_speed_m_per_s");
+    const double scaling = number(r["loading"], "density_scaling");
+    s += fmt::format(
+        "- Loading of the verification tests: platens at {:g} m/s, density scaling {:g} "
+        "(speed x sqrt(scaling) {:.3g} m/s); a run of the preset that loads more than {:g} times "
+        "faster by that measure warns (docs/physics.md §6.1).\n",
+        v, scaling, v * std::sqrt(scaling), kPresetLoadingTolerance);
+  }
   std::string grains;
   for (const auto& v : r.value("verification", json::array()))
     grains += (grains.empty() ? "" : ", ") + std::to_string(v.value("particles", 0));

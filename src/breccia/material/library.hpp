@@ -27,6 +27,12 @@ inline constexpr double kMinShearShare = 0.01;
 inline constexpr double kMaxEndQuarterShare = 0.40;
 std::vector<std::string> honesty_failures(const EmbeddedMaterial& m);
 
+// How far a test is from quasi-static goes with its platens' speed over the grains' wave speed,
+// v sqrt(s) for one rock at density scaling s (docs/physics.md §6.1). A run of a preset that
+// loads more than this many times faster than the preset's verification tests (the record's
+// "loading") warns: its peak and modulus carry inertia the preset's values do not.
+inline constexpr double kPresetLoadingTolerance = 1.5;
+
 // docs/materials.md: one table of every preset (rock, source, each target, achieved, error),
 // then each record in full.
 std::string materials_docs();

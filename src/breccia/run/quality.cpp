@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace breccia {
 
@@ -68,6 +69,22 @@ std::vector<std::string> quality_warnings(const QualityVerdict& q, double confin
         "the confining stress left its 2 % band before the peak (largest error {:.3g} %)",
         100 * q.confine_err_pre));
   return w;
+}
+
+std::optional<std::string> preset_loading_warning(const std::string& preset, double preset_speed,
+                                                  double preset_scaling, double speed,
+                                                  double scaling) {
+  if (!(speed > 0.0 && preset_speed > 0.0 && preset_scaling > 0.0 && scaling > 0.0))
+    return std::nullopt;
+  const double run = speed * std::sqrt(scaling);
+  const double calibrated = preset_speed * std::sqrt(preset_scaling);
+  if (run <= kPresetLoadingTolerance * calibrated) return std::nullopt;
+  return fmt::format(
+      "the platens load {:.3g} times less quasi-statically than {}'s verification tests "
+      "(speed x sqrt(density scaling): {:.3g} m/s at {:g} m/s and {:g}, against {:.3g} m/s at "
+      "{:g} m/s and {:g}): the peak and the modulus carry inertia the preset's values do not; "
+      "lower test.platen_speed or engine.density_scaling to the preset's (docs/physics.md §6.1)",
+      run / calibrated, preset, run, speed, scaling, calibrated, preset_speed, preset_scaling);
 }
 
 }  // namespace breccia

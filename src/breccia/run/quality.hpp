@@ -1,10 +1,12 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "breccia/analysis/compression.hpp"
+#include "breccia/material/library.hpp"
 
 namespace breccia {
 
@@ -33,5 +35,12 @@ QualityVerdict judge_quality(const analysis::CompressionSeries& series,
 
 // The warnings a stress-strain test's summary carries, with what to change.
 std::vector<std::string> quality_warnings(const QualityVerdict& q, double confining_stress);
+
+// The warning for a run of `preset` at platen speed `speed` and density scaling `scaling` whose
+// verification tests ran at `preset_speed` and `preset_scaling`; none when it loads no faster
+// than kPresetLoadingTolerance times those by v sqrt(s) (or has no platens).
+std::optional<std::string> preset_loading_warning(const std::string& preset, double preset_speed,
+                                                  double preset_scaling, double speed,
+                                                  double scaling);
 
 }  // namespace breccia

@@ -634,6 +634,23 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
 
 namespace {
 
+// The warning when a run of a calibrated preset loads its platens less quasi-statically than the
+// preset's verification tests did (their loading is in its record).
+std::optional<std::string> preset_loading_check(const ExperimentSpec& spec, const Protocol& test) {
+  const StressStrainTest* curve = test.stress_strain();
+  if (!curve) return std::nullopt;
+  for (const EmbeddedMaterial& e : embedded_materials()) {
+    if (e.name != spec.preset || e.record.empty()) continue;
+    const json r = json::parse(e.record, nullptr, false);
+    if (!r.is_object() || !r.contains("loading")) return std::nullopt;
+    const json& l = r["loading"];
+    return preset_loading_warning(spec.preset, l.value("platen_speed_m_per_s", 0.0),
+                                  l.value("density_scaling", 0.0), curve->platen_speed(),
+                                  spec.density_scaling);
+  }
+  return std::nullopt;
+}
+
 // Where the run's micro-parameters come from: the material preset and, for a library rock, its
 // calibration record, with whether the run kept the calibrated values (applying the preset
 // again to the resolved experiment changes nothing) or overrode some of them.
@@ -785,6 +802,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   loop.bond_sites_initial = sim.intact_bond_sites();
   const double sigma3 = confining_stress(test);
   loop.series.confining_stress = sigma3;
+  if (auto w = preset_loading_check(spec, test)) loop.warnings.push_back(*w);
   if (sigma3 > 0.0 && !test.stress_strain()->consolidated())
     loop.warnings.push_back(fmt::format(
         "consolidation to {} MPa did not settle within {} steps; loading started anyway",

@@ -480,6 +480,14 @@ void set_platen_speed(ExperimentSpec& spec, double speed, const std::string& whe
   });
 }
 
+double platen_speed(const ExperimentSpec& spec) {
+  double speed = 0.0;
+  visit_lab_test(spec.test, [&]<class T>(const typename T::Params& p) {
+    if constexpr (PlatenLoaded<T>) speed = T::loading(p).platen_speed;
+  });
+  return speed;
+}
+
 SampleInfo sample_info(const ExperimentSpec& s) {
   SampleInfo info;
   info.dimension = static_cast<int>(s.dimension);

@@ -127,6 +127,8 @@ void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string
 // Sets the platens' speed of the experiment's compression test (strain-rate sweeps). Throws
 // InputError for tests that are not compression.
 void set_platen_speed(ExperimentSpec& spec, double speed, const std::string& where);
+// The platens' speed of the experiment's compression test, m/s; 0 for tests without platens.
+double platen_speed(const ExperimentSpec& spec);
 // The [sample] radius distribution of a generated sample.
 RadiusDistribution radius_distribution(const ExperimentSpec& spec);
 // The chosen bond law's moduli (bar-wave speed, crack energies).
