@@ -74,7 +74,7 @@ def resolution_block(out, preset):
         "commits": sorted(c for c in commits if c),
         "machines": sorted(x for x in machines if x),
         "reference_width_m": reference,
-        "strain_rate": "the calibration's (platen speed scaled with the sample)",
+        "loading": "the calibration's platen speed and density scaling at every size",
         "samples": samples,
     }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""The resolution tables of the study run.py made: per preset and prism size, the mean E, nu and
-UCS over the packings run, and how far E and the UCS move from their values on the calibration
-size (6 mm, the size each preset was calibrated on; brenna was calibrated on 8 mm).
+"""The resolution tables of the study run.py made: per preset and sample width, the mean E, nu and
+UCS over the packings run, and how far E and the UCS move from their values on the width the
+preset was calibrated on (6 mm for the 3D presets, 8 mm for brenna, 1.9 or 3.8 mm in 2D).
 
     validation/preset-resolution/table.py OUT/results.csv [--tolerance 0.10]
 
@@ -82,12 +82,12 @@ def main():
             f"| `{p}` | {grains} | {worst['youngs_modulus_pa']:+.1%} | "
             f"{worst['uniaxial_strength_pa']:+.1%} | {'yes' if ok else '**no**'} |")
         detail += [f"\n`{p}` (calibrated on {ref:g} mm):\n",
-                   "| prism | grains | E (GPa) | nu | UCS (MPa) | shear cracks | wall (s, 1 thread) |",
+                   "| width | grains | E (GPa) | nu | UCS (MPa) | shear cracks | wall (s, 1 thread) |",
                    "|---|---|---|---|---|---|---|"]
         for s in sizes:
             st = stats[s]
             detail.append(
-                f"| {s:g} x {s:g} x {2 * s:g} mm | {st['particles'][0]:,.0f} | "
+                f"| {s:g} mm | {st['particles'][0]:,.0f} | "
                 f"{fmt(*st['youngs_modulus_pa'], 1e9, 2)} | {fmt(*st['poisson_ratio'], 1, 3)} | "
                 f"{fmt(*st['uniaxial_strength_pa'], 1e6, 1)} | "
                 f"{fmt(*st['shear_crack_fraction'], 0.01, 1)} % | {st['wall_s'][0]:.0f} |")

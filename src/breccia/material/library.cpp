@@ -161,7 +161,7 @@ std::string resolution_table(const json& r) {
   for (const auto& c : res.value("commits", json::array()))
     commits += (commits.empty() ? "" : ", ") + c.get<std::string>();
   std::string s = fmt::format(
-      "\nResolution across sample sizes (the same grains, the calibration's strain rate; "
+      "\nResolution across sample sizes (the same grains, the calibration's loading; "
       "`{}`, commit {}; mean +/- sd over the packings):\n\n"
       "| sample | grains | packings | E_t50 | Poisson ratio | UCS | shear cracks | "
       "wall time, 1 thread |\n|---|---|---|---|---|---|---|---|\n",
@@ -517,7 +517,8 @@ std::string resolution_notes() {
   return "\n## Resolution across sample sizes\n\n"
          "Each preset's own UCS test (its calibration file's experiment with the calibrated "
          "values) on samples of three sizes with the same grains, loaded at the calibration's "
-         "strain rate (validation/preset-resolution). The moves are the largest change of the "
+         "platen speed and density scaling (validation/preset-resolution). The moves are the "
+         "largest change of the "
          "mean E_t50 and UCS of a size from those of the size the preset was calibrated on; a "
          "preset holds when both stay within " +
          fmt::format("{:g}", 100 * kResolutionTolerance) +
