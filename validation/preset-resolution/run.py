@@ -19,8 +19,8 @@ writes OUT/<preset>/<size>mm-seed<n>/ (the experiment file and the run folder) a
 """
 import argparse
 import csv
+import fcntl
 import json
-import os
 import subprocess
 import sys
 import time
@@ -104,21 +104,16 @@ def complete(folder):
 
 
 def claim(where):
-    """True when this process may run the folder's experiment: no other live process of the
-    study holds its lock (two calls on one OUT share the runs out)."""
-    lock = where / "lock"
+    """An open lock on the folder's experiment, or None when another call of the study holds it
+    (two calls on one OUT share the runs out). The system lets go of the lock when the holder
+    ends, however it ends."""
+    lock = open(where / "lock", "w")
     try:
-        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-    except FileExistsError:
-        try:
-            os.kill(int(lock.read_text() or 0), 0)
-            return False
-        except (ProcessLookupError, ValueError):
-            lock.unlink(missing_ok=True)
-            return claim(where)
-    os.write(fd, str(os.getpid()).encode())
-    os.close(fd)
-    return True
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        lock.close()
+        return None
+    return lock
 
 
 def one_run(breccia, out, preset, size_mm, seed):
@@ -127,14 +122,13 @@ def one_run(breccia, out, preset, size_mm, seed):
     folder = run_folder(where)
     took = None
     if folder is None or not complete(folder):
-        if not claim(where):
+        lock = claim(where)
+        if lock is None:
             print(f"{preset} {size_mm:g} mm seed {seed}: another call is running it",
                   file=sys.stderr)
             return None
-        try:
+        with lock:
             took, folder = run_experiment(breccia, where, preset, size_mm, seed)
-        finally:
-            (where / "lock").unlink(missing_ok=True)
         if folder is None:
             return None
     return row(folder, preset, size_mm, seed, took)
