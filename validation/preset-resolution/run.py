@@ -198,13 +198,21 @@ def main():
             for seed in seeds[size]]
     with ThreadPoolExecutor(a.jobs) as pool:
         rows = list(pool.map(lambda r: one_run(a.breccia, a.out, *r), runs))
-    rows = [r for r in rows if r]
-    with open(a.out / "results.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(sorted(rows, key=lambda r: (r["preset"], r["size_mm"], r["seed"])))
-    print(f"{len(rows)} of {len(runs)} runs; {a.out / 'results.csv'}")
-    return 0 if len(rows) == len(runs) else 1
+    done = sum(1 for r in rows if r)
+    # results.csv holds every complete run under OUT, this call's and earlier calls'.
+    every = []
+    for where in sorted(a.out.glob("*/*mm-seed*")):
+        folder = run_folder(where)
+        name = where.name.split("mm-seed")
+        if folder is not None and complete(folder) and len(name) == 2:
+            every.append(row(folder, where.parent.name, float(name[0]), int(name[1]), None))
+    if every:
+        with open(a.out / "results.csv", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(every[0].keys()))
+            w.writeheader()
+            w.writerows(sorted(every, key=lambda r: (r["preset"], r["size_mm"], r["seed"])))
+    print(f"{done} of this call's {len(runs)} runs; {len(every)} in {a.out / 'results.csv'}")
+    return 0 if done == len(runs) else 1
 
 
 if __name__ == "__main__":
