@@ -17,6 +17,8 @@ import tomllib
 from collections import defaultdict
 from pathlib import Path
 
+from run import complete, run_folder
+
 ROOT = Path(__file__).resolve().parents[2]
 FOLDER = re.compile(r"^([0-9.]+)mm-seed([0-9]+)$")
 
@@ -25,17 +27,12 @@ def complete_runs(out, preset):
     """(width in mm, seed, summary, manifest) of every complete run of the preset."""
     for where in sorted((out / preset).glob("*mm-seed*")):
         m = FOLDER.match(where.name)
-        if not m:
+        folder = run_folder(where)
+        if not m or folder is None or not complete(folder):
             continue
-        for run in sorted(where.glob("2*")):
-            try:
-                manifest = json.loads((run / "manifest.json").read_text())
-                if manifest.get("status") != "complete":
-                    continue
-                summary = json.loads((run / "summary.json").read_text())
-            except (OSError, ValueError):
-                continue
-            yield float(m.group(1)), int(m.group(2)), summary, manifest
+        summary = json.loads((folder / "summary.json").read_text())
+        manifest = json.loads((folder / "manifest.json").read_text())
+        yield float(m.group(1)), int(m.group(2)), summary, manifest
 
 
 def resolution_block(out, preset):

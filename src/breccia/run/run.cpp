@@ -634,35 +634,37 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
 
 namespace {
 
+// The calibration record of the run's preset; null for "custom" or a preset without one.
+json preset_record(const ExperimentSpec& spec) {
+  for (const EmbeddedMaterial& e : embedded_materials())
+    if (e.name == spec.preset && !e.record.empty()) {
+      json r = json::parse(e.record, nullptr, false);
+      return r.is_discarded() ? json(nullptr) : r;
+    }
+  return nullptr;
+}
+
 // The warning when a run of a calibrated preset loads its platens less quasi-statically than the
 // preset's verification tests did (their loading is in its record).
 std::optional<std::string> preset_loading_check(const ExperimentSpec& spec, const Protocol& test) {
   const StressStrainTest* curve = test.stress_strain();
-  if (!curve) return std::nullopt;
-  for (const EmbeddedMaterial& e : embedded_materials()) {
-    if (e.name != spec.preset || e.record.empty()) continue;
-    const json r = json::parse(e.record, nullptr, false);
-    if (!r.is_object() || !r.contains("loading")) return std::nullopt;
-    const json& l = r["loading"];
-    return preset_loading_warning(spec.preset, l.value("platen_speed_m_per_s", 0.0),
-                                  l.value("density_scaling", 0.0), curve->platen_speed(),
-                                  spec.density_scaling);
-  }
-  return std::nullopt;
+  const json r = preset_record(spec);
+  if (!curve || !r.is_object() || !r.contains("loading")) return std::nullopt;
+  const json& l = r["loading"];
+  return preset_loading_warning(spec.preset, l.value("platen_speed_m_per_s", 0.0),
+                                l.value("density_scaling", 0.0), curve->platen_speed(),
+                                spec.density_scaling);
 }
 
 // Where the run's micro-parameters come from: the material preset and, for a library rock, its
 // calibration record, with whether the run kept the calibrated values (applying the preset
 // again to the resolved experiment changes nothing) or overrode some of them.
 json material_provenance(const ExperimentSpec& spec) {
-  json m = {{"preset", spec.preset}, {"record", nullptr}};
-  for (const EmbeddedMaterial& e : embedded_materials()) {
-    if (e.name != spec.preset || e.record.empty()) continue;
-    ExperimentSpec as_calibrated = spec;
-    apply_preset(as_calibrated, spec.preset, "material provenance");
-    m["parameters_as_calibrated"] = to_toml(as_calibrated) == to_toml(spec);
-    m["record"] = json::parse(e.record);
-  }
+  json m = {{"preset", spec.preset}, {"record", preset_record(spec)}};
+  if (m["record"].is_null()) return m;
+  ExperimentSpec as_calibrated = spec;
+  apply_preset(as_calibrated, spec.preset, "material provenance");
+  m["parameters_as_calibrated"] = to_toml(as_calibrated) == to_toml(spec);
   return m;
 }
 
