@@ -893,6 +893,8 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   std::ifstream in = open_checkpoint(cpath);
   ArchiveReader a(in, cpath.string());
   const fs::path folder = other_rank ? resume_folder_of_rank(source, scratch) : source;
+  // Root cuts its tables back to the checkpoint's length below: not while another rank copies.
+  if (opt.split_over_ranks) ranks::barrier();
   a.string();  // magic, format and version: checked with the hash
   a.get<std::uint32_t>();
   a.string();
