@@ -6,7 +6,8 @@ Each run is the calibration file's [experiment] (the test the preset was calibra
 with) with the preset's calibrated [contact], [bond] and density in place of the start values, the
 sample scaled to the width (its shape kept) at the calibration's platen speed (as quasi-static as
 the calibration), and the packing seed set. The runs are independent processes; a run
-folder that is complete is reused, so the study can be stopped and run again to continue.
+folder that is complete is reused and one that was stopped is resumed from its checkpoint, so
+the study can be stopped and run again to continue.
 
     validation/preset-resolution/run.py OUT [--breccia build/breccia] [--jobs 2]
         [--presets berea,coal] [--sizes 4,6,9] [--seeds 4:1,2,3 6:1,2 9:1]
@@ -43,14 +44,18 @@ def toml_value(v):
     raise TypeError(f"cannot write {v!r} as TOML")
 
 
-def write_toml(table, path):
+def toml_text(table):
     """A table of scalars and one level of sub-tables, the shape of an experiment file."""
     lines = [f"{k} = {toml_value(v)}" for k, v in table.items() if not isinstance(v, dict)]
     for name, sub in table.items():
         if isinstance(sub, dict):
             lines.append(f"\n[{name}]")
             lines += [f"{k} = {toml_value(v)}" for k, v in sub.items()]
-    path.write_text("\n".join(lines) + "\n")
+    return "\n".join(lines) + "\n"
+
+
+def write_toml(table, path):
+    path.write_text(toml_text(table))
 
 
 def presets_3d():
@@ -136,23 +141,45 @@ def one_run(breccia, out, preset, size_mm, seed):
 
 def run_experiment(breccia, where, preset, size_mm, seed):
     """Runs the experiment in `where`: its wall time and run folder, or (None, None) when it
-    failed. A run folder an interrupted call left is removed (a UCS this size is not resumed)."""
-    for stale in where.glob("2*"):
-        if stale.is_dir() and not complete(stale):
-            subprocess.run(["rm", "-rf", str(stale)], check=True)
+    failed. A run an interrupted call left is resumed from its checkpoint; one without a
+    checkpoint, or of another experiment, is removed and run again."""
     experiment = where / "experiment.toml"
-    write_toml(experiment_for(preset, size_mm, seed), experiment)
+    wanted = experiment_for(preset, size_mm, seed)
+    partial = resumable(where, wanted)
+    for stale in where.glob("2*"):
+        if stale.is_dir() and stale != partial and not complete(stale):
+            subprocess.run(["rm", "-rf", str(stale)], check=True)
+    write_toml(wanted, experiment)
+    if partial is not None:
+        command = [breccia, "resume", str(partial), "--quiet", "--threads", "1"]
+    else:
+        command = [breccia, "run", str(experiment), "--quiet", "--threads", "1",
+                   "--output", str(where)]
     t0 = time.time()
-    with open(where / "run.log", "w") as log:
-        rc = subprocess.run([breccia, "run", str(experiment), "--quiet", "--threads", "1",
-                             "--output", str(where)], stdout=log, stderr=log).returncode
+    with open(where / "run.log", "a" if partial else "w") as log:
+        rc = subprocess.run(command, stdout=log, stderr=log).returncode
     took = time.time() - t0
     folder = run_folder(where)
     if rc != 0 or folder is None or not complete(folder):
         print(f"{preset} {size_mm:g} mm seed {seed}: run failed (see {where}/run.log)",
               file=sys.stderr)
         return None, None
-    return took, folder
+    return (None if partial else took), folder
+
+
+def resumable(where, wanted):
+    """The incomplete run folder in `where` that a checkpoint can finish, when the experiment
+    file beside it is the one this call would write (a study changed since must start over)."""
+    folder = run_folder(where)
+    experiment = where / "experiment.toml"
+    if folder is None or complete(folder) or not (folder / "checkpoint.bin").exists():
+        return None
+    try:
+        if tomllib.loads(experiment.read_text()) != tomllib.loads(toml_text(wanted)):
+            return None
+    except (OSError, tomllib.TOMLDecodeError):
+        return None
+    return folder
 
 
 def row(folder, preset, size_mm, seed, took):
