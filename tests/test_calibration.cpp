@@ -142,6 +142,62 @@ TEST(Calibration, TinyCalibrationRecoversTargetsOfAKnownParameterSet) {
   fs::remove_all(dir);
 }
 
+// A size correction meets the targets where the verification measures them. The targets are
+// what a known parameter set gives on the verification's sample, which differs from the
+// calibration sample by more than the tolerances (another packing with frictionless platens
+// stands in for another size: both shift E and the UCS by several per cent, at a fraction of a
+// larger sample's cost). The search meets them on the calibration sample and so misses them on
+// the verification's (the first round says so); the correction shifts its aims and meets them
+// there, near the known set. The search starts at the known set, which misses the targets on
+// the calibration sample by the gap between the samples: it moves away, the correction back.
+TEST(Calibration, SizeCorrectionMeetsTheTargetsAtTheVerificationSize) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_calibration_size";
+  fs::remove_all(dir);
+  const double known_modulus = 6e9, known_tensile = 25e6;
+  auto with_correction = [](std::string text, int rounds) {
+    text.replace(text.find("verify_seeds = []"), 17,
+                 fmt::format("verify_seeds = [1]\nverify_set = [\"contact.wall_friction=0.0\"]\n"
+                             "size_corrections = {}",
+                             rounds));
+    return text;
+  };
+  const CalibrationSpec truth = parse_calibration(
+      with_correction(tiny_calibration(1e9, 1e6, known_modulus, known_tensile), 2), "truth.toml");
+  Laboratory lab(truth, dir / "truth", [](const std::string&) {});
+  const Measurement m = lab.measure("verify-1", {known_modulus, known_tensile}, TestPlan{});
+  ASSERT_TRUE(m.properties.count(Property::YoungsModulus));
+  ASSERT_TRUE(m.properties.count(Property::UniaxialStrength));
+  const double e = m.properties.at(Property::YoungsModulus);
+  const double ucs = m.properties.at(Property::UniaxialStrength);
+
+  CalibrationOptions opt;
+  opt.output_directory = (dir / "out").string();
+  const CalibrationSpec spec = parse_calibration(
+      with_correction(tiny_calibration(e, ucs, known_modulus, known_tensile), 2), "size.toml");
+  const CalibrationResult r = run_calibration(spec, opt);
+  ASSERT_EQ(r.status, "complete");
+  for (const auto& v : r.verdicts)
+    EXPECT_TRUE(v.met) << info(v.target.property).key << " " << v.error;
+  const auto record =
+      nlohmann::json::parse(breccia::testing::read(fs::path(r.folder) / "record.json"));
+  const auto& rounds = record.at("size_corrections");
+  ASSERT_GE(rounds.size(), 1u);
+  EXPECT_FALSE(rounds[0].at("met").get<bool>())
+      << "the search's parameters must miss at the verification's sample, or the test shows "
+         "nothing";
+  // The aims moved the way the gap says: where the verification's sample reads lower, the
+  // search aims higher.
+  for (const auto& t : rounds[0].at("targets")) {
+    const double small = t.at("calibration_sample"), large = t.at("verification_mean");
+    if (t.at("met_at_verification").get<bool>()) continue;
+    EXPECT_EQ(t.at("next_aim").get<double>() > t.at("lab").get<double>(), small > large)
+        << t.dump();
+  }
+  EXPECT_NEAR(r.values[0] / known_modulus, 1.0, 0.2);
+  EXPECT_NEAR(r.values[1] / known_tensile, 1.0, 0.2);
+  fs::remove_all(dir);
+}
+
 // With fit_seeds the search judges a trial on the mean over one packing per seed: the two
 // packings differ, and measure_fit() returns their mean, reading both tests back.
 TEST(Calibration, FitSeedsJudgeATrialOnTheMeanOverTheirPackings) {
@@ -250,6 +306,13 @@ std::vector<BadCalibration> bad_calibrations() {
       {"AimAboveTheTolerance",
        with_experiment(e_target + free_e + "[calibration]\naim = 1.5\n"),
        {"bad.toml:6", "calibration.aim", "1.5", "from 0.1 to 1"}},
+      {"TooManySizeCorrections",
+       with_experiment(e_target + free_e + "[calibration]\nsize_corrections = 9\n"),
+       {"bad.toml:6", "calibration.size_corrections", "9"}},
+      {"SizeCorrectionWithoutVerification",
+       with_experiment(e_target + free_e +
+                       "[calibration]\nsize_corrections = 1\nverify_seeds = []\n"),
+       {"calibration.size_corrections", "verify_seeds"}},
   };
 }
 

@@ -36,6 +36,12 @@ def main(folder):
                 xs.append(int(r["trial"]))
                 ys.append(float(r[name + "_achieved"]) / scale)
                 cs.append(COLOURS.get(r["stage"], "grey"))
+        # After a size correction the search aims elsewhere than the lab's value (the gap
+        # between the calibration sample and the verification's): drawn as a dotted step.
+        aims = [float(r[name + "_target"]) / scale for r in rows]
+        if any(a != target for a in aims):
+            ax.step([int(r["trial"]) for r in rows], aims, where="post", color="k", ls=":",
+                    lw=1, label="aim of the search")
         ax.plot(xs, ys, color="0.75", lw=1, zorder=1)
         ax.scatter(xs, ys, c=cs, s=22, zorder=2)
         ax.axhline(target, color="k", ls="--", lw=1)

@@ -10,10 +10,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <nlopt.hpp>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
 #include "breccia/calibrate/affine_elasticity.hpp"
 #include "breccia/calibrate/laboratory.hpp"
@@ -83,6 +85,8 @@ struct Evaluation {
   int index = 0;
   std::string stage;  // elastic | strength | friction | final
   int pass = 0;
+  int correction = 0;        // the size-correction round it belongs to (0: the first search)
+  std::vector<double> aims;  // the value each target had in the search (shifted by corrections)
   std::vector<double> values;
   Properties properties;
   double objective = 0.0;
@@ -118,7 +122,11 @@ std::vector<std::vector<double>> check_points(const CalibrationSpec& c) {
 class Calibrator {
  public:
   Calibrator(const CalibrationSpec& c, const CalibrationOptions& o, fs::path folder)
-      : c_(c), o_(o), folder_(std::move(folder)), lab_(c, folder_, o.log, o.pool) {
+      : c_(c),
+        o_(o),
+        folder_(std::move(folder)),
+        lab_(c, folder_, o.log, o.pool),
+        aims_(c.targets) {
     for (const auto& f : c_.free) values_.push_back(f.start);
   }
 
@@ -128,6 +136,10 @@ class Calibrator {
   Evaluation evaluate(const std::vector<double>& v, std::optional<CalibrationStage> stage,
                       int pass);
   void fit_stage(CalibrationStage stage, int pass);
+  Evaluation search();
+  bool correct_for_size(const Evaluation& small);
+  std::map<Property, std::vector<double>> measure_verification(const std::vector<double>& values,
+                                                               json& runs);
   std::vector<double> scaled_start(CalibrationStage stage, const Evaluation& e) const;
   std::vector<TargetVerdict> verify(const Evaluation& final_eval);
   void report_progress(const Evaluation& e) const;
@@ -141,11 +153,17 @@ class Calibrator {
       if (c_.free[i].stage == s) idx.push_back(i);
     return idx;
   }
+  // The targets the search aims at: the lab's, shifted by the size corrections so far.
   std::vector<const Target*> stage_targets(std::optional<CalibrationStage> s) const {
     std::vector<const Target*> t;
-    for (const auto& tg : c_.targets)
+    for (const auto& tg : aims_)
       if (!s || info(tg.property).stage == *s) t.push_back(&tg);
     return t;
+  }
+  const Target* aim(Property p) const {
+    for (const auto& t : aims_)
+      if (t.property == p) return &t;
+    return nullptr;
   }
   int free_index(std::string_view key) const {
     for (std::size_t i = 0; i < c_.free.size(); ++i)
@@ -172,6 +190,9 @@ class Calibrator {
   std::vector<Evaluation> evals_;
   std::vector<TargetVerdict> verdicts_;
   json verification_ = json::array();  // per seed: the sample and what each test measured
+  std::vector<Target> aims_;           // the search's targets (see stage_targets)
+  int correction_ = 0;                 // the size-correction round under way
+  json corrections_ = json::array();   // per round: both sizes' properties and the shifts
   std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
   int stages_done_ = 0;
   double new_run_seconds_ = 0.0;
@@ -185,6 +206,8 @@ Evaluation Calibrator::evaluate(const std::vector<double>& v, std::optional<Cali
   e.index = static_cast<int>(evals_.size()) + 1;
   e.stage = stage ? std::string(stage_name(*stage)) : "final";
   e.pass = pass;
+  e.correction = correction_;
+  for (const auto& t : aims_) e.aims.push_back(t.value);
   e.values = v;
   e.properties = m.properties;
   e.problems = m.problems;
@@ -203,7 +226,9 @@ Evaluation Calibrator::evaluate(const std::vector<double>& v, std::optional<Cali
   }
   // COBYLA may ask for a point it has seen (its start): it is not a new trial.
   for (const auto& old : evals_)
-    if (old.values == e.values && old.stage == e.stage && old.pass == e.pass) return e;
+    if (old.values == e.values && old.stage == e.stage && old.pass == e.pass &&
+        old.correction == e.correction)
+      return e;
   evals_.push_back(e);
   report_progress(e);
   write_convergence();
@@ -212,12 +237,20 @@ Evaluation Calibrator::evaluate(const std::vector<double>& v, std::optional<Cali
 
 int Calibrator::evaluations_left_at_most() const {
   const int stages_total = 3 * static_cast<int>(c_.passes);
+  const int search = stages_total * static_cast<int>(c_.trials_per_stage) +
+                     static_cast<int>(c_.passes) + static_cast<int>(c_.verify_seeds.size());
+  const int rounds_left = static_cast<int>(c_.size_corrections) - correction_;
   return std::max(0, stages_total - stages_done_) * static_cast<int>(c_.trials_per_stage) +
-         static_cast<int>(c_.passes) + static_cast<int>(c_.verify_seeds.size());
+         static_cast<int>(c_.passes) + static_cast<int>(c_.verify_seeds.size()) +
+         std::max(0, rounds_left) * search;
 }
 
 void Calibrator::report_progress(const Evaluation& e) const {
-  std::string line = fmt::format("[calibrate] trial {} ({}, pass {}):", e.index, e.stage, e.pass);
+  std::string line =
+      e.correction > 0
+          ? fmt::format("[calibrate] trial {} ({}, pass {}, size correction {}):", e.index, e.stage,
+                        e.pass, e.correction)
+          : fmt::format("[calibrate] trial {} ({}, pass {}):", e.index, e.stage, e.pass);
   for (const auto& t : c_.targets) {
     const auto it = e.properties.find(t.property);
     const double v = it == e.properties.end() ? kNaN : it->second;
@@ -241,7 +274,7 @@ void Calibrator::report_progress(const Evaluation& e) const {
 std::vector<double> Calibrator::scaled_start(CalibrationStage stage, const Evaluation& e) const {
   std::vector<double> v = e.values;
   auto ratio = [&](Property p) -> double {
-    const Target* t = c_.target(p);
+    const Target* t = aim(p);
     const auto it = e.properties.find(p);
     if (!t || it == e.properties.end() || !(it->second > 0.0)) return 1.0;
     return t->value / it->second;
@@ -258,7 +291,7 @@ std::vector<double> Calibrator::scaled_start(CalibrationStage stage, const Evalu
   if (stage == CalibrationStage::Elastic) {
     double r = ratio(Property::YoungsModulus);
     const int kappa = free_index("bond.stiffness_ratio");
-    const Target* nu = c_.target(Property::PoissonRatio);
+    const Target* nu = aim(Property::PoissonRatio);
     const auto nu_seen = e.properties.find(Property::PoissonRatio);
     if (kappa >= 0 && c_.free[kappa].stage == stage && nu && nu_seen != e.properties.end()) {
       const AffineElasticity affine{static_cast<int>(c_.base.dimension)};
@@ -296,7 +329,7 @@ std::vector<double> Calibrator::scaled_start(CalibrationStage stage, const Evalu
     // The strain at the peak goes as the UCS over the modulus: a modulus calibrated in this
     // stage (the file puts it here when E is not a target) moves so that the strain the scaled
     // strengths would give meets its target.
-    const Target* peak_strain = c_.target(Property::StrainAtPeak);
+    const Target* peak_strain = aim(Property::StrainAtPeak);
     const auto strain_seen = e.properties.find(Property::StrainAtPeak);
     if (peak_strain && strain_seen != e.properties.end() && strain_seen->second > 0.0) {
       const double r_modulus = r * strain_seen->second / peak_strain->value;
@@ -382,64 +415,139 @@ void Calibrator::fit_stage(CalibrationStage stage, int pass) {
   values_ = best.values;
 }
 
-std::vector<TargetVerdict> Calibrator::verify(const Evaluation& final_eval) {
+// Each target's measurements over the verification's packings (the sample of verify_set, one
+// packing per seed), run at once over the ranks; `runs` gets each seed's sample and tests.
+std::map<Property, std::vector<double>> Calibrator::measure_verification(
+    const std::vector<double>& values, json& runs) {
   std::map<Property, std::vector<double>> seen;
   std::vector<std::string> sets;
   for (auto seed : c_.verify_seeds) sets.push_back(fmt::format("verify-{}", seed));
-  lab_.prefetch(sets, values_, tests_for(c_, std::nullopt));  // at once, over the ranks
+  lab_.prefetch(sets, values, tests_for(c_, std::nullopt));
   for (auto seed : c_.verify_seeds) {
     const std::string set = fmt::format("verify-{}", seed);
     if (o_.log) o_.log(fmt::format("[calibrate] verifying with packing seed {}", seed));
-    const Measurement m = lab_.measure(set, values_, tests_for(c_, std::nullopt));
-    verification_.push_back({{"seed", seed},
-                             {"particles", lab_.sample_report(set).value("particles", 0)},
-                             {"tests", m.tests},
-                             {"run_folders", m.run_folders}});
+    const Measurement m = lab_.measure(set, values, tests_for(c_, std::nullopt));
+    runs.push_back({{"seed", seed},
+                    {"particles", lab_.sample_report(set).value("particles", 0)},
+                    {"tests", m.tests},
+                    {"run_folders", m.run_folders}});
     for (const auto& p : m.problems)
       if (o_.log) o_.log("[calibrate]   " + p);
     for (const auto& [p, v] : m.properties) seen[p].push_back(v);
   }
+  return seen;
+}
+
+// Mean and sample standard deviation (NaN when empty; sd 0 for one value).
+std::pair<double, double> mean_sd(const std::vector<double>& xs) {
+  if (xs.empty()) return {kNaN, kNaN};
+  double s = 0;
+  for (double x : xs) s += x;
+  const auto n = static_cast<double>(xs.size());
+  const double mean = s / n;
+  double ss = 0;
+  for (double x : xs) ss += (x - mean) * (x - mean);
+  return {mean, xs.size() > 1 ? std::sqrt(ss / (n - 1.0)) : 0.0};
+}
+
+// The verdict on a target from its measurements: their mean within the full tolerance, and
+// every packing measured it (`wanted` values; a property missing on one packing is a miss).
+bool verdict_met(const Target& t, const std::vector<double>& xs, std::size_t wanted) {
+  if (xs.empty() || xs.size() != wanted) return false;
+  const double mean = mean_sd(xs).first;
+  return std::abs(t.relative ? std::log(mean / t.value) / std::log1p(t.tolerance)
+                             : signed_error(t, mean) / t.tolerance) <= 1.0;
+}
+
+std::vector<TargetVerdict> Calibrator::verify(const Evaluation& final_eval) {
+  const auto seen = c_.verify_seeds.empty() ? std::map<Property, std::vector<double>>{}
+                                            : measure_verification(values_, verification_);
   std::vector<TargetVerdict> out;
   for (const auto& t : c_.targets) {
     TargetVerdict v;
     v.target = t;
     const auto it = final_eval.properties.find(t.property);
     v.calibrated = it == final_eval.properties.end() ? kNaN : it->second;
-    std::vector<double> xs = c_.verify_seeds.empty() ? std::vector<double>{} : seen[t.property];
+    std::vector<double> xs;
+    if (const auto s = seen.find(t.property); s != seen.end()) xs = s->second;
     if (c_.verify_seeds.empty() && std::isfinite(v.calibrated)) xs.push_back(v.calibrated);
     v.samples = static_cast<int>(xs.size());
-    v.mean = kNaN;
-    v.sd = kNaN;
-    if (!xs.empty()) {
-      double s = 0;
-      for (double x : xs) s += x;
-      const auto n = static_cast<double>(xs.size());
-      v.mean = s / n;
-      double ss = 0;
-      for (double x : xs) ss += (x - v.mean) * (x - v.mean);
-      v.sd = xs.size() > 1 ? std::sqrt(ss / (n - 1.0)) : 0.0;
-    }
-    // Every seed must have measured it; a property missing on one seed is a miss.
-    const bool complete =
-        !xs.empty() && (c_.verify_seeds.empty() || xs.size() == c_.verify_seeds.size());
+    std::tie(v.mean, v.sd) = mean_sd(xs);
     v.error = std::isfinite(v.mean) ? signed_error(t, v.mean) : kNaN;
-    v.met = complete && std::abs(t.relative ? std::log(v.mean / t.value) / std::log1p(t.tolerance)
-                                            : v.error / t.tolerance) <= 1.0;
+    v.met = verdict_met(t, xs, c_.verify_seeds.empty() ? 1 : c_.verify_seeds.size());
     out.push_back(v);
   }
   return out;
 }
 
+// One round of size correction (output space mapping): the parameters the search found are
+// measured at the verification's size and packings. If every target is met there, the
+// calibration is done (false). Otherwise each target the search aims at becomes the lab's
+// value carried over by the gap between the sizes at these parameters, relative targets by
+// the ratio of the small sample's value to the large one's, the others by their difference,
+// and the search runs again (true). Both sizes respond alike to a small change of the
+// parameters, so the search on the small sample moves the large one by nearly what it moves
+// the small one: each round's full-size tests correct what the small sample cannot see.
+bool Calibrator::correct_for_size(const Evaluation& small) {
+  json runs = json::array();
+  const auto large = measure_verification(values_, runs);
+  json round{{"round", correction_ + 1},
+             {"values", values_},
+             {"verification", runs},
+             {"targets", json::array()}};
+  bool all_met = true;
+  for (std::size_t k = 0; k < c_.targets.size(); ++k) {
+    const Target& t = c_.targets[k];
+    const auto s = small.properties.find(t.property);
+    const auto l = large.find(t.property);
+    const double at_small = s == small.properties.end() ? kNaN : s->second;
+    const std::vector<double> xs = l == large.end() ? std::vector<double>{} : l->second;
+    const double at_large = mean_sd(xs).first;
+    const bool met = verdict_met(t, xs, c_.verify_seeds.size());
+    all_met = all_met && met;
+    double shifted = aims_[k].value;
+    const bool usable = std::isfinite(at_small) && std::isfinite(at_large) &&
+                        (!t.relative || (at_small > 0.0 && at_large > 0.0));
+    if (!met && usable)
+      shifted = t.relative ? t.value * at_small / at_large : t.value + (at_small - at_large);
+    auto num = [](double x) { return std::isfinite(x) ? json(x) : json(nullptr); };
+    round["targets"].push_back({{"target", info(t.property).key},
+                                {"lab", t.value},
+                                {"aimed_at", aims_[k].value},
+                                {"calibration_sample", num(at_small)},
+                                {"verification_mean", num(at_large)},
+                                {"met_at_verification", met},
+                                {"next_aim", shifted}});
+    if (o_.log)
+      o_.log(fmt::format(
+          "[calibrate] size correction {}: {} {} on the calibration sample, {} at "
+          "the verification's size ({}){}",
+          correction_ + 1, info(t.property).key, show_value(t.property, at_small),
+          show_value(t.property, at_large), met ? "met" : "missed",
+          met || !usable
+              ? ""
+              : fmt::format("; the search now aims at {}", show_value(t.property, shifted))));
+    aims_[k].value = shifted;
+  }
+  round["met"] = all_met;
+  corrections_.push_back(round);
+  return !all_met;
+}
+
+// One row a trial; a trial's target columns hold what its search aimed at (the lab's value,
+// shifted after a size correction) and its error is against that aim.
 void Calibrator::write_convergence() const {
-  std::string csv = "trial,stage,pass,new_test_runs";
+  std::string csv = "trial,stage,pass,size_correction,new_test_runs";
   for (const auto& f : c_.free) csv += "," + f.key;
   for (const auto& t : c_.targets)
     csv += fmt::format(",{0}_target,{0}_achieved,{0}_error", info(t.property).key);
   csv += ",objective,met\n";
   for (const auto& e : evals_) {
-    csv += fmt::format("{},{},{},{}", e.index, e.stage, e.pass, e.new_runs);
+    csv += fmt::format("{},{},{},{},{}", e.index, e.stage, e.pass, e.correction, e.new_runs);
     for (double v : e.values) csv += fmt::format(",{:.9g}", v);
-    for (const auto& t : c_.targets) {
+    for (std::size_t k = 0; k < c_.targets.size(); ++k) {
+      Target t = c_.targets[k];
+      t.value = e.aims[k];
       const auto it = e.properties.find(t.property);
       if (it == e.properties.end())
         csv += fmt::format(",{:.9g},,", t.value);
@@ -466,24 +574,35 @@ void Calibrator::write_manifest(const std::string& status, const std::string& er
   write_text(folder_ / "manifest.json", m.dump(2) + "\n");
 }
 
+// The staged search over the passes, on the calibration sample: the last pass's final trial.
+Evaluation Calibrator::search() {
+  Evaluation final_eval;
+  for (int pass = 1; pass <= c_.passes; ++pass) {
+    for (auto s :
+         {CalibrationStage::Elastic, CalibrationStage::Strength, CalibrationStage::Friction}) {
+      fit_stage(s, pass);
+      ++stages_done_;
+    }
+    final_eval = evaluate(values_, std::nullopt, pass);
+    if (final_eval.met) break;
+    stages_done_ = 3 * pass;
+  }
+  stages_done_ = 3 * static_cast<int>(c_.passes);
+  return final_eval;
+}
+
 CalibrationResult Calibrator::run() {
   write_manifest("running");
   CalibrationResult r;
   r.folder = folder_.string();
   try {
     lab_.preflight(check_points(c_));
-    Evaluation final_eval;
-    for (int pass = 1; pass <= c_.passes; ++pass) {
-      for (auto s :
-           {CalibrationStage::Elastic, CalibrationStage::Strength, CalibrationStage::Friction}) {
-        fit_stage(s, pass);
-        ++stages_done_;
-      }
-      final_eval = evaluate(values_, std::nullopt, pass);
-      if (final_eval.met) break;
-      stages_done_ = 3 * pass;
+    Evaluation final_eval = search();
+    while (correction_ < c_.size_corrections && correct_for_size(final_eval)) {
+      ++correction_;
+      stages_done_ = 0;
+      final_eval = search();
     }
-    stages_done_ = 3 * static_cast<int>(c_.passes);
     verdicts_ = verify(final_eval);
     r.status = "complete";
   } catch (const Interrupted&) {
@@ -610,6 +729,7 @@ void Calibrator::write_outputs(const CalibrationResult& r) const {
               {"loading", loading},
               {"calibration_sample", sample},
               {"verification", verification_},
+              {"size_corrections", corrections_},
               {"evaluations", r.evaluations},
               {"test_runs", r.test_runs},
               {"wall_seconds", r.wall_seconds},

@@ -346,6 +346,8 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
       if (!a) throw InputError(w, key, show(v), "expected an array of \"section.key=value\"");
       c.verify_set.clear();
       for (const auto& s : *a) c.verify_set.push_back(string_of(s, w, key));
+    } else if (item == "size_corrections") {
+      c.size_corrections = int_of(v, w, key, 0, 5);
     } else if (item == "brazilian_diameter") {
       c.disc_diameter = real_of(v, w, key);
       if (!(c.disc_diameter > 0.0)) throw InputError(w, key, show(v), "must be above 0 m");
@@ -358,8 +360,8 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
     } else {
       throw InputError(w, key, show(v),
                        "unknown key; allowed: name, rock, confining_stresses, trials_per_stage, "
-                       "passes, aim, fit_seeds, verify_seeds, verify_set, brazilian_diameter, "
-                       "brazilian_thickness, brazilian_platen_speed");
+                       "passes, aim, fit_seeds, verify_seeds, verify_set, size_corrections, "
+                       "brazilian_diameter, brazilian_thickness, brazilian_platen_speed");
     }
   }
 }
@@ -521,6 +523,10 @@ CalibrationSpec parse_calibration(const std::string& text, const std::string& so
       throw InputError(source, "calibration.verify_set", "\"" + o + "\"", e.what());
     }
   }
+  if (c.size_corrections > 0 && c.verify_seeds.empty())
+    throw InputError(source, "calibration.size_corrections", std::to_string(c.size_corrections),
+                     "a size correction measures at the verification's size and packings: give "
+                     "verify_seeds (and verify_set for another size), or size_corrections = 0");
   check_parameters(c, root, source);
   default_disc(c);
   return c;
@@ -569,6 +575,12 @@ std::string calibration_docs() {
       "the verdict is then the calibration sample's) |\n"
       "| `verify_set` | [] | experiment overrides (`\"section.key=value\"`) of the verification, "
       "e.g. the shipping sample size |\n"
+      "| `size_corrections` | 0 | rounds of size correction after the search, 0 to 5: each "
+      "measures the parameters on the verification's size and packings; where a target is "
+      "missed there, the search's targets are shifted by the gap between the two sizes "
+      "(relative targets by their ratio, the others by their difference) and the search runs "
+      "again on the small sample. It stops when every target is met at the verification size; "
+      "each round costs one verification. Needs `verify_seeds` |\n"
       "| `brazilian_diameter`, `brazilian_thickness` | the prism's width, half of it | the "
       "Brazilian disc, m, above 0 |\n"
       "| `brazilian_platen_speed` | 0.02 | m/s |\n\n"

@@ -84,7 +84,11 @@ struct CalibrationSpec {
   std::vector<std::int64_t> fit_seeds;
   std::vector<std::int64_t> verify_seeds{1, 2, 3};
   std::vector<std::string> verify_set;  // experiment overrides for the verification (full size)
-  ExperimentSpec base;                  // the experiment at the start values
+  // Rounds of size correction after the search: measure at the verification's size and
+  // packings, shift the search's targets by the gap between the two sizes and search again on
+  // the small sample (output space mapping). 0: none.
+  std::int64_t size_corrections = 0;
+  ExperimentSpec base;  // the experiment at the start values
 
   // The sample sets the search measures on: "calibration", or "fit-<seed>" per fit seed.
   std::vector<std::string> fit_sets() const;
