@@ -130,6 +130,11 @@ std::vector<BadCase> cases() {
        e,
        2,
        {"e.toml:3", "test.confining_stress", "1e+308"}},
+      {"membrane_on_a_prism",
+       exp("[test]\nkind = \"triaxial\"\nconfining_stress = 1e6\nmembrane = true\n"),
+       e,
+       2,
+       {"test.membrane", "cylinder", "membrane = false"}},
       {"hertz_2d",
        exp("[engine]\ndimension = 2\n[sample]\nshape = \"rectangle\"\nplanar_body = "
            "\"disk\"\n[contact]\nlaw = \"hertz_mindlin\"\n"),

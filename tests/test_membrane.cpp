@@ -1,6 +1,5 @@
-// The 2D flexible membrane (docs/physics.md §6.3, protocol/membrane.hpp): which grains form the
-// chains, the follower loads against numbers worked by hand, and a biaxial test whose confining
-// stress stays at its target through the peak and the shear band.
+// The flexible membranes (docs/physics.md §6.3, protocol/membrane.hpp): which grains form the 2D
+// chains and the 3D membrane's nodes, and their loads against numbers worked by hand.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 #include "breccia/engine/simulation.hpp"
@@ -91,4 +91,122 @@ TEST(Membrane2D, KinkedSideLoadsMatchTheHandNumbers) {
   const double s5 = std::sqrt(5.0), end = 1 + 0.5 * s5;
   const double left = (-0.5 * end * 2 + 0.5 * s5) / (2 * end + s5);
   EXPECT_NEAR(m.width(sim.particles()), (10.5 - left) * mm, 1e-12);
+}
+
+namespace {
+
+// Columns of equal grains (radius r) around the z axis at radius rho, one grain per cell: with
+// rho + r = 12 r / pi the membrane cuts 12 columns (round(2 pi (rho + r) / 2r)), and layers 2r
+// apart between platens 6r apart make 3 rows. `rho_of_row` bulges a row; `skip` leaves a cell
+// empty (column, row); `inner` adds a grain 1.5 r inside column 0 of the middle row.
+struct Column {
+  double r = 1e-3;
+  double rho = 1e-3 * (12.0 / std::numbers::pi - 1.0);
+  double theta(int k) const { return -std::numbers::pi + (k + 0.5) * 2.0 * std::numbers::pi / 12; }
+  Simulation build(const double (&rho_of_row)[3], std::pair<int, int> skip = {-1, -1},
+                   bool inner = false) const {
+    ParticleStore ps(Dimension::Three, 1.0);
+    std::uint64_t tag = 1;
+    for (int row = 0; row < 3; ++row)
+      for (int k = 0; k < 12; ++k) {
+        if (k == skip.first && row == skip.second) continue;
+        const double p = rho_of_row[row];
+        ps.add({.tag = tag++,
+                .position = {p * std::cos(theta(k)), p * std::sin(theta(k)), (2 * row + 1) * r},
+                .radius = r,
+                .density = 2650});
+      }
+    if (inner)
+      ps.add({.tag = tag++,
+              .position = {(rho - 1.5 * r) * std::cos(theta(0)),
+                           (rho - 1.5 * r) * std::sin(theta(0)), 3 * r},
+              .radius = r,
+              .density = 2650});
+    EngineConfig cfg;
+    cfg.time_step = 1e-8;
+    return Simulation(std::move(ps), cfg, make_contact_model<LinearContact>({}, {}));
+  }
+};
+
+}  // namespace
+
+// Hand numbers: a face between neighbouring columns, h tall, has the area h L along the radius
+// through its middle, L = 2 rho sin(pi/12) the chord; its load sigma_3 h L goes a quarter to each
+// corner. A grain of the middle row is a corner of four faces 2r tall; one of the end rows of two
+// faces r tall whose ring corners are its own (a half each) and two 2r tall (a quarter each).
+// Either way the two sides' loads, pi/12 either side of the grain's radius, add up to sigma_3 h L
+// 2 cos(pi/12) with h = r: sigma_3 rho r inward along its radius.
+TEST(MembraneCylinder, StraightColumnsCarrySigma3RhoRInwardEach) {
+  const Column c;
+  const double sigma3 = 5e6, rows[3] = {c.rho, c.rho, c.rho};
+  Simulation sim = c.build(rows);
+  MembraneCylinder m;
+  m.apply(sim, sigma3, {0, 0, 0}, 0.0, 6 * c.r);
+  EXPECT_EQ(m.columns(), 12u);
+  EXPECT_EQ(m.rows(), 3u);
+  EXPECT_EQ(m.grains().size(), 36u);
+  const auto& f = sim.external_force();
+  const ParticleStore& p = sim.particles();
+  const double expected = sigma3 * c.rho * c.r;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Vec3 x = p.pos_rad[i].x;
+    const Vec3 inward{-x.x / c.rho, -x.y / c.rho, 0.0};
+    EXPECT_NEAR(dot(f[i], inward), expected, 1e-9 * expected) << i;
+    EXPECT_NEAR(norm(f[i] - inward * dot(f[i], inward)), 0.0, 1e-9 * expected) << i;
+  }
+  EXPECT_NEAR(m.stress(), sigma3, 1e-12 * sigma3);
+  EXPECT_NEAR(m.diameter(p), 2.0 * (c.rho + c.r), 1e-15);
+}
+
+// A bulged middle row: the loads are no longer radial at the end rows (the faces lean), but the
+// faces tile a surface whose ends are equal polygons, so the loads sum to zero in every
+// direction, and the radial parts to sigma_3 times the faces' radial area (stress() = sigma_3).
+// A grain inside the outermost one of its cell carries nothing.
+TEST(MembraneCylinder, BulgedSidesAreLoadedInBalanceAndInnerGrainsAreNot) {
+  const Column c;
+  const double sigma3 = 5e6, rows[3] = {c.rho, c.rho + 0.5 * c.r, c.rho};
+  Simulation sim = c.build(rows, {-1, -1}, true);
+  MembraneCylinder m;
+  m.apply(sim, sigma3, {0, 0, 0}, 0.0, 6 * c.r);
+  const auto& f = sim.external_force();
+  Vec3 total{};
+  for (const Vec3& x : f) total += x;
+  const double scale = sigma3 * c.rho * c.r;
+  EXPECT_NEAR(norm(total), 0.0, 1e-9 * scale);
+  EXPECT_EQ(norm(f.back()), 0.0) << "the inner grain";
+  EXPECT_EQ(m.grains().size(), 36u);
+  EXPECT_NEAR(m.stress(), sigma3, 1e-12 * sigma3);
+  // The end rows' grains are pulled toward the bulge (their faces lean outward going up or
+  // down), the middle row's pushed straight in.
+  const ParticleStore& p = sim.particles();
+  for (std::size_t i = 0; i < 36; ++i) {
+    const double z = p.pos_rad[i].x.z;
+    if (std::abs(z - c.r) < 1e-12) {
+      EXPECT_GT(f[i].z, 0.0) << i;
+    } else if (std::abs(z - 5 * c.r) < 1e-12) {
+      EXPECT_LT(f[i].z, 0.0) << i;
+    } else {
+      EXPECT_NEAR(f[i].z, 0.0, 1e-9 * scale) << i;
+    }
+  }
+  // The diameter lies between the end rows' reach and the bulge's.
+  EXPECT_GT(m.diameter(p), 2.0 * (c.rho + c.r));
+  EXPECT_LT(m.diameter(p), 2.0 * (c.rho + 1.5 * c.r));
+}
+
+// A cell without a grain takes the grain of the next cell around the axis, which then stands at
+// two nodes and carries both shares; the membrane still holds sigma_3 over its faces.
+TEST(MembraneCylinder, AnEmptyCellTakesTheNextCellsGrain) {
+  const Column c;
+  const double sigma3 = 5e6, rows[3] = {c.rho, c.rho, c.rho};
+  Simulation sim = c.build(rows, {3, 1});
+  MembraneCylinder m;
+  m.apply(sim, sigma3, {0, 0, 0}, 0.0, 6 * c.r);
+  EXPECT_EQ(m.grains().size(), 35u);
+  EXPECT_NEAR(m.stress(), sigma3, 1e-12 * sigma3);
+  // Column 4's middle grain (index 12 + 4 - 1: the skipped cell came before it) takes column
+  // 3's faces too, so it carries more than a grain of its own.
+  const auto& f = sim.external_force();
+  const double alone = sigma3 * c.rho * c.r;
+  EXPECT_GT(norm(f[12 + 3]), 1.5 * alone);
 }

@@ -322,10 +322,11 @@ TEST(Mpi, ARunSplitOverRanksWritesTheFilesOfOneProcess) {
   fs::remove_all(out);
 }
 
-// Small samples (about 1,100 grains: the second rank owns the grains past 1,024) of three other
-// kinds of test: a 2D biaxial test confined by membranes (forces on the boundary grains, strain
-// gauges), a Brazilian disc, and a ball dropped on a slab (a dynamic test with a free body). Each
-// split over 2 ranks writes the files of one process.
+// Small samples (about 1,100 grains or more: the second rank owns the grains past 1,024) of four
+// other kinds of test: a 2D biaxial test confined by membranes (forces on the boundary grains,
+// strain gauges), a 3D triaxial test in a membrane (its nodes chosen over both ranks' grains), a
+// Brazilian disc, and a ball dropped on a slab (a dynamic test with a free body). Each split over
+// 2 ranks writes the files of one process.
 TEST(Mpi, OtherTestsSplitOverRanksWriteTheFilesOfOneProcess) {
   const fs::path out =
       fs::temp_directory_path() / ("breccia_mpi_kinds_" + std::to_string(getpid()));
@@ -338,6 +339,11 @@ TEST(Mpi, OtherTestsSplitOverRanksWriteTheFilesOfOneProcess) {
        "radius_max = 60e-6\nporosity = 0.176\n[test]\nkind = \"biaxial\"\n"
        "confining_stress = 15e6\nplaten_speed = 0.6\nmax_strain = 0.02\n"
        "[output]\nsnapshot_strain_interval = 0.005\n"},
+      {"triaxial-membrane",
+       "[material]\npreset = \"berea\"\n[sample]\nshape = \"cylinder\"\ndiameter = 0.005\n"
+       "height = 0.006\nradius_min = 0.15e-3\nradius_max = 0.25e-3\n[test]\n"
+       "kind = \"triaxial\"\nconfining_stress = 1e6\nmembrane = true\nplaten_speed = 0.4\n"
+       "max_strain = 0.015\nstop_fraction = 0\n[output]\nsnapshot_strain_interval = 0.005\n"},
       {"brazilian",
        "[material]\npreset = \"berea\"\n[sample]\nshape = \"cylinder\"\ndiameter = 0.004\n"
        "height = 0.002\nradius_min = 0.12e-3\nradius_max = 0.18e-3\n[test]\n"

@@ -22,8 +22,10 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
   planar_ = p.planar();
   thickness_ = p.thickness();
   axis_ = planar_ ? 1 : 2;
-  // Membranes are 2D only, a cylindrical wall 3D only.
+  // Chain membranes are 2D only, a cylinder (walled or wrapped) 3D only.
   if (planar_ && lateral_ == LateralBoundary::Cylinder) lateral_ = LateralBoundary::Prism;
+  if (planar_ && lateral_ == LateralBoundary::CylinderMembrane)
+    lateral_ = LateralBoundary::Membrane;
   if (!planar_ && lateral_ == LateralBoundary::Membrane) lateral_ = LateralBoundary::Prism;
   const auto [lo, hi, r_max] = sample_bounds(p);
   Vec3 up{};
@@ -36,7 +38,7 @@ PlatenCompression::PlatenCompression(Simulation& sim, PlatenCompressionSettings 
   double shell = 0.0;  // cylinder radius: outermost particle surface
   for (const PosRad& q : p.pos_rad)
     shell = std::max(shell, std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r);
-  if (confined() && lateral_ != LateralBoundary::Membrane) {
+  if (confined() && !flexible()) {
     if (lateral_ == LateralBoundary::Cylinder) {
       side_.push_back(sim.add_wall(
           Wall::cylinder("confining_cylinder", {centre_.x, centre_.y, 0}, {0, 0, 1}, shell)));
@@ -72,7 +74,7 @@ void PlatenCompression::find_face_grains(const Simulation& sim, double z_from, d
   for (std::uint32_t i = 0; i < p.size(); ++i) {
     const PosRad& q = p.pos_rad[i];
     if (q.x[axis_] < z_from || q.x[axis_] > z_to) continue;
-    if (lateral_ == LateralBoundary::Cylinder) {
+    if (round()) {
       if (std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r > shell - r_max)
         faces[0].push_back(i);
       continue;
@@ -124,6 +126,12 @@ void PlatenCompression::widths(const Simulation& sim, double w[2]) const {
     w[1] = thickness_;
     return;
   }
+  if (confined() && lateral_ == LateralBoundary::CylinderMembrane) {
+    if (sleeve_.grains().empty())
+      sleeve_.find(sim.particles(), centre_, W[bottom_].point[axis_], W[top_].point[axis_]);
+    w[0] = w[1] = sleeve_.diameter(sim.particles());
+    return;
+  }
   if (confined()) {
     if (lateral_ == LateralBoundary::Cylinder) {
       w[0] = w[1] = 2.0 * W[side_[0]].radius;
@@ -145,7 +153,7 @@ void PlatenCompression::particle_widths(const Simulation& sim,
     for (std::uint32_t i : ids) s += f(p.pos_rad[i]);
     return ids.empty() ? 0.0 : s / static_cast<double>(ids.size());
   };
-  if (lateral_ == LateralBoundary::Cylinder) {
+  if (round()) {
     const double r = mean(faces[0], [&](const PosRad& q) {
       return std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r;
     });
@@ -162,13 +170,14 @@ void PlatenCompression::particle_widths(const Simulation& sim,
 double PlatenCompression::current_area(const Simulation& sim) const {
   double w[2];
   widths(sim, w);
-  if (lateral_ == LateralBoundary::Cylinder) return std::numbers::pi * 0.25 * w[0] * w[0];
+  if (round()) return std::numbers::pi * 0.25 * w[0] * w[0];
   return w[0] * w[1];
 }
 
 double PlatenCompression::lateral_stress(const Simulation& sim) const {
   if (!confined()) return 0.0;
   if (lateral_ == LateralBoundary::Membrane) return membrane_.stress();
+  if (lateral_ == LateralBoundary::CylinderMembrane) return sleeve_.stress();
   const auto& W = sim.walls();
   const double h = height(sim);
   if (lateral_ == LateralBoundary::Cylinder) {
@@ -190,6 +199,11 @@ void PlatenCompression::drive_lateral(Simulation& sim) {
   auto& W = sim.walls();
   if (lateral_ == LateralBoundary::Membrane) {
     membrane_.apply(sim, st_.confining_stress, W[bottom_].point[axis_], W[top_].point[axis_]);
+    return;
+  }
+  if (lateral_ == LateralBoundary::CylinderMembrane) {
+    sleeve_.apply(sim, st_.confining_stress, centre_, W[bottom_].point[axis_],
+                  W[top_].point[axis_]);
     return;
   }
   const double h = height(sim), dt = sim.time_step();
@@ -334,7 +348,7 @@ AxialState PlatenCompression::measure(const Simulation& sim) const {
   s.stress_nominal = f / area0_;
   double w[2];
   widths(sim, w);
-  if (lateral_ == LateralBoundary::Cylinder) {
+  if (round()) {
     s.lateral_strain = (w0_[0] - w[0]) / w0_[0];
     s.volumetric_strain = s.strain + 2.0 * s.lateral_strain;
   } else if (planar_) {
@@ -350,7 +364,7 @@ AxialState PlatenCompression::measure(const Simulation& sim) const {
   s.gauge_strain = (gauge_length0_ - gauge_length(sim)) / gauge_length0_;
   particle_widths(sim, waist_, w);
   const double gx = (waist0_[0] - w[0]) / waist0_[0], gy = (waist0_[1] - w[1]) / waist0_[1];
-  s.gauge_lateral_strain = lateral_ == LateralBoundary::Cylinder || planar_ ? gx : 0.5 * (gx + gy);
+  s.gauge_lateral_strain = round() || planar_ ? gx : 0.5 * (gx + gy);
   return s;
 }
 
@@ -362,9 +376,8 @@ GrainReads PlatenCompression::grains_read_by_measure() const {
     std::sort(measured_.begin(), measured_.end());
     measured_.erase(std::unique(measured_.begin(), measured_.end()), measured_.end());
   }
-  if (!(confined() && lateral_ == LateralBoundary::Membrane))
-    return {.all = false, .some = measured_};
-  const std::vector<std::uint32_t>& chains = membrane_.chain_grains();
+  if (!(confined() && flexible())) return {.all = false, .some = measured_};
+  const std::vector<std::uint32_t>& chains = membrane_grains();
   measured_now_.clear();
   std::set_union(measured_.begin(), measured_.end(), chains.begin(), chains.end(),
                  std::back_inserter(measured_now_));
@@ -399,6 +412,8 @@ std::string PlatenCompression::label() const {
 std::string PlatenCompression::lateral_boundary() const {
   if (!confined()) return "none";
   if (lateral_ == LateralBoundary::Membrane) return "flexible membranes on the outer grain chains";
+  if (lateral_ == LateralBoundary::CylinderMembrane)
+    return "flexible membrane on the outermost grains all round";
   return lateral_ == LateralBoundary::Cylinder ? "cylindrical servo wall"
                                                : "servo-controlled plane walls";
 }

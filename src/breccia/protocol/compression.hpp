@@ -24,8 +24,9 @@
 namespace breccia {
 
 // Prism: plane walls (2 in 2D, 4 in 3D); Cylinder: a cylindrical wall; Membrane (2D only): the
-// follower load of Membrane2D on each side's outermost grain chain.
-enum class LateralBoundary { Prism, Cylinder, Membrane };
+// follower load of Membrane2D on each side's outermost grain chain; CylinderMembrane (3D
+// cylinders): MembraneCylinder's pressure on the outermost grains all round.
+enum class LateralBoundary { Prism, Cylinder, Membrane, CylinderMembrane };
 
 struct PlatenCompressionSettings {
   double platen_speed = 0.05;  // m/s, each platen
@@ -164,6 +165,18 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   // Recomputed from the particles every step (nothing of it is checkpointed), hence mutable:
   // the const measurements find the chains when a restored run has not stepped yet.
   mutable Membrane2D membrane_;
+  mutable MembraneCylinder sleeve_;
+  // The cylinder's shell (a wall or a membrane) and the flexible boundaries.
+  bool round() const noexcept {
+    return lateral_ == LateralBoundary::Cylinder || lateral_ == LateralBoundary::CylinderMembrane;
+  }
+  bool flexible() const noexcept {
+    return lateral_ == LateralBoundary::Membrane || lateral_ == LateralBoundary::CylinderMembrane;
+  }
+  // The membrane's grains as of its last search.
+  const std::vector<std::uint32_t>& membrane_grains() const noexcept {
+    return planar_ ? membrane_.chain_grains() : sleeve_.grains();
+  }
 };
 
 // --- the registered tests that run on PlatenCompression (protocol/registry.hpp) ---
@@ -296,7 +309,8 @@ struct ConfinedCompressionTest {
       Dim == 3 ? "Triaxial compression (3D): the sample is consolidated to sigma_3 with the "
                  "platens and lateral walls servo-controlled (four plane walls around a prism, a "
                  "cylindrical wall around a cylinder; docs/physics.md §6.2), then loaded axially "
-                 "while the lateral walls hold sigma_3."
+                 "while the lateral walls hold sigma_3 (a cylinder with membrane = true: a "
+                 "flexible membrane on its outermost grains, §6.3)."
                : "Biaxial compression (2D, seed 002): consolidation to sigma_3 with "
                  "servo-controlled platens, then axial loading at constant platen speed to "
                  "max_strain (10.3 %) while flexible membranes on the outermost grain chains "
@@ -309,12 +323,20 @@ struct ConfinedCompressionTest {
     double max_strain = Dim == 2 ? 0.103 : 0.03, stop_fraction = Dim == 2 ? 0.0 : 0.6;
     double elastic_speed = 0.0, slow_down_broken_fraction = 0.0;
     double confining_stress = 5e6, servo_relaxation = 0.5;
-    bool membrane = Dim == 2;  // 2D: flexible membranes (true) or servo walls
+    bool membrane = Dim == 2;  // flexible membranes (true) or servo walls
   };
   static constexpr auto fields() {
     if constexpr (Dim == 3) {
-      return compression_fields<Params, 2>(
-          confining_fields<Params>("sigma_3 held by the lateral walls"));
+      const auto c = confining_fields<Params>(
+          "sigma_3 held by the lateral walls (or the membrane with membrane = true)");
+      return compression_fields<Params, 3>(std::array<ParamField<Params>, 3>{
+          c[0], c[1],
+          ParamField<Params>{
+              "membrane", "-", &Params::membrane, 0, 0, true, true,
+              "a cylinder only: a flexible membrane (docs/physics.md §6.3), sigma_3 acting "
+              "as a pressure on a surface through the outermost grains all round, found "
+              "again every step, so the sample can bulge and a shear band break through; "
+              "false: the cylindrical servo wall (§6.2)"}});
     } else {
       const auto c = confining_fields<Params>(
           "sigma_3 held by the membranes (or the side walls with membrane = false)");
@@ -334,6 +356,10 @@ struct ConfinedCompressionTest {
       throw InputError(where, "test.kind", "\"" + std::string(name) + "\"",
                        Dim == 3 ? "a triaxial test needs a 3D sample; 2D samples take \"biaxial\""
                                 : "a biaxial test needs a 2D sample; 3D samples take \"triaxial\"");
+    if (Dim == 3 && p.membrane && s.shape != "cylinder")
+      throw InputError(where, "test.membrane", "true",
+                       "a 3D membrane wraps a cylinder (sample.shape = \"cylinder\"); a " +
+                           s.shape + " takes servo walls: membrane = false");
   }
   static PlatenLoading loading(const Params& p) { return platen_loading(p); }
   static void set_loading(Params& p, const PlatenLoading& l) { set_platen_loading(p, l); }
@@ -349,7 +375,8 @@ struct ConfinedCompressionTest {
  private:
   static LateralBoundary lateral_of(const Params& p, const SampleInfo& s) {
     if (Dim == 2) return p.membrane ? LateralBoundary::Membrane : LateralBoundary::Prism;
-    return s.shape == "cylinder" ? LateralBoundary::Cylinder : LateralBoundary::Prism;
+    if (s.shape != "cylinder") return LateralBoundary::Prism;
+    return p.membrane ? LateralBoundary::CylinderMembrane : LateralBoundary::Cylinder;
   }
 };
 

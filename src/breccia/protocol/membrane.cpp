@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "breccia/core/byte_text.hpp"
+#include "breccia/core/error.hpp"
 #include "breccia/core/ranks.hpp"
 #include "breccia/engine/simulation.hpp"
 
@@ -154,6 +156,170 @@ double Membrane2D::width(const ParticleStore& p) const {
     surface[side] = weight > 0.0 ? sum / weight : 0.0;
   }
   return surface[1] - surface[0];
+}
+
+}  // namespace breccia
+
+namespace breccia {
+
+double MembraneCylinder::reach(const PosRad& q) const {
+  return std::hypot(q.x.x - centre_.x, q.x.y - centre_.y) + q.r;
+}
+
+void MembraneCylinder::find_nodes(const ParticleStore& p, std::size_t from, std::size_t to,
+                                  bool over_ranks) {
+  double r_sum = 0.0;
+  for (const PosRad& q : p.pos_rad) r_sum += q.r;
+  const double d = 2.0 * r_sum / static_cast<double>(std::max<std::size_t>(p.size(), 1));
+  double outer = 0.0;
+  for (std::size_t i = from; i < to; ++i) {
+    const PosRad& q = p.pos_rad[i];
+    if (q.x.z >= z_bottom_ && q.x.z <= z_top_) outer = std::max(outer, reach(q));
+  }
+  if (over_ranks) {
+    std::string mine;
+    bytes::put(mine, outer);
+    for (const std::string& part : ranks::all_gather(mine)) {
+      std::size_t at = 0;
+      outer = std::max(outer, bytes::take<double>(part, at));
+    }
+  }
+  // Cells about one mean diameter of arc at the outer radius, and one tall; at least six around.
+  columns_ = std::max<std::size_t>(
+      6, static_cast<std::size_t>(std::llround(2.0 * std::numbers::pi * outer / d)));
+  rows_ = static_cast<std::size_t>(std::max(1.0, std::ceil((z_top_ - z_bottom_) / d)));
+  const double dz = (z_top_ - z_bottom_) / static_cast<double>(rows_);
+  node_.assign(columns_ * rows_, -1);
+  for (std::size_t i = from; i < to; ++i) {
+    const PosRad& q = p.pos_rad[i];
+    if (q.x.z < z_bottom_ || q.x.z > z_top_) continue;
+    const double theta = std::atan2(q.x.y - centre_.y, q.x.x - centre_.x);
+    const auto col =
+        std::min(columns_ - 1,
+                 static_cast<std::size_t>((theta + std::numbers::pi) / (2.0 * std::numbers::pi) *
+                                          static_cast<double>(columns_)));
+    const auto row = std::min(rows_ - 1, static_cast<std::size_t>((q.x.z - z_bottom_) / dz));
+    std::int64_t& b = node_[col + columns_ * row];
+    if (b < 0 || reach(q) > reach(p.pos_rad[static_cast<std::size_t>(b)]))
+      b = static_cast<std::int64_t>(i);
+  }
+}
+
+void MembraneCylinder::choose_over_ranks(const ParticleStore& p) {
+  std::string mine;
+  for (const std::int64_t b : node_) {
+    bytes::put(mine, b);
+    bytes::put(mine, b < 0 ? 0.0 : reach(p.pos_rad[static_cast<std::size_t>(b)]));
+  }
+  std::vector<double> best(node_.size(), 0.0);
+  node_.assign(node_.size(), -1);
+  // In rank order, a later rank's grain only when it reaches strictly further, as one process's
+  // search in index order keeps the first.
+  for (const std::string& part : ranks::all_gather(mine)) {
+    std::size_t at = 0;
+    for (std::size_t c = 0; c < node_.size(); ++c) {
+      const auto b = bytes::take<std::int64_t>(part, at);
+      const auto r = bytes::take<double>(part, at);
+      if (b >= 0 && (node_[c] < 0 || r > best[c])) {
+        node_[c] = b;
+        best[c] = r;
+      }
+    }
+  }
+}
+
+void MembraneCylinder::fill_and_list() {
+  for (std::size_t row = 0; row < rows_; ++row) {
+    std::int64_t* cells = node_.data() + columns_ * row;
+    std::size_t filled = 0;
+    for (std::size_t k = 0; k < columns_; ++k) filled += cells[k] >= 0 ? 1 : 0;
+    if (filled == 0) throw InternalError("the membrane found no grain at one level of the sample");
+    // Going down the columns, an empty cell takes the choice of the next cell round the axis.
+    for (std::size_t k = columns_; k-- > 0;)
+      if (cells[k] < 0) {
+        std::size_t n = (k + 1) % columns_;
+        while (cells[n] < 0) n = (n + 1) % columns_;
+        cells[k] = cells[n];
+      }
+  }
+  grains_.clear();
+  for (const std::int64_t b : node_) grains_.push_back(static_cast<std::uint32_t>(b));
+  std::sort(grains_.begin(), grains_.end());
+  grains_.erase(std::unique(grains_.begin(), grains_.end()), grains_.end());
+}
+
+void MembraneCylinder::find(const ParticleStore& p, const Vec3& centre, double z_bottom,
+                            double z_top) {
+  centre_ = centre;
+  z_bottom_ = z_bottom;
+  z_top_ = z_top;
+  find_nodes(p, 0, p.size(), false);
+  fill_and_list();
+}
+
+std::uint32_t MembraneCylinder::grain_at(std::size_t k, std::size_t j) const {
+  const std::size_t row = j == 0 ? 0 : std::min(j - 1, rows_ - 1);
+  return static_cast<std::uint32_t>(node_[k + columns_ * row]);
+}
+
+Vec3 MembraneCylinder::node_at(const ParticleStore& p, std::size_t k, std::size_t j) const {
+  Vec3 x = p.pos_rad[grain_at(k, j)].x;
+  if (j == 0) x.z = z_bottom_;
+  if (j == rows_ + 1) x.z = z_top_;
+  return x;
+}
+
+MembraneCylinder::FaceSums MembraneCylinder::load_faces(const ParticleStore& p, double sigma3,
+                                                        std::vector<Vec3>* load) const {
+  FaceSums s;
+  for (std::size_t k = 0; k < columns_; ++k) {
+    const std::size_t next = (k + 1) % columns_;
+    for (std::size_t j = 0; j <= rows_; ++j) {
+      const std::uint32_t g[4] = {grain_at(k, j), grain_at(next, j), grain_at(next, j + 1),
+                                  grain_at(k, j + 1)};
+      const Vec3 a = node_at(p, k, j), b = node_at(p, next, j), c = node_at(p, next, j + 1),
+                 d = node_at(p, k, j + 1);
+      // Around the axis anticlockwise, then up: the area vector points outward.
+      const Vec3 area = cross(c - a, d - b) * 0.5;
+      const Vec3 mid = (a + b + c + d) * 0.25;
+      const double rho = std::hypot(mid.x - centre_.x, mid.y - centre_.y);
+      const Vec3 out{(mid.x - centre_.x) / rho, (mid.y - centre_.y) / rho, 0.0};
+      const double radial = dot(area, out);
+      s.radial_area += radial;
+      s.inward += sigma3 * radial;
+      double r = 0.0;
+      for (std::uint32_t i : g) r += 0.25 * reach(p.pos_rad[i]);
+      s.reach += r * radial;
+      if (load)
+        for (std::uint32_t i : g) (*load)[i] += area * (-0.25 * sigma3);
+    }
+  }
+  return s;
+}
+
+void MembraneCylinder::apply(Simulation& sim, double sigma3, const Vec3& centre, double z_bottom,
+                             double z_top) {
+  const ParticleStore& p = sim.particles();
+  centre_ = centre;
+  z_bottom_ = z_bottom;
+  z_top_ = z_top;
+  if (sim.split()) {
+    const IndexRange own = sim.owned_particles();
+    find_nodes(p, own.begin, own.end, true);
+    choose_over_ranks(p);
+    fill_and_list();
+    sim.gather_grains({.all = false, .some = grains_});
+  } else {
+    find_nodes(p, 0, p.size(), false);
+    fill_and_list();
+  }
+  const FaceSums s = load_faces(p, sigma3, &sim.external_force());
+  stress_ = s.radial_area > 0.0 ? s.inward / s.radial_area : 0.0;
+}
+
+double MembraneCylinder::diameter(const ParticleStore& p) const {
+  const FaceSums s = load_faces(p, 0.0, nullptr);
+  return s.radial_area > 0.0 ? 2.0 * s.reach / s.radial_area : 0.0;
 }
 
 }  // namespace breccia
