@@ -340,10 +340,10 @@ TEST(Mpi, OtherTestsSplitOverRanksWriteTheFilesOfOneProcess) {
        "confining_stress = 15e6\nplaten_speed = 0.6\nmax_strain = 0.02\n"
        "[output]\nsnapshot_strain_interval = 0.005\n"},
       {"triaxial-membrane",
-       "[material]\npreset = \"berea\"\n[sample]\nshape = \"cylinder\"\ndiameter = 0.005\n"
-       "height = 0.006\nradius_min = 0.15e-3\nradius_max = 0.25e-3\n[test]\n"
-       "kind = \"triaxial\"\nconfining_stress = 1e6\nmembrane = true\nplaten_speed = 0.4\n"
-       "max_strain = 0.015\nstop_fraction = 0\n[output]\nsnapshot_strain_interval = 0.005\n"},
+       "[material]\npreset = \"berea\"\n[sample]\nshape = \"cylinder\"\ndiameter = 0.0045\n"
+       "height = 0.0055\nradius_min = 0.15e-3\nradius_max = 0.25e-3\n[test]\n"
+       "kind = \"triaxial\"\nconfining_stress = 1e6\nmembrane = true\nplaten_speed = 0.8\n"
+       "max_strain = 0.012\nstop_fraction = 0\n[output]\nsnapshot_strain_interval = 0.004\n"},
       {"brazilian",
        "[material]\npreset = \"berea\"\n[sample]\nshape = \"cylinder\"\ndiameter = 0.004\n"
        "height = 0.002\nradius_min = 0.12e-3\nradius_max = 0.18e-3\n[test]\n"

@@ -19,6 +19,12 @@ for s3 in 20 40; do
   wait
   OMP_NUM_THREADS=1 "$bin" run "$example" --set "$dir" --set "$conf" \
     --set "name=\"triaxial-jointed-$s3-frictionless-walls\"" --set contact.wall_friction=0.0
+  # A flexible membrane instead of the cylindrical wall (the platens keep their friction).
+  OMP_NUM_THREADS=1 "$bin" run "$example" --set "$dir" --set "$conf" --set test.membrane=true \
+    --set "name=\"triaxial-jointed-$s3-membrane\"" &
+  OMP_NUM_THREADS=1 "$bin" run "$example" --set "$dir" --set "$conf" --set test.membrane=true \
+    --set "name=\"triaxial-intact-$s3-membrane\"" --set 'joint.planes=[]' &
+  wait
 done
 for f in "$out"/*/summary.json; do
   /usr/bin/python3 -c "import json,sys; s=json.load(open(sys.argv[1])); \
