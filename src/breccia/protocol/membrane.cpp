@@ -19,6 +19,32 @@ double reach(const PosRad& q, int side) {
   return side == 0 ? -(q.x.x - q.r) : q.x.x + q.r;
 }
 
+// Each cell's grain over every rank's choice (collective): `cells` holds this rank's choices
+// (-1 for none), reach(cell, grain) how far the grain reaches out for that cell, which only
+// its owner knows current. In rank order a later rank's grain wins only when it reaches strictly
+// further: the first grain in index order that reaches furthest, as one process's search keeps.
+template <class Reach>
+void choose_furthest_over_ranks(std::vector<std::int64_t>& cells, Reach&& reach) {
+  std::string mine;
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    bytes::put(mine, cells[c]);
+    bytes::put(mine, cells[c] < 0 ? 0.0 : reach(c, static_cast<std::size_t>(cells[c])));
+  }
+  std::vector<double> best(cells.size(), 0.0);
+  cells.assign(cells.size(), -1);
+  for (const std::string& part : ranks::all_gather(mine)) {
+    std::size_t at = 0;
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      const auto b = bytes::take<std::int64_t>(part, at);
+      const auto r = bytes::take<double>(part, at);
+      if (b >= 0 && (cells[c] < 0 || r > best[c])) {
+        cells[c] = b;
+        best[c] = r;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void Membrane2D::find_chains(const ParticleStore& p, double y_bottom, double y_top,
@@ -42,32 +68,15 @@ void Membrane2D::find_chains(const ParticleStore& p, double y_bottom, double y_t
 }
 
 void Membrane2D::choose_over_ranks(const ParticleStore& p) {
-  // Each rank's choice with its reach, which only its owner knows current.
-  std::string mine;
-  for (int side = 0; side < 2; ++side)
-    for (const std::int64_t b : best_[side]) {
-      bytes::put(mine, b);
-      bytes::put(mine, b < 0 ? 0.0 : reach(p.pos_rad[static_cast<std::size_t>(b)], side));
-    }
-  std::array<std::vector<double>, 2> best_reach;
-  for (int side = 0; side < 2; ++side) {
-    best_[side].assign(best_[side].size(), -1);
-    best_reach[side].assign(best_[side].size(), 0.0);
-  }
-  // In rank order, a later rank's grain only when it reaches strictly further: the first grain
-  // in index order that reaches furthest, as one process's search keeps.
-  for (const std::string& part : ranks::all_gather(mine)) {
-    std::size_t at = 0;
-    for (int side = 0; side < 2; ++side)
-      for (std::size_t k = 0; k < best_[side].size(); ++k) {
-        const auto b = bytes::take<std::int64_t>(part, at);
-        const auto r = bytes::take<double>(part, at);
-        if (b >= 0 && (best_[side][k] < 0 || r > best_reach[side][k])) {
-          best_[side][k] = b;
-          best_reach[side][k] = r;
-        }
-      }
-  }
+  // Both sides in one collective: the left side's cells, then the right side's.
+  std::vector<std::int64_t> cells(best_[0]);
+  cells.insert(cells.end(), best_[1].begin(), best_[1].end());
+  const std::size_t left = best_[0].size();
+  choose_furthest_over_ranks(cells, [&](std::size_t cell, std::size_t i) {
+    return reach(p.pos_rad[i], cell < left ? 0 : 1);
+  });
+  best_[0].assign(cells.begin(), cells.begin() + static_cast<std::ptrdiff_t>(left));
+  best_[1].assign(cells.begin() + static_cast<std::ptrdiff_t>(left), cells.end());
 }
 
 void Membrane2D::make_chains() {
@@ -206,26 +215,8 @@ void MembraneCylinder::find_nodes(const ParticleStore& p, std::size_t from, std:
 }
 
 void MembraneCylinder::choose_over_ranks(const ParticleStore& p) {
-  std::string mine;
-  for (const std::int64_t b : node_) {
-    bytes::put(mine, b);
-    bytes::put(mine, b < 0 ? 0.0 : reach(p.pos_rad[static_cast<std::size_t>(b)]));
-  }
-  std::vector<double> best(node_.size(), 0.0);
-  node_.assign(node_.size(), -1);
-  // In rank order, a later rank's grain only when it reaches strictly further, as one process's
-  // search in index order keeps the first.
-  for (const std::string& part : ranks::all_gather(mine)) {
-    std::size_t at = 0;
-    for (std::size_t c = 0; c < node_.size(); ++c) {
-      const auto b = bytes::take<std::int64_t>(part, at);
-      const auto r = bytes::take<double>(part, at);
-      if (b >= 0 && (node_[c] < 0 || r > best[c])) {
-        node_[c] = b;
-        best[c] = r;
-      }
-    }
-  }
+  choose_furthest_over_ranks(node_,
+                             [&](std::size_t, std::size_t i) { return reach(p.pos_rad[i]); });
 }
 
 void MembraneCylinder::fill_and_list() {
