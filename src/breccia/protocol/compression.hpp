@@ -326,29 +326,21 @@ struct ConfinedCompressionTest {
     bool membrane = Dim == 2;  // flexible membranes (true) or servo walls
   };
   static constexpr auto fields() {
-    if constexpr (Dim == 3) {
-      const auto c = confining_fields<Params>(
-          "sigma_3 held by the lateral walls (or the membrane with membrane = true)");
-      return compression_fields<Params, 3>(std::array<ParamField<Params>, 3>{
-          c[0], c[1],
-          ParamField<Params>{
-              "membrane", "-", &Params::membrane, 0, 0, true, true,
-              "a cylinder only: a flexible membrane (docs/physics.md §6.3), sigma_3 acting "
-              "as a pressure on a surface through the outermost grains all round, found "
-              "again every step, so the sample can bulge and a shear band break through; "
-              "false: the cylindrical servo wall (§6.2)"}});
-    } else {
-      const auto c = confining_fields<Params>(
-          "sigma_3 held by the membranes (or the side walls with membrane = false)");
-      return compression_fields<Params, 3>(std::array<ParamField<Params>, 3>{
-          c[0], c[1],
-          ParamField<Params>{
-              "membrane", "-", &Params::membrane, 0, 0, true, true,
-              "flexible membranes (docs/physics.md §6.3): sigma_3 acts as a follower "
-              "load per unit length on the outermost grain chain of each side, "
-              "found again every step; false: rigid side walls servo-controlled "
-              "to sigma_3 (servo_relaxation)"}});
-    }
+    const auto c = confining_fields<Params>(
+        Dim == 3 ? "sigma_3 held by the lateral walls (or the membrane with membrane = true)"
+                 : "sigma_3 held by the membranes (or the side walls with membrane = false)");
+    return compression_fields<Params, 3>(std::array<ParamField<Params>, 3>{
+        c[0], c[1],
+        ParamField<Params>{
+            "membrane", "-", &Params::membrane, 0, 0, true, true,
+            Dim == 3 ? "a cylinder only: a flexible membrane (docs/physics.md §6.3), sigma_3 "
+                       "acting as a pressure on a surface through the outermost grains all "
+                       "round, found again every step, so the sample can bulge and a shear band "
+                       "break through; false: the cylindrical servo wall (§6.2)"
+                     : "flexible membranes (docs/physics.md §6.3): sigma_3 acts as a follower "
+                       "load per unit length on the outermost grain chain of each side, found "
+                       "again every step; false: rigid side walls servo-controlled to sigma_3 "
+                       "(servo_relaxation)"}});
   }
   static void check(const Params& p, const SampleInfo& s, const std::string& where) {
     check_platen_speeds(p, where);
