@@ -19,6 +19,8 @@ import sys
 from collections import defaultdict
 from pathlib import Path
 
+from run import complete, run_folder
+
 MIN_EVENTS = 50
 
 
@@ -45,23 +47,16 @@ def catalogue(folder):
     return len(m), len(above), mc, b, max(m) - mc
 
 
-def complete(folder):
-    try:
-        return json.loads((folder / "manifest.json").read_text())["status"] == "complete"
-    except (OSError, ValueError, KeyError):
-        return False
-
-
 def main(out):
     rows = defaultdict(list)
     for where in sorted(out.glob("*/*mm-seed*")):
-        folders = sorted(p for p in where.glob("2*") if p.is_dir() and complete(p))
-        if not folders:
+        folder = run_folder(where)
+        if folder is None or not complete(folder):
             continue
-        c = catalogue(folders[-1])
+        c = catalogue(folder)
         if c is None:
             continue
-        particles = json.loads((folders[-1] / "summary.json").read_text())["particles"]
+        particles = json.loads((folder / "summary.json").read_text())["particles"]
         size = float(where.name.split("mm-seed")[0])
         rows[(where.parent.name, size)].append((particles,) + c)
     print("| preset | width | grains | packings | events | above M_c | M_c | b | M_max - M_c |")
