@@ -487,7 +487,12 @@ std::string law_limits_notes() {
          "204.5 MPa (128.6 MPa at the preset's own loading; validation/preset-resolution, "
          "\"Inertia\"). A preset carries to a larger sample at its calibration's platen speed "
          "and density scaling. Inertia raises the modulus too, by 27 % on that packing (7.34 to "
-         "9.31 GPa), not by the 62 %; the rest is not yet explained. Presets are calibrated "
+         "9.31 GPa), not by the 62 %. The rest is not the size: with the preset's `rows` "
+         "compaction E is flat from 3,453 to 13,706 disks. The benchmark's `homogeneous` "
+         "compaction makes larger samples denser and stiffer (porosity 0.150, 0.142, 0.134 and "
+         "E +7 % from 2,394 to 9,507 disks at the benchmark's inertia), which explains part of "
+         "it; the step to 13.8 GPa is steeper than that trend and not yet explained "
+         "(validation/preset-resolution, \"The 60k-disk modulus\"). Presets are calibrated "
          "at one resolution (grain size and sample size in each record); DEM moduli and strengths "
          "depend on it, so a sample of other grains should be calibrated again.\n";
 }
