@@ -19,6 +19,7 @@
 #include "breccia/calibrate/calibrate.hpp"
 #include "breccia/core/allocator.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/core/float_mode.hpp"
 #include "breccia/core/interrupt.hpp"
 #include "breccia/core/ranks.hpp"
 #include "breccia/io/run_folder.hpp"
@@ -555,6 +556,7 @@ std::string command_word(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   breccia::configure_allocator();
+  breccia::flush_subnormals();  // before OpenMP starts the threads that inherit it
   // Refused before MPI starts: a build without MPI cannot call it, and a command that runs in
   // one process must not run once per rank.
   if (const auto refusal = breccia::ranks::launch_refusal(

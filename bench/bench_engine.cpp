@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "breccia/core/allocator.hpp"
+#include "breccia/core/float_mode.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/core/ranks.hpp"
 #include "breccia/core/rng.hpp"
@@ -173,6 +174,10 @@ int main(int argc, char** argv) {
   app.add_flag("--keep-pair-forces", keep_pair_forces,
                "keep every pair's force in an array even where the laws' states give it back "
                "(the reference path, for comparison)");
+  bool keep_subnormals = false;
+  app.add_flag("--keep-subnormals", keep_subnormals,
+               "compute with subnormal numbers as the hardware does by default (breccia flushes "
+               "them to zero; for comparison)");
   bool split = false;
   app.add_flag("--split", split,
                "under mpirun: split the sample over the ranks (each steps its own particles)");
@@ -181,6 +186,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_engine: --sample cylinder is 3D only (got --dim %d)\n", dim);
     return 2;
   }
+  if (!keep_subnormals) flush_subnormals();  // as breccia's main does, before the threads start
   set_threads(threads);
 
   const double R = 0.5e-3;
@@ -280,6 +286,7 @@ int main(int argc, char** argv) {
   if (bond == "brittle_beam") name += "-beam";
   if (bond == "quaternion_bond") name += "-quat";
   if (keep_pair_forces) name += "-kept";
+  if (keep_subnormals) name += "-subnormals";
   if (n_ranks > 1) name += fmt::format("-{}ranks{}", n_ranks, sim.split() ? "" : "-unsplit");
   std::fprintf(stderr,
                "%-16s ranks %d x threads %d: %zu particles, %zu/%zu bonds intact, %zu contacts, "
@@ -297,6 +304,7 @@ int main(int argc, char** argv) {
                    {"sample", sample},
                    {"bond_law", bond},
                    {"keep_pair_forces", keep_pair_forces},
+                   {"subnormals_flushed", subnormals_flushed()},
                    {"pack_s", pack_s},
                    {"particles", sim.particles().size()},
                    {"bonds", bonds0},

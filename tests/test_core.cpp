@@ -3,9 +3,12 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <numbers>
 #include <optional>
+#include <thread>
 
+#include "breccia/core/float_mode.hpp"
 #include "breccia/core/quat.hpp"
 #include "breccia/core/ranks.hpp"
 #include "breccia/core/rng.hpp"
@@ -13,6 +16,48 @@
 #include "breccia/state/tag_index.hpp"
 
 using namespace breccia;
+
+#if defined(__x86_64__) || defined(__i386__) || defined(__aarch64__)
+constexpr bool kFlushModeExists = true;
+#else
+constexpr bool kFlushModeExists = false;
+#endif
+
+// 1e-300 x 1e-10 = 1e-310 lies below the smallest normal double (2.2e-308): a subnormal result
+// unless the mode flushes it. volatile keeps the compiler from folding the products.
+TEST(FloatMode, FlushesSubnormalResultsWhileHeldAndRestoresAfter) {
+  if (!kFlushModeExists) GTEST_SKIP() << "no flush-to-zero mode on this processor";
+  volatile double tiny = 1e-300, factor = 1e-10;
+  const bool before = subnormals_flushed();
+  {
+    const SubnormalsFlushed flushed;
+    EXPECT_TRUE(subnormals_flushed());
+    EXPECT_EQ(tiny * factor, 0.0);
+  }
+  EXPECT_EQ(subnormals_flushed(), before);
+  if (!before) EXPECT_EQ(std::fpclassify(tiny * factor), FP_SUBNORMAL);
+}
+
+TEST(FloatMode, SubnormalOperandsReadAsZeroWhereTheProcessorCan) {
+#if defined(__x86_64__) || defined(__i386__)
+  volatile double sub = std::numeric_limits<double>::denorm_min() * 1e6;  // about 4.9e-318
+  ASSERT_EQ(std::fpclassify(sub), FP_SUBNORMAL);
+  const SubnormalsFlushed flushed;
+  EXPECT_EQ(sub * 1e300, 0.0);  // 4.9e-18 if the operand were read as it is
+#else
+  GTEST_SKIP() << "denormals-are-zero is an x86 mode";
+#endif
+}
+
+// breccia's main() sets the mode before OpenMP starts its threads, which inherit it.
+TEST(FloatMode, ThreadsStartedAfterwardsInheritTheMode) {
+  if (!kFlushModeExists) GTEST_SKIP() << "no flush-to-zero mode on this processor";
+  const SubnormalsFlushed flushed;
+  bool in_thread = false;
+  std::thread t([&] { in_thread = subnormals_flushed(); });
+  t.join();
+  EXPECT_TRUE(in_thread);
+}
 
 TEST(Quat, RotateMatchesMatrixOfPhysicsReference) {
   // docs/physics.md §0.4 matrix, body to world.

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 
+#include "breccia/core/float_mode.hpp"
 #include "breccia/core/interrupt.hpp"
 #include "breccia/run/run.hpp"
 #include "module.hpp"
@@ -115,6 +116,7 @@ py::dict guarded_run(Callbacks& callbacks, RunOptions& opt, Body&& body) {
   RunResult result;
   {
     py::gil_scoped_release release;
+    const SubnormalsFlushed flushed;  // the engine's mode while it runs, Python's after
     result = body(opt);
   }
   callbacks.rethrow();

@@ -3,6 +3,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include "breccia/core/float_mode.hpp"
 #include "breccia/run/sample_build.hpp"
 #include "breccia/sample/geometry_file.hpp"
 #include "module.hpp"
@@ -22,6 +23,7 @@ py::dict generate(const ExperimentSpec& spec, const std::string& path,
   GeneratedSample g;
   {
     py::gil_scoped_release release;
+    const SubnormalsFlushed flushed;  // the engine's mode while it runs, Python's after
     g = generate_sample(spec, path, logger);
   }
   // The packing report as a Python dict, through its JSON text.

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <memory>
 
+#include "breccia/core/float_mode.hpp"
 #include "breccia/core/parallel.hpp"
 #include "breccia/run/sample_build.hpp"
 #include "module.hpp"
@@ -37,6 +38,7 @@ std::unique_ptr<Scripted> make(const ExperimentSpec& spec, std::optional<py::fun
     (*log)(m);
   };
   py::gil_scoped_release release;
+  const SubnormalsFlushed flushed;  // the engine's mode while it runs, Python's after
   s->built = std::make_unique<Built>(build(spec, logger));
   return s;
 }
@@ -49,6 +51,7 @@ void step(Scripted& s, std::uint64_t n) {
     const std::uint64_t todo = std::min(chunk, n - done);
     {
       py::gil_scoped_release release;
+      const SubnormalsFlushed flushed;
       for (std::uint64_t k = 0; k < todo; ++k) {
         s.built->protocol->control(s.sim());
         s.sim().step();
