@@ -1,6 +1,6 @@
 #!/bin/bash
-# Seed 001's full-size Tumlin UCS and its geometrically similar smaller cylinders (run by hand,
-# not by CI; README.md has the figures). Each step can be run alone:
+# Seed 001's full-size UCS of its four sandstones and geometrically similar smaller cylinders (run
+# by hand, not by CI; README.md has the figures). Each step can be run alone:
 #
 #   validation/tumlin-full-size/run.sh pack  SCALE        # pack and bond the cylinder (SCALE = 1: 75 mm tall)
 #   validation/tumlin-full-size/run.sh run   SCALE LOADING [--stop-at-step N]
@@ -11,7 +11,10 @@
 # seed's 1.16 million) with the same grains, so the steps a loading needs grow with SCALE.
 # LOADING is "calibrated" (the preset's: platens at 0.03 m/s, safety factor 0.3) or "fast"
 # (0.24 m/s until 0.1 % of the bonds have broken, then 0.06 m/s; safety factor 0.6).
-# Output goes to runs/tumlin/ (samples, run folders, and `/usr/bin/time -v` logs beside them).
+# ROCK (default tumlin; brenna, mucharz, radkow) picks the preset and the grains: each rock's
+# grains are the calibration's 0.22-0.36 mm scaled so that the full cylinder holds the seed's
+# count for that rock (Table 2: Brenna 82,266, Mucharz 339,324, Radków 150,653, Tumlin 1,155,851).
+# Output goes to runs/ROCK/ (samples, run folders, and `/usr/bin/time -v` logs beside them).
 # BRECCIA (default build-bench/breccia, a native build: cmake -S . -B build-bench -G Ninja
 # -DCMAKE_BUILD_TYPE=Release -DBRECCIA_NATIVE=ON -DBRECCIA_BUILD_TESTS=OFF) and THREADS
 # (default 2) can be set in the environment.
@@ -20,8 +23,33 @@ cd "$(dirname "$0")/../.."
 BRECCIA=${BRECCIA:-build-bench/breccia}
 THREADS=${THREADS:-2}
 EXPERIMENT=validation/tumlin-full-size/tumlin-full-size.toml
-OUT=runs/tumlin
+ROCK=${ROCK:-tumlin}
+OUT=runs/$ROCK
 mkdir -p "$OUT"
+
+# The preset and the grain scale factor on the calibration's 0.22-0.36 mm radii: Tumlin's 0.746
+# (the experiment file's) gives 1,160,160 grains in the full cylinder, and the count goes as the
+# factor's inverse cube.
+rock() {
+  local seed_grains
+  case "$ROCK" in
+    tumlin) return ;;  # the experiment file's own grains (0.164-0.269 mm)
+    brenna) seed_grains=82266 ;;
+    mucharz) seed_grains=339324 ;;
+    radkow) seed_grains=150653 ;;
+    *) echo "ROCK must be tumlin, brenna, mucharz or radkow, not '$ROCK'" >&2; exit 2 ;;
+  esac
+  python3 -c "import sys; f = 0.746 * (1160160 / int(sys.argv[2])) ** (1 / 3)
+print(f'--set material.preset={sys.argv[1]} --set name={sys.argv[1]}-full-size '
+      f'--set sample.radius_min={0.22e-3 * f:.4g} --set sample.radius_max={0.36e-3 * f:.4g} '
+      f'--set sample.bond_gap_tolerance={5e-6 * f:.4g}')" "$ROCK" "$seed_grains"
+}
+
+timed() {  # /usr/bin/time -v -o FILE COMMAND..., or the bare command where GNU time is missing
+  local log=$1
+  shift
+  if [ -x /usr/bin/time ]; then /usr/bin/time -v -o "$log" "$@"; else "$@"; fi
+}
 
 geometry() {  # the cylinder's size at a scale
   python3 -c "import sys; s = float(sys.argv[1]); print(f'--set sample.diameter={0.0375 * s:.6g} --set sample.height={0.075 * s:.6g}')" "$1"
@@ -39,29 +67,29 @@ case "${1:-}" in
   pack)
     scale=$2
     # shellcheck disable=SC2046
-    /usr/bin/time -v -o "$OUT/pack-$scale.time" "$BRECCIA" generate "$EXPERIMENT" \
-      $(geometry "$scale") --set engine.threads="$THREADS" --output "$OUT/cylinder-$scale.geom"
+    timed "$OUT/pack-$scale.time" "$BRECCIA" generate "$EXPERIMENT" \
+      $(rock) $(geometry "$scale") --set engine.threads="$THREADS" --output "$OUT/cylinder-$scale.geom"
     ;;
   run)
     scale=$2 load=$3
     shift 3
     [ -f "$OUT/cylinder-$scale.geom" ] || { echo "pack the sample first: $0 pack $scale" >&2; exit 2; }
     # shellcheck disable=SC2046
-    /usr/bin/time -v -o "$OUT/run-$scale-$load.time" "$BRECCIA" run "$EXPERIMENT" --threads "$THREADS" \
-      $(geometry "$scale") $(loading "$load") --set sample.source=file \
+    timed "$OUT/run-$scale-$load.time" "$BRECCIA" run "$EXPERIMENT" --threads "$THREADS" \
+      $(rock) $(geometry "$scale") $(loading "$load") --set sample.source=file \
       --set sample.file="$PWD/$OUT/cylinder-$scale.geom" --set output.directory="$OUT/$scale-$load" "$@"
     ;;
   resume)
     folder=$2
     shift 2
-    /usr/bin/time -v -o "$folder.resume-$(date +%s).time" "$BRECCIA" resume "$folder" --threads "$THREADS" "$@"
+    timed "$folder.resume-$(date +%s).time" "$BRECCIA" resume "$folder" --threads "$THREADS" "$@"
     ;;
   table)
     shift
     /usr/bin/python3 validation/tumlin-full-size/table.py "$@"
     ;;
   *)
-    sed -n '2,19p' "$0"
+    sed -n '2,22p' "$0"
     exit 2
     ;;
 esac

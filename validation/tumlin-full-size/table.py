@@ -1,15 +1,16 @@
 #!/usr/bin/python3
-"""Tables of the Tumlin UCS runs beside seed 001's (run by hand, not by CI).
+"""Tables of seed 001's sandstone UCS runs beside the seed's (run by hand, not by CI).
 
     /usr/bin/python3 validation/tumlin-full-size/table.py [--peak-mpa=X] LABEL=RUN_FOLDER[,TIME_LOG] ...
 
 Each argument names a run folder (finished or stopped with a checkpoint) and, optionally, the
 output of `/usr/bin/time -v` for the process that ran it (its peak resident memory). Prints two
 Markdown tables: the runs' loading, size, speed and memory, and their results beside seed 001's
-Tables 4 and 5 (E, UCS, critical strain, Poisson's ratio, broken bonds, fragments and their mass
-classes, the bond energy at the peak by component and the kinetic energy). A stopped run shows
-how far it went (strain, stress, cracks) and its throughput so far, and with --peak-mpa its gauge
-modulus over 40-60 % of that expected peak once it has passed 60 % of it.
+Tables 4 and 5, each rock's runs beside its own model (E, UCS, critical strain, Poisson's ratio,
+broken bonds, fragments and their mass classes, the bond energy at the peak by component and the
+kinetic energy). A run stopped after its peak (below 0.9 of it) gives its results so far; one
+stopped before it shows how far it went (strain, stress, cracks) and its throughput so far, and
+with --peak-mpa its gauge modulus over 40-60 % of that expected peak once it has passed 60 % of it.
 """
 import csv
 import json
@@ -18,19 +19,44 @@ import re
 import sys
 import tomllib
 
-# Seed 001, Tables 2, 4 and 5 and its text: the Tumlin sample TU2 (simulation and laboratory).
-SEED = {
-    "grains": 1_155_851,
-    "bonds": 3_831_657,
-    "youngs_modulus_gpa": (27.4, 26.2),
-    "ucs_mpa": (118.0, 115.0),
-    "critical_strain_pct": (0.46, 0.51),
-    "poisson_ratio": (0.26, 0.22),
-    "fragments": 152_953,
-    "classes": (152_944, 8, 1),  # smallest (< 10 % of the largest), middle, biggest (> 90 %)
-    "largest_fragment_pct": 100.0 * 75.0 / 135.0,
-    "bonds_lost_pct": 30.0,  # "almost 30 %" decrease of the bond count (Fig. 9)
-    "core_hours": 320 * 24,
+# Seed 001, Tables 2, 4 and 5 and its text: each sandstone's model (simulation and laboratory).
+# The largest fragment's share is its mass over the sample's (the text's grams); the bonds lost
+# are read from Fig. 9, for Tumlin alone. Classes: smallest (< 10 % of the largest), middle,
+# biggest (> 90 %).
+SEEDS = {
+    "brenna": {
+        "name": "Brenna (BR2)", "grains": 82_266, "bonds": 297_847,
+        "youngs_modulus_gpa": (20.8, 20.5), "ucs_mpa": (98.0, 99.0),
+        "critical_strain_pct": (0.51, 0.52), "poisson_ratio": (0.21, 0.25),
+        "fragments": 19_888, "classes": (19_879, 8, 1),
+        "largest_fragment_pct": 100.0 * 79.0 / 153.0, "bonds_lost_pct": None,
+        "core_hours": 92 * 287 / 60,
+    },
+    "mucharz": {
+        "name": "Mucharz (MU1)", "grains": 339_324, "bonds": 821_488,
+        "youngs_modulus_gpa": (29.2, 31.8), "ucs_mpa": (136.0, 138.0),
+        "critical_strain_pct": (0.47, 0.49), "poisson_ratio": (0.19, 0.23),
+        "fragments": 23_384, "classes": (23_377, 4, 3),
+        "largest_fragment_pct": 100.0 * 48.0 / 113.0, "bonds_lost_pct": None,
+        "core_hours": 228 * 667 / 60,
+    },
+    "radkow": {
+        "name": "Radków (RAD1)", "grains": 150_653, "bonds": 500_024,
+        "youngs_modulus_gpa": (23.4, 22.8), "ucs_mpa": (61.0, 60.0),
+        "critical_strain_pct": (0.28, 0.29), "poisson_ratio": (0.21, 0.20),
+        "fragments": 33_790, "classes": (33_764, 14, 12),
+        "largest_fragment_pct": 100.0 * 21.0 / 118.0, "bonds_lost_pct": None,
+        "core_hours": 93 * 335 / 60,
+    },
+    "tumlin": {
+        "name": "Tumlin (TU2)", "grains": 1_155_851, "bonds": 3_831_657,
+        "youngs_modulus_gpa": (27.4, 26.2), "ucs_mpa": (118.0, 115.0),
+        "critical_strain_pct": (0.46, 0.51), "poisson_ratio": (0.26, 0.22),
+        "fragments": 152_953, "classes": (152_944, 8, 1),
+        "largest_fragment_pct": 100.0 * 75.0 / 135.0,
+        "bonds_lost_pct": 30.0,  # "almost 30 %" decrease of the bond count (Fig. 9)
+        "core_hours": 320 * 24,
+    },
 }
 
 
@@ -71,6 +97,13 @@ def gauge_modulus(rows, low_pa, high_pa):
     return sum((x - mx) * (y - my) for x, y in pts) / sxx if sxx > 0 else None
 
 
+def past_peak(summary, last_row):
+    if not summary or not summary.get("peak_reached"):
+        return False
+    peak = summary.get("peak_deviatoric_stress_pa") or 0.0
+    return peak > 0 and float(last_row["deviatoric_stress_pa"]) < 0.9 * peak
+
+
 def fmt(v, f="{:.3g}"):
     return "-" if v is None else f.format(v)
 
@@ -78,8 +111,12 @@ def fmt(v, f="{:.3g}"):
 def run_record(label, folder, time_log, peak_mpa):
     folder = pathlib.Path(folder)
     manifest = read_json(folder / "manifest.json") or {}
-    # An interrupted run's summary analyses the curve so far (its "peak" is where it stopped).
-    summary = read_json(folder / "summary.json") if manifest.get("status") == "complete" else None
+    # An interrupted run's summary analyses the curve so far: its "peak" is where it stopped
+    # unless the stress had clearly fallen from a peak before (below 0.9 of it), and its broken
+    # bonds and fragments are those at the stop.
+    summary = read_json(folder / "summary.json")
+    if manifest.get("status") != "complete" and not past_peak(summary, history(folder)[-1]):
+        summary = None
     spec = tomllib.loads((folder / "experiment.toml").read_text())
     test, engine = spec.get("test", {}), spec.get("engine", {})
     rows = history(folder)
@@ -90,6 +127,7 @@ def run_record(label, folder, time_log, peak_mpa):
     rss = peak_rss_bytes(time_log)
     r = {
         "label": label,
+        "rock": spec.get("material", {}).get("preset", "tumlin"),
         "status": manifest.get("status", "?"),
         "grains": particles,
         "bonds": manifest.get("bonds"),
@@ -143,19 +181,26 @@ def energy_shares(s):
     return ", ".join(f"{k} {100 * v / total:.0f} %" for k, v in parts)
 
 
+def seed_row(rock):
+    sd = SEEDS[rock]
+    lost = f"about {sd['bonds_lost_pct']:.0f}" if sd["bonds_lost_pct"] else "-"
+    return (
+        f"| seed 001, {sd['name']}, {sd['grains']:,} grains, simulation (lab) | "
+        f"{sd['youngs_modulus_gpa'][0]} ({sd['youngs_modulus_gpa'][1]}) | "
+        f"{sd['ucs_mpa'][0]:.0f} ({sd['ucs_mpa'][1]:.0f}) | {sd['critical_strain_pct'][0]} "
+        f"({sd['critical_strain_pct'][1]}) | {sd['poisson_ratio'][0]} ({sd['poisson_ratio'][1]}) | "
+        f"{lost} | {sd['fragments']:,} | "
+        f"{' / '.join(f'{c:,}' for c in sd['classes'])} | {sd['largest_fragment_pct']:.0f} | "
+        "(tension, shear, bending, torsion: Fig. 11) | small (Fig. 11B) |")
+
+
 def results_table(runs):
     out = ["| run | E_t50 (GPa) | UCS (MPa) | critical strain (%) | Poisson's ratio | broken bonds at "
            "the end (%) | fragments | smallest / middle / biggest | largest fragment (% of mass) | "
            "bond energy at the peak | kinetic / bond energy at the peak |",
            "|---|---|---|---|---|---|---|---|---|---|---|"]
-    sd = SEED
-    out.append(
-        f"| seed 001, simulation (lab) | {sd['youngs_modulus_gpa'][0]} ({sd['youngs_modulus_gpa'][1]}) | "
-        f"{sd['ucs_mpa'][0]:.0f} ({sd['ucs_mpa'][1]:.0f}) | {sd['critical_strain_pct'][0]} "
-        f"({sd['critical_strain_pct'][1]}) | {sd['poisson_ratio'][0]} ({sd['poisson_ratio'][1]}) | "
-        f"about {sd['bonds_lost_pct']:.0f} | {sd['fragments']:,} | "
-        f"{' / '.join(f'{c:,}' for c in sd['classes'])} | {sd['largest_fragment_pct']:.0f} | "
-        "(tension, shear, bending, torsion: Fig. 11) | small (Fig. 11B) |")
+    for rock in sorted({r["rock"] for r in runs}):
+        out.append(seed_row(rock))
     for r in runs:
         s = r["summary"]
         if not s:
@@ -173,8 +218,12 @@ def results_table(runs):
         peak = (s.get("energy_budget") or {}).get("at_peak") or {}
         bond_total = ((peak.get("bond_strain_j") or {}).get("total")) or None
         kin = peak.get("kinetic_j")
+        label = r["label"]
+        if r["status"] != "complete":
+            label += (f" (stopped after the peak at {r['stress_mpa']:.1f} MPa; bonds and "
+                      "fragments at the stop)")
         out.append(
-            f"| {r['label']} | {fmt(s.get('youngs_modulus_pa') and s['youngs_modulus_pa'] / 1e9, '{:.2f}')} | "
+            f"| {label} | {fmt(s.get('youngs_modulus_pa') and s['youngs_modulus_pa'] / 1e9, '{:.2f}')} | "
             f"{fmt(s.get('peak_deviatoric_stress_mpa'), '{:.1f}')} | "
             f"{fmt(s.get('axial_strain_at_peak') and 100 * s['axial_strain_at_peak'], '{:.3f}')} | "
             f"{fmt(s.get('poisson_ratio'), '{:.3f}')} | "
