@@ -24,6 +24,10 @@ BRECCIA=${BRECCIA:-build-bench/breccia}
 THREADS=${THREADS:-2}
 EXPERIMENT=validation/tumlin-full-size/tumlin-full-size.toml
 ROCK=${ROCK:-tumlin}
+case "$ROCK" in  # checked here: an exit inside $(rock) below would leave only its subshell
+  tumlin | brenna | mucharz | radkow) ;;
+  *) echo "ROCK must be tumlin, brenna, mucharz or radkow, not '$ROCK'" >&2; exit 2 ;;
+esac
 OUT=runs/$ROCK
 mkdir -p "$OUT"
 
@@ -37,7 +41,6 @@ rock() {
     brenna) seed_grains=82266 ;;
     mucharz) seed_grains=339324 ;;
     radkow) seed_grains=150653 ;;
-    *) echo "ROCK must be tumlin, brenna, mucharz or radkow, not '$ROCK'" >&2; exit 2 ;;
   esac
   python3 -c "import sys; f = 0.746 * (1160160 / int(sys.argv[2])) ** (1 / 3)
 print(f'--set material.preset={sys.argv[1]} --set name={sys.argv[1]}-full-size '
@@ -73,6 +76,7 @@ case "${1:-}" in
   run)
     scale=$2 load=$3
     shift 3
+    loading "$load" > /dev/null || exit 2
     [ -f "$OUT/cylinder-$scale.geom" ] || { echo "pack the sample first: $0 pack $scale" >&2; exit 2; }
     # shellcheck disable=SC2046
     timed "$OUT/run-$scale-$load.time" "$BRECCIA" run "$EXPERIMENT" --threads "$THREADS" \
