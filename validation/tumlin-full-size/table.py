@@ -25,37 +25,33 @@ import tomllib
 # biggest (> 90 %).
 SEEDS = {
     "brenna": {
-        "name": "Brenna (BR2)", "grains": 82_266, "bonds": 297_847,
+        "name": "Brenna (BR2)", "grains": 82_266,
         "youngs_modulus_gpa": (20.8, 20.5), "ucs_mpa": (98.0, 99.0),
         "critical_strain_pct": (0.51, 0.52), "poisson_ratio": (0.21, 0.25),
         "fragments": 19_888, "classes": (19_879, 8, 1),
         "largest_fragment_pct": 100.0 * 79.0 / 153.0, "bonds_lost_pct": None,
-        "core_hours": 92 * 287 / 60,
     },
     "mucharz": {
-        "name": "Mucharz (MU1)", "grains": 339_324, "bonds": 821_488,
+        "name": "Mucharz (MU1)", "grains": 339_324,
         "youngs_modulus_gpa": (29.2, 31.8), "ucs_mpa": (136.0, 138.0),
         "critical_strain_pct": (0.47, 0.49), "poisson_ratio": (0.19, 0.23),
         "fragments": 23_384, "classes": (23_377, 4, 3),
         "largest_fragment_pct": 100.0 * 48.0 / 113.0, "bonds_lost_pct": None,
-        "core_hours": 228 * 667 / 60,
     },
     "radkow": {
-        "name": "Radków (RAD1)", "grains": 150_653, "bonds": 500_024,
+        "name": "Radków (RAD1)", "grains": 150_653,
         "youngs_modulus_gpa": (23.4, 22.8), "ucs_mpa": (61.0, 60.0),
         "critical_strain_pct": (0.28, 0.29), "poisson_ratio": (0.21, 0.20),
         "fragments": 33_790, "classes": (33_764, 14, 12),
         "largest_fragment_pct": 100.0 * 21.0 / 118.0, "bonds_lost_pct": None,
-        "core_hours": 93 * 335 / 60,
     },
     "tumlin": {
-        "name": "Tumlin (TU2)", "grains": 1_155_851, "bonds": 3_831_657,
+        "name": "Tumlin (TU2)", "grains": 1_155_851,
         "youngs_modulus_gpa": (27.4, 26.2), "ucs_mpa": (118.0, 115.0),
         "critical_strain_pct": (0.46, 0.51), "poisson_ratio": (0.26, 0.22),
         "fragments": 152_953, "classes": (152_944, 8, 1),
         "largest_fragment_pct": 100.0 * 75.0 / 135.0,
         "bonds_lost_pct": 30.0,  # "almost 30 %" decrease of the bond count (Fig. 9)
-        "core_hours": 320 * 24,
     },
 }
 
