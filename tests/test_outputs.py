@@ -251,6 +251,10 @@ def test_report_renders_every_figure():
         ae = summary["acoustic_emission"]
         events = open(os.path.join(folder, "events.csv")).read().strip().splitlines()
         assert len(events) - 1 == ae["events"] > 10
+        # Whether b falls toward failure is read from the windows up to the peak, and reported.
+        trend = ae["b_value_before_peak"]
+        assert trend["flag"] in ("", "no_peak", "no_window_before_peak", "too_few_windows")
+        assert "<th>b-value before the peak</th>" in table
         assert summary["energy_budget"]["classification"] in ("good", "warning")
         assert summary["fragments"]["count"] >= 1
 

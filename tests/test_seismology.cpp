@@ -92,6 +92,44 @@ TEST(BValue, EventWindowsStampTheLastEventStrain) {
   for (const auto& x : w) EXPECT_NEAR(x.value.b, 1.0, 0.35);
 }
 
+TEST(BValue, SpearmanRhoWithTiesByHand) {
+  // y's ranks with the tie at 7 shared: (1, 2, 3.5, 5, 3.5); centred on 3 against x's (-2..2):
+  // sum dx dy = 8, sum dx^2 = 10, sum dy^2 = 9.5, rho = 8 / sqrt(95).
+  EXPECT_NEAR(spearman_rho({1, 2, 3, 4, 5}, {5, 6, 7, 8, 7}), 8.0 / std::sqrt(95.0), 1e-15);
+  // Any strictly falling series, however far from a line, is -1.
+  EXPECT_DOUBLE_EQ(spearman_rho({0.1, 0.2, 0.3, 0.4}, {9.0, 2.0, 1.9, -50.0}), -1.0);
+  EXPECT_TRUE(std::isnan(spearman_rho({1, 2, 3}, {4, 4, 4})));  // no ranking
+  EXPECT_TRUE(std::isnan(spearman_rho({1}, {2})));
+}
+
+TEST(BValue, TrendBeforeThePeakFromTheWindows) {
+  std::vector<BValueWindow> w;
+  const double strain[] = {0.001, 0.002, 0.003, 0.0035, 0.004, 0.005, 0.006, 0.007};
+  const double b[] = {3.0, 2.5, 2.6, 0.0, 2.0, 1.5, 1.2, 1.0};
+  for (int k = 0; k < 8; ++k) {
+    BValueWindow x{strain[k], {}};
+    x.value.b = b[k];
+    if (k == 3) x.value.flag = "too_few_events";  // an invalid window is skipped
+    w.push_back(x);
+  }
+  // Up to the peak at 0.005: b = (3, 2.5, 2.6, 2, 1.5), ranks (5, 3, 4, 2, 1) against (1..5):
+  // sum dx dy = -9 over sqrt(10 x 10), rho = -0.9.
+  BValueTrend t = b_value_trend(w, 0.005, true);
+  EXPECT_EQ(t.windows, 5u);
+  EXPECT_DOUBLE_EQ(t.first_strain, 0.001);
+  EXPECT_DOUBLE_EQ(t.first_b, 3.0);
+  EXPECT_DOUBLE_EQ(t.last_strain, 0.005);
+  EXPECT_DOUBLE_EQ(t.last_b, 1.5);
+  EXPECT_NEAR(t.spearman_rho, -0.9, 1e-15);
+  EXPECT_EQ(t.flag, "");
+  t = b_value_trend(w, 0.005, true, 6);
+  EXPECT_EQ(t.flag, "too_few_windows");
+  EXPECT_TRUE(std::isnan(t.spearman_rho));
+  EXPECT_DOUBLE_EQ(t.last_b, 1.5);
+  EXPECT_EQ(b_value_trend(w, 0.0005, true).flag, "no_window_before_peak");
+  EXPECT_EQ(b_value_trend(w, 0.005, false).flag, "no_peak");
+}
+
 // ---- magnitudes and moment tensors (§4.2, §4.3) ----
 
 TEST(MomentTensor, OpeningDipoleAndDoubleCouple) {

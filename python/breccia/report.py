@@ -168,6 +168,31 @@ def magnitudes(summary, events, hist, outdir, figures):
     save(fig, outdir, "event_magnitudes.png", figures)
 
 
+def b_before_peak_text(ae):
+    """Whether the b-value falls toward failure: its windows up to the peak (summary.json's
+    acoustic_emission.b_value_before_peak)."""
+    t = ae.get("b_value_before_peak")
+    if t is None:
+        return "n/a (not in this run's summary)"
+    flag = t.get("flag")
+    if flag == "no_peak":
+        return "n/a (no peak)"
+    if flag == "no_window_before_peak":
+        return ("no window: fewer events above the completeness magnitude precede the peak "
+                "than a window holds")
+    def pct(v):
+        return fmt(100 * v if v is not None else None, "{:.3f}")
+
+    text = (f"from {fmt(t.get('first_b'))} at {pct(t.get('first_axial_strain'))} % strain to "
+            f"{fmt(t.get('at_peak_b'))} at {pct(t.get('at_peak_axial_strain'))} % over "
+            f"{t.get('windows')} window{'' if t.get('windows') == 1 else 's'}")
+    rho = t.get("spearman_rho")
+    if rho is None:
+        return text + " (too few for a trend)"
+    trend = "falls" if rho <= -0.5 else "rises" if rho >= 0.5 else "shows no clear trend"
+    return text + f"; Spearman rho {rho:.2f}: b {trend} toward the peak"
+
+
 def b_and_d2(summary, bwin, dwin, ind, outdir, figures):
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 5.6), sharex=True)
     for ax in (a1, a2):
@@ -178,6 +203,11 @@ def b_and_d2(summary, bwin, dwin, ind, outdir, figures):
     if ind:
         a1.plot(col(ind, "axial_strain", 100), col(ind, "b_value"), "-", color="tab:purple",
                 lw=0.8, label="strain windows (extended to the minimum count)")
+    peak = summary.get("axial_strain_at_peak")
+    if peak is not None and summary.get("peak_reached"):
+        for ax in (a1, a2):
+            ax.axvline(100 * peak, color="k", ls=":", lw=0.8)
+        a1.text(100 * peak, 0.02, " peak", fontsize=7, transform=a1.get_xaxis_transform())
     a1.set_ylabel("b-value")
     a1.legend(fontsize=7)
     if dwin:
@@ -194,7 +224,7 @@ def b_and_d2(summary, bwin, dwin, ind, outdir, figures):
     d_all = ae.get("d2", {})
     a1.set_title(wrapped(
         f"b-value: whole test {fmt(b_all.get('b'))} +- {fmt(b_all.get('sigma'))} "
-        f"({b_all.get('flag') or 'ok'}); windows without enough events give no value"), fontsize=8)
+        f"({b_all.get('flag') or 'ok'}); before the peak: {b_before_peak_text(ae)}"), fontsize=8)
     a2.set_title(f"D2 of the crack midpoints: whole test {fmt(d_all.get('d2'))}", fontsize=8)
     fig.tight_layout()
     save(fig, outdir, "b_value_d2.png", figures)
@@ -322,6 +352,7 @@ def summary_rows(folder, summary):
         ("acoustic emission", f"{ae.get('events')} events (largest {ae.get('largest_event_cracks')} "
                               f"cracks); b-value {fmt(ae.get('b_value', {}).get('b'))} over the "
                               f"test, {fmt_range(ae.get('b_value_window_range'))} in its windows"),
+        ("b-value before the peak", b_before_peak_text(ae)),
         ("correlation dimension D2 (crack midpoints)",
          f"{fmt(ae.get('d2', {}).get('d2'))} over the test, "
          f"{fmt_range(ae.get('d2_window_range'))} in its windows"),

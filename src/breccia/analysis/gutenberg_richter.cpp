@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 
 namespace breccia::analysis {
 
@@ -90,6 +91,74 @@ std::vector<BValueWindow> b_value_windows(const std::vector<double>& magnitudes,
     out.push_back({e[end - 1], b_value(w, completeness, 0.0, min_events)});
   }
   return out;
+}
+
+namespace {
+
+// Ranks from 1, ties sharing the mean of the ranks they span.
+std::vector<double> mean_ranks(const std::vector<double>& v) {
+  std::vector<std::size_t> order(v.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+  std::vector<double> rank(v.size());
+  for (std::size_t i = 0; i < order.size();) {
+    std::size_t j = i;
+    while (j + 1 < order.size() && v[order[j + 1]] == v[order[i]]) ++j;
+    const double mean = 0.5 * static_cast<double>(i + j) + 1.0;
+    for (std::size_t k = i; k <= j; ++k) rank[order[k]] = mean;
+    i = j + 1;
+  }
+  return rank;
+}
+
+}  // namespace
+
+double spearman_rho(const std::vector<double>& x, const std::vector<double>& y) {
+  const std::size_t n = std::min(x.size(), y.size());
+  if (n < 2) return kNaN;
+  const std::vector<double> rx =
+      mean_ranks({x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n)});
+  const std::vector<double> ry =
+      mean_ranks({y.begin(), y.begin() + static_cast<std::ptrdiff_t>(n)});
+  const double mean = 0.5 * static_cast<double>(n + 1);  // of either set of ranks
+  double sxy = 0.0, sxx = 0.0, syy = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    sxy += (rx[k] - mean) * (ry[k] - mean);
+    sxx += (rx[k] - mean) * (rx[k] - mean);
+    syy += (ry[k] - mean) * (ry[k] - mean);
+  }
+  return sxx > 0.0 && syy > 0.0 ? sxy / std::sqrt(sxx * syy) : kNaN;
+}
+
+BValueTrend b_value_trend(const std::vector<BValueWindow>& windows, double peak_strain,
+                          bool peak_reached, std::size_t min_windows) {
+  BValueTrend t;
+  if (!peak_reached || !std::isfinite(peak_strain)) {
+    t.flag = "no_peak";
+    return t;
+  }
+  std::vector<double> strain, b;
+  for (const auto& w : windows)
+    if (w.value.valid() && w.strain <= peak_strain) {
+      strain.push_back(w.strain);
+      b.push_back(w.value.b);
+    }
+  t.windows = b.size();
+  if (b.empty()) {
+    t.flag = "no_window_before_peak";
+    return t;
+  }
+  t.first_strain = strain.front();
+  t.first_b = b.front();
+  t.last_strain = strain.back();
+  t.last_b = b.back();
+  if (b.size() < min_windows) {
+    t.flag = "too_few_windows";
+    return t;
+  }
+  t.spearman_rho = spearman_rho(strain, b);
+  return t;
 }
 
 }  // namespace breccia::analysis

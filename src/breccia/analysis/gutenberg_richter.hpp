@@ -53,4 +53,21 @@ std::vector<BValueWindow> b_value_windows(const std::vector<double>& magnitudes,
                                           std::size_t window = 100, std::size_t step = 10,
                                           std::size_t min_events = 50);
 
+// Spearman's rank correlation of two equally long series: Pearson's coefficient of their ranks,
+// tied values sharing the mean of their ranks. NaN for fewer than 2 pairs or a constant series.
+double spearman_rho(const std::vector<double>& x, const std::vector<double>& y);
+
+// How the b-value moves toward failure (§5.4): the valid windows stamped at or before the peak
+// strain, the first and the last of them, and Spearman's rho of b against strain over them
+// (-1: b falls at every window). rho is NaN with a flag below `min_windows` windows; everything is
+// NaN without a peak.
+struct BValueTrend {
+  std::size_t windows = 0;  // valid windows at or before the peak
+  double first_strain = kNaN, first_b = kNaN, last_strain = kNaN, last_b = kNaN;
+  double spearman_rho = kNaN;
+  std::string flag;  // "", "no_peak", "no_window_before_peak", "too_few_windows"
+};
+BValueTrend b_value_trend(const std::vector<BValueWindow>& windows, double peak_strain,
+                          bool peak_reached, std::size_t min_windows = 5);
+
 }  // namespace breccia::analysis

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
@@ -159,6 +160,29 @@ std::string summarise_sweep(const fs::path& file) {
   return s;
 }
 
+// "b before the peak: from 8.54 at 0.456 % strain to 2.57 at the peak (0.573 %) over 71 windows,
+// Spearman rho -0.91", or why there is no such line.
+std::string b_before_peak_text(const JsonView& ae) {
+  const auto t = ae.find("b_value_before_peak");
+  if (!t) return "";
+  const std::string flag = t->text("flag", "");
+  if (flag == "no_peak") return "";
+  if (flag == "no_window_before_peak")
+    return "\n  b before the peak: no window (fewer events above M_c precede the peak than a "
+           "window holds)";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto pct = [&](const char* key) { return 100.0 * t->maybe_number(key).value_or(nan); };
+  std::string s = fmt::format(
+      "\n  b before the peak: from {:.2f} at {:.3f} % strain to {:.2f} at {:.3f} % over {} "
+      "window{}",
+      t->maybe_number("first_b").value_or(nan), pct("first_axial_strain"),
+      t->maybe_number("at_peak_b").value_or(nan), pct("at_peak_axial_strain"),
+      plain(*t, "windows", "{:.0f}"), t->maybe_number("windows").value_or(0.0) == 1.0 ? "" : "s");
+  return s + (t->has("spearman_rho")
+                  ? fmt::format(", Spearman rho {:.2f}", t->number("spearman_rho"))
+                  : " (too few for a trend)");
+}
+
 std::string summarise_acoustic_emission(const JsonView& ae) {
   std::string b_text = "n/a";
   if (const auto b = ae.find("b_value"))
@@ -168,11 +192,12 @@ std::string summarise_acoustic_emission(const JsonView& ae) {
   std::string d2 = "n/a";
   if (const auto d = ae.find("d2")) d2 = plain(*d, "d2", "{:.2f}");
   return fmt::format(
-      "\n  AE: {} events (largest {} cracks), M_w {}, b = {} (windows {}), D2 = {} (windows "
-      "{}); shear fraction {}",
-      plain(ae, "events", "{:.0f}"), plain(ae, "largest_event_cracks", "{:.0f}"),
-      range(ae, "magnitude_range"), b_text, range(ae, "b_value_window_range"), d2,
-      range(ae, "d2_window_range"), plain(ae, "shear_fraction", "{:.3f}"));
+             "\n  AE: {} events (largest {} cracks), M_w {}, b = {} (windows {}), D2 = {} (windows "
+             "{}); shear fraction {}",
+             plain(ae, "events", "{:.0f}"), plain(ae, "largest_event_cracks", "{:.0f}"),
+             range(ae, "magnitude_range"), b_text, range(ae, "b_value_window_range"), d2,
+             range(ae, "d2_window_range"), plain(ae, "shear_fraction", "{:.3f}")) +
+         b_before_peak_text(ae);
 }
 
 std::string summarise_run(const fs::path& file) {

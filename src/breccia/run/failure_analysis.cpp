@@ -488,6 +488,22 @@ std::array<double, 2> finite_range(const std::vector<double>& v) {
   return {lo, hi};
 }
 
+// Whether the b-value falls toward failure: its windows up to the peak (§5.4).
+json b_value_before_peak(const FailureInputs& in, const MagnitudeStats& ms) {
+  const analysis::BValueTrend t = analysis::b_value_trend(
+      ms.windows, in.result.strain_at_peak, in.stress_strain && in.result.peak_reached);
+  return {{"windows", t.windows},
+          {"first_axial_strain", jnum(t.first_strain)},
+          {"first_b", jnum(t.first_b)},
+          {"at_peak_axial_strain", jnum(t.last_strain)},
+          {"at_peak_b", jnum(t.last_b)},
+          {"spearman_rho", jnum(t.spearman_rho)},
+          {"flag", t.flag},
+          {"method",
+           "windows stamped at or before the peak strain; Spearman's rho of b against "
+           "strain over them (at least 5; -1: b falls at every window)"}};
+}
+
 // The acoustic-emission block of summary.json.
 json acoustic_emission_summary(const FailureInputs& in, const CrackPoints& cp,
                                const EventCatalogue& cat, const MagnitudeStats& ms,
@@ -535,6 +551,7 @@ json acoustic_emission_summary(const FailureInputs& in, const CrackPoints& cp,
         {"flag", ms.b_all.flag},
         {"method", "Aki-Utsu maximum likelihood above M_c (maximum curvature + 0.2)"}}},
       {"b_value_window_range", {jnum(b[0]), jnum(b[1])}},
+      {"b_value_before_peak", b_value_before_peak(in, ms)},
       {"d2",
        {{"d2", jnum(d2.all.d2)},
         {"standard_error", jnum(d2.all.standard_error)},
