@@ -160,8 +160,11 @@ std::string summarise_sweep(const fs::path& file) {
   return s;
 }
 
-// "b before the peak: from 8.54 at 0.456 % strain to 2.57 at the peak (0.573 %) over 71 windows,
-// Spearman rho -0.91", or why there is no such line.
+namespace {
+
+// "b before the peak: from 8.54 at 0.456 % strain to 2.57 at 0.573 % over 71 windows, Spearman
+// rho -0.91" (the first window's b and strain, then the last before the peak), or why there is
+// no such line.
 std::string b_before_peak_text(const JsonView& ae) {
   const auto t = ae.find("b_value_before_peak");
   if (!t) return "";
@@ -182,6 +185,8 @@ std::string b_before_peak_text(const JsonView& ae) {
                   ? fmt::format(", Spearman rho {:.2f}", t->number("spearman_rho"))
                   : " (too few for a trend)");
 }
+
+}  // namespace
 
 std::string summarise_acoustic_emission(const JsonView& ae) {
   std::string b_text = "n/a";
