@@ -180,6 +180,7 @@ def b_before_peak_text(ae):
     if flag == "no_window_before_peak":
         return ("no window: fewer events above the completeness magnitude precede the peak "
                 "than a window holds")
+
     def pct(v):
         return fmt(100 * v if v is not None else None, "{:.3f}")
 

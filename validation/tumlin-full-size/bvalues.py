@@ -8,8 +8,11 @@ windows (-1: b falls all the way), and the deformation stages with their b-value
 
     /usr/bin/python3 validation/tumlin-full-size/bvalues.py LABEL=RUN_FOLDER ...
 
-Reads summary.json, b_value_windows.csv and events.csv as the run wrote them; computes nothing
-the run did not, except where in the windows the given strains fall. Prints Markdown.
+Reads summary.json, b_value_windows.csv and events.csv as the run wrote them. It computes
+Spearman's rho itself, so that runs made before summary.json carried
+`acoustic_emission.b_value_before_peak` can be read too (the two agree: the same windows, the same
+rank correlation), and the b-values at given fractions of the peak strain and the median after
+it. Prints Markdown.
 """
 import json
 import sys
