@@ -89,6 +89,37 @@ def main(folder, rock):
             print(f"Breccia's stages at 15 MPa end at {fmt(ends[0], '{:.2f}')} % (I), "
                   f"{fmt(ends[1], '{:.2f}')} % (II, the peak) and {fmt(ends[2], '{:.2f}')} % (III); "
                   "IV runs to 10.3 %.")
+    stage_table(folder, sweep)
+
+
+def stage_table(folder, sweep):
+    """Every test's four stages (docs/analysis.md §8) from its summary.json: where each ends, its
+    cracks and b-value, and the trend of b over the windows before the peak (§5.4)."""
+    print("\n| sigma_3 (MPa) | I ends (%) | II ends: peak (%) | III ends (%) | stages found | "
+          "cracks I / II / III / IV | b in I / II / III / IV | b windows before the peak | "
+          "b: first window, at the peak (Spearman rho) |")
+    print("|" + "---|" * 9)
+    for run in sorted(sweep["runs"], key=lambda r: r["confining_stress_pa"]):
+        summary = json.load(open(os.path.join(folder, run["folder"], "summary.json")))
+        stages = summary.get("stages", {}).get("by_stage", [])
+        if len(stages) != 4:
+            continue
+        present = [s["axial_strain_from"] is not None and s["axial_strain_to"] is not None and
+                   s["axial_strain_to"] > s["axial_strain_from"] for s in stages]
+        ends = [fmt(100 * s["axial_strain_to"], "{:.2f}") if ok else "-"
+                for s, ok in zip(stages[:3], present[:3])]
+        cracks = " / ".join(str(s["cracks"]) if ok else "-" for s, ok in zip(stages, present))
+        bees = " / ".join(fmt(s["b_value"], "{:.2f}") if ok else "-"
+                          for s, ok in zip(stages, present))
+        trend = summary.get("acoustic_emission", {}).get("b_value_before_peak", {})
+        windows = trend.get("windows", 0)
+        shape = "-"
+        if windows:
+            shape = (f"{fmt(trend.get('first_b'), '{:.2f}')}, {fmt(trend.get('at_peak_b'), '{:.2f}')}"
+                     f" ({fmt(trend.get('spearman_rho'), '{:+.2f}')})")
+        print(f"| {round(run['confining_stress_pa'] * 1e-6)} | " + " | ".join(
+            ends + [" ".join(n for n, ok in zip(("I", "II", "III", "IV"), present) if ok),
+                    cracks, bees, str(windows), shape]) + " |")
 
 
 if __name__ == "__main__":
