@@ -233,3 +233,39 @@ def test_runs_without_a_peak_train_nothing_and_get_no_actual_values():
         assert table["actual_stress_to_failure_mpa"].isna().all()
         assert table["actual_strain_to_failure"].isna().all()
         assert table["predicted_stress_to_failure_mpa"].notna().all()
+        # Without a report (output.plot = false) the command says how to draw one; with one,
+        # it redraws it with the forecast figure and row.
+        assert "draws the forecast" in r.stdout
+        subprocess.run([CLI, "report", folder], check=True, capture_output=True)
+        r = _predict("apply", folder, "--model", model)
+        assert r.returncode == 0 and "the report shows the forecast" in r.stdout, r.stderr
+        assert os.path.exists(os.path.join(folder, "report", "failure_forecast.png"))
+        with open(os.path.join(folder, "report.html")) as f:
+            assert "no actual values beside it" in f.read()
+
+
+def test_the_report_scores_the_forecast_on_the_windows_before_the_peak_only():
+    from breccia import report
+    from breccia.report_kit import Table
+    strain = np.array([0.001, 0.002, 0.003, 0.004, 0.005])
+    # Before the peak (0.004) the hand example of docs/analysis.md §10.5: R^2 0.98, RMSE 0.1581;
+    # the row after it, far off, must not count.
+    preds = Table({"axial_strain": strain,
+                   "actual_stress_to_failure_mpa": np.array([1.0, 2.0, 3.0, 4.0, -9.0]),
+                   "predicted_stress_to_failure_mpa": np.array([1.1, 1.9, 3.2, 3.8, 7.0]),
+                   "actual_strain_to_failure": 0.004 - strain,
+                   "predicted_strain_to_failure": 0.004 - strain}, 5)
+    summary = {"peak_reached": True, "axial_strain_at_peak": 0.004}
+    scores = report.forecast_scores(preds, summary)
+    r2, err, n = scores["stress_to_failure_mpa"]
+    assert (r2, err, n) == (pytest.approx(0.98), pytest.approx(0.1581, abs=1e-4), 4)
+    assert scores["strain_to_failure"][:2] == (pytest.approx(1.0), pytest.approx(0.0))
+    (name, text), = report.forecast_rows(preds, summary)
+    assert name == "failure forecast" and "stress to failure R^2 0.98 (RMSE 0.158 MPa)" in text
+    assert report.forecast_scores(preds, {"peak_reached": False}) == {}
+    assert "no actual values" in report.forecast_rows(preds, {"peak_reached": False})[0][1]
+    assert report.forecast_rows(Table({}, 0), summary) == []
+    with tempfile.TemporaryDirectory() as out:
+        figures = []
+        report.failure_forecast(summary, preds, out, figures)
+        assert os.path.exists(os.path.join(out, "failure_forecast.png")), figures

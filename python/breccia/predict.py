@@ -429,6 +429,19 @@ def apply(run_path, model_dir, log=print):
     return out
 
 
+def redraw_report(run_path, log=print):
+    """A run that has a report gets it redrawn with the forecast figure and row; one without
+    (output.plot = false) is left so, with the command that draws it."""
+    if os.path.exists(os.path.join(run_path, "report.html")):
+        import matplotlib  # only where a report is drawn
+        matplotlib.use("Agg")  # files only
+        from . import report
+        report.run_report(run_path)
+        log(f"predict: the report shows the forecast: {os.path.join(run_path, 'report.html')}")
+    else:
+        log(f"predict: `breccia report {run_path}` draws the forecast in the run's report")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="breccia predict", description=__doc__.split("\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -450,6 +463,7 @@ def main(argv=None):
                   args.networks)
         else:
             apply(args.run, args.model)
+            redraw_report(args.run)
     except (PredictError, FileNotFoundError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

@@ -4,7 +4,8 @@ and the figures as PNG under report/.
 Usage: python3 -m breccia.report FOLDER (or breccia.report.main(folder))
 Run folder: stress-strain with cracks by mode and stages, crack maps by stage (a central section
 for 3D samples), event magnitudes over strain, b-value and D2 over strain, Gutenberg-Richter plot,
-Hudson source-type plot, energy budget over strain, indicator series, fragment sizes.
+Hudson source-type plot, energy budget over strain, indicator series, fragment sizes, and the
+failure predictor's forecast where `breccia predict apply` has written one.
 Sweep folder: Mohr-Coulomb envelope and trends with confinement.
 Needs Debian's python3-matplotlib (and numpy).
 """
@@ -19,7 +20,7 @@ import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 
-from breccia import slab_report
+from breccia import predict, slab_report
 from breccia.report_kit import (CAPTIONS, Table, col, fmt, fmt_range, read_csv, save, wrapped,
                                 write_html)
 
@@ -479,6 +480,58 @@ def indicators(summary, ind, outdir, figures):
     save(fig, outdir, "indicators.png", figures)
 
 
+# The predictor's two targets as failure_predictions.csv names them, with the unit drawn.
+FORECAST_TARGETS = (("stress_to_failure_mpa", "stress to failure (MPa)", 1.0),
+                    ("strain_to_failure", "strain to failure (%)", 100.0))
+
+
+def forecast_scores(preds, summary):
+    """R^2 and RMSE of each target over the forecast's windows up to the peak, where the run's
+    peak gives actual values (an empty dict otherwise)."""
+    if not preds or not summary.get("peak_reached"):
+        return {}
+    pre = col(preds, "axial_strain") <= summary.get("axial_strain_at_peak", float("nan"))
+    scores = {}
+    for target, _, scale in FORECAST_TARGETS:
+        y, p = col(preds, f"actual_{target}", scale)[pre], col(preds, f"predicted_{target}", scale)[pre]
+        keep = np.isfinite(y) & np.isfinite(p)
+        if keep.sum() >= 2:
+            scores[target] = (predict.r2(y[keep], p[keep]), predict.rmse(y[keep], p[keep]),
+                              int(keep.sum()))
+    return scores
+
+
+def failure_forecast(summary, preds, outdir, figures):
+    """The failure predictor's forecast along the run (`breccia predict apply` writes
+    failure_predictions.csv): predicted beside actual stress and strain to failure."""
+    if not preds:
+        return
+    e = col(preds, "axial_strain", 100)
+    scores = forecast_scores(preds, summary)
+    # "To failure" has a meaning only up to the peak: after it the actual values are not drawn.
+    pre = e <= 100 * summary.get("axial_strain_at_peak", float("nan"))
+    fig, axes = plt.subplots(2, 1, figsize=(7.5, 5.6), sharex=True)
+    for ax, (target, label, scale) in zip(axes, FORECAST_TARGETS):
+        shade_stages(ax, summary)
+        ax.plot(e[pre], col(preds, f"actual_{target}", scale)[pre], "k-", lw=1.2, label="actual")
+        ax.plot(e, col(preds, f"predicted_{target}", scale), ".", ms=3, color="tab:blue",
+                label="forecast")
+        if summary.get("peak_reached"):
+            ax.axvline(100 * summary["axial_strain_at_peak"], color="tab:red", ls="--", lw=0.8,
+                       label="peak")
+        ax.axhline(0.0, color="grey", lw=0.5)
+        ax.set_ylabel(label, fontsize=8)
+        if target in scores:
+            r2, err, n = scores[target]
+            ax.set_title(f"R^2 {fmt(r2, '{:.2f}')}, RMSE {fmt(err, '{:.3g}')} over {n} "
+                         "windows before the peak", fontsize=8)
+        ax.legend(fontsize=7)
+    axes[-1].set_xlabel("axial strain (%)")
+    fig.suptitle("Failure forecast of the predictor (breccia predict apply)", fontsize=9)
+    fig.tight_layout()
+    save(fig, outdir, "failure_forecast.png", figures)
+
+
 def fragment_sizes(summary, frags, outdir, figures):
     if not frags:
         return
@@ -519,6 +572,18 @@ def slab_test_report(folder, summary, hist, cracks, outdir):
     return figures
 
 
+def forecast_rows(preds, summary):
+    if not preds:
+        return []
+    scores = forecast_scores(preds, summary)
+    text = ", ".join(f"{label.split(' (')[0]} R^2 {fmt(scores[t][0], '{:.2f}')} (RMSE "
+                     f"{fmt(scores[t][1], '{:.3g}')} {label.split('(')[1].rstrip(')')})"
+                     for t, label, _ in FORECAST_TARGETS if t in scores)
+    return [("failure forecast", f"{len(preds)} windows (failure_predictions.csv); " +
+             (text + " over the windows before the peak" if text else
+              "no actual values beside it (the run has no peak)"))]
+
+
 # The rows of summary_rows that slab and dynamic tests share with compression tests.
 SHARED_ROWS = ("rock", "sample", "calibration", "microcracks", "acoustic emission",
                "energy balance", "run")
@@ -553,7 +618,10 @@ def run_report(folder):
     energy_budget(summary, hist, outdir, figures)
     indicators(summary, read_csv(os.path.join(folder, "indicators.csv")), outdir, figures)
     fragment_sizes(summary, read_csv(os.path.join(folder, "fragments.csv")), outdir, figures)
+    preds = read_csv(os.path.join(folder, "failure_predictions.csv"))
+    failure_forecast(summary, preds, outdir, figures)
     rows = summary_rows(folder, summary)
+    rows += forecast_rows(preds, summary)
     cp = summary.get("crack_pattern", {})
     if cp.get("quarter_shares_along_axis"):
         rows.append(("cracks per quarter along the load",

@@ -139,6 +139,7 @@ CAPTIONS = {
     "energy_budget.png": "Energy budget over strain",
     "indicators.png": "Indicator series",
     "fragment_sizes.png": "Fragment size distribution",
+    "failure_forecast.png": "Failure forecast: stress and strain to failure, predicted and actual",
     "mohr_coulomb.png": "Mohr-Coulomb and Hoek-Brown envelopes",
     "trends.png": "Trends with confinement",
     "rate_dependence.png": "UCS against strain rate",
