@@ -480,9 +480,9 @@ def indicators(summary, ind, outdir, figures):
     save(fig, outdir, "indicators.png", figures)
 
 
-# The predictor's two targets as failure_predictions.csv names them, with the unit drawn.
-FORECAST_TARGETS = (("stress_to_failure_mpa", "stress to failure (MPa)", 1.0),
-                    ("strain_to_failure", "strain to failure (%)", 100.0))
+# The predictor's two targets as failure_predictions.csv names them: name, unit drawn, scale.
+FORECAST_TARGETS = (("stress_to_failure_mpa", "stress to failure", "MPa", 1.0),
+                    ("strain_to_failure", "strain to failure", "%", 100.0))
 
 
 def forecast_scores(preds, summary):
@@ -492,8 +492,9 @@ def forecast_scores(preds, summary):
         return {}
     pre = col(preds, "axial_strain") <= summary.get("axial_strain_at_peak", float("nan"))
     scores = {}
-    for target, _, scale in FORECAST_TARGETS:
-        y, p = col(preds, f"actual_{target}", scale)[pre], col(preds, f"predicted_{target}", scale)[pre]
+    for target, _, _, scale in FORECAST_TARGETS:
+        y = col(preds, f"actual_{target}", scale)[pre]
+        p = col(preds, f"predicted_{target}", scale)[pre]
         keep = np.isfinite(y) & np.isfinite(p)
         if keep.sum() >= 2:
             scores[target] = (predict.r2(y[keep], p[keep]), predict.rmse(y[keep], p[keep]),
@@ -511,7 +512,7 @@ def failure_forecast(summary, preds, outdir, figures):
     # "To failure" has a meaning only up to the peak: after it the actual values are not drawn.
     pre = e <= 100 * summary.get("axial_strain_at_peak", float("nan"))
     fig, axes = plt.subplots(2, 1, figsize=(7.5, 5.6), sharex=True)
-    for ax, (target, label, scale) in zip(axes, FORECAST_TARGETS):
+    for ax, (target, name, unit, scale) in zip(axes, FORECAST_TARGETS):
         shade_stages(ax, summary)
         ax.plot(e[pre], col(preds, f"actual_{target}", scale)[pre], "k-", lw=1.2, label="actual")
         ax.plot(e, col(preds, f"predicted_{target}", scale), ".", ms=3, color="tab:blue",
@@ -520,7 +521,7 @@ def failure_forecast(summary, preds, outdir, figures):
             ax.axvline(100 * summary["axial_strain_at_peak"], color="tab:red", ls="--", lw=0.8,
                        label="peak")
         ax.axhline(0.0, color="grey", lw=0.5)
-        ax.set_ylabel(label, fontsize=8)
+        ax.set_ylabel(f"{name} ({unit})", fontsize=8)
         if target in scores:
             r2, err, n = scores[target]
             ax.set_title(f"R^2 {fmt(r2, '{:.2f}')}, RMSE {fmt(err, '{:.3g}')} over {n} "
@@ -576,9 +577,9 @@ def forecast_rows(preds, summary):
     if not preds:
         return []
     scores = forecast_scores(preds, summary)
-    text = ", ".join(f"{label.split(' (')[0]} R^2 {fmt(scores[t][0], '{:.2f}')} (RMSE "
-                     f"{fmt(scores[t][1], '{:.3g}')} {label.split('(')[1].rstrip(')')})"
-                     for t, label, _ in FORECAST_TARGETS if t in scores)
+    text = ", ".join(f"{name} R^2 {fmt(scores[t][0], '{:.2f}')} (RMSE "
+                     f"{fmt(scores[t][1], '{:.3g}')} {unit})"
+                     for t, name, unit, _ in FORECAST_TARGETS if t in scores)
     return [("failure forecast", f"{len(preds)} windows (failure_predictions.csv); " +
              (text + " over the windows before the peak" if text else
               "no actual values beside it (the run has no peak)"))]
