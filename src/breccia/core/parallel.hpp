@@ -35,6 +35,16 @@ inline void set_threads(int n) noexcept {
 #endif
 }
 
+// How many blocks a thread takes at a time: four where there are plenty (fewer trips to the
+// shared counter), one where there are few, so that a small system's handful of blocks is shared
+// among the threads rather than taken by the first to ask (four blocks on two threads in one
+// chunk of four would leave the second thread idle).
+inline int block_chunk(std::ptrdiff_t blocks) noexcept {
+  const std::ptrdiff_t per_thread_quarter =
+      blocks / (4 * static_cast<std::ptrdiff_t>(max_threads()));
+  return static_cast<int>(std::clamp<std::ptrdiff_t>(per_thread_quarter, 1, 4));
+}
+
 // Calls body(begin, end, block) for each block of [0, n) in parallel. Blocks are handed out
 // dynamically (a thread slowed by the machine does not hold the others at the barrier); results
 // stay bitwise reproducible because each block's output depends only on the block. A single
@@ -43,7 +53,8 @@ inline void set_threads(int n) noexcept {
 template <class Body>
 void for_blocks_in(std::size_t first, std::size_t last, std::size_t n, Body&& body) {
   const std::ptrdiff_t nb = static_cast<std::ptrdiff_t>(last - first);
-#pragma omp parallel for schedule(dynamic, 4) if (nb > 1)
+  const int chunk = block_chunk(nb);
+#pragma omp parallel for schedule(dynamic, chunk) if (nb > 1)
   for (std::ptrdiff_t k = 0; k < nb; ++k) {
     const std::size_t b = first + static_cast<std::size_t>(k);
     const std::size_t begin = b * kBlock;
