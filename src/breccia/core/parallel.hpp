@@ -103,7 +103,8 @@ inline std::vector<std::size_t> particle_block_starts(const std::vector<std::uin
 template <class Body>
 void for_item_blocks(const std::vector<std::size_t>& starts, Body&& body) {
   const std::ptrdiff_t nb = static_cast<std::ptrdiff_t>(starts.size()) - 1;
-#pragma omp parallel for schedule(dynamic, 4) if (nb > 1)
+  const int chunk = block_chunk(nb);
+#pragma omp parallel for schedule(dynamic, chunk) if (nb > 1)
   for (std::ptrdiff_t b = 0; b < nb; ++b)
     body(starts[static_cast<std::size_t>(b)], starts[static_cast<std::size_t>(b) + 1],
          static_cast<std::size_t>(b));
