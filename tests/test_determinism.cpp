@@ -67,6 +67,17 @@ TEST(Determinism, OneAndTwoThreadsGiveBitwiseEqualTrajectories) {
 // at most ~30 terms, so the two orders differ by at most 30 epsilon of the sum of the terms'
 // magnitudes; the moment balance (Newton's third law for the pairs' forces and couples) holds to
 // the same order.
+// A small sample's few blocks go one at a time, so that every thread gets some (four blocks in
+// one chunk of four left the second of two threads idle); many blocks go four at a time.
+TEST(Parallel, FewBlocksAreHandedOutOneAtATime) {
+  const std::ptrdiff_t threads = max_threads();
+  EXPECT_EQ(1, block_chunk(4));
+  EXPECT_EQ(1, block_chunk(8 * threads - 1));
+  EXPECT_EQ(2, block_chunk(8 * threads));
+  EXPECT_EQ(4, block_chunk(16 * threads));
+  EXPECT_EQ(4, block_chunk(1000 * threads));
+}
+
 TEST(PairPass, ParticleTotalsAreTheSumsOfTheirPairs) {
   const double R = 0.5e-3;
   ParticleStore ps = fcc_block(6, 6, 16, R, 2650);  // 2,304 grains: five particle blocks
