@@ -1,16 +1,70 @@
-"""Seed 003's published macro-properties beside run.sh's two UCS runs."""
+"""Seed 003's published macro-properties beside the UCS runs of run.sh and gap.sh.
+
+For each run: the bonds per interior grain, E_t50 and Poisson's ratio as Breccia reports them
+(at half the peak, where the sample already cracks and dilates), E and nu fitted on the gauges
+over 5-15 % of the peak (elastic), the bulk and shear moduli those imply
+(K = E / (3 (1 - 2 nu)), G = E / (2 (1 + nu))), and the UCS.
+"""
+import csv
 import glob
 import json
+import os
 import sys
 
+import numpy as np
+
 PUBLISHED = {"E": 14.5, "nu": 0.30, "UCS": 105.0}  # seed 003 Table 2 (PFC3D)
-print("| contact stiffness | E_t50 | E secant 50 % | nu | UCS |")
-print("|---|---|---|---|---|")
-print(f"| PFC3D, published | {PUBLISHED['E']} GPa | | {PUBLISHED['nu']} | {PUBLISHED['UCS']} MPa |")
-for f in sorted(glob.glob(f"{sys.argv[1]}/ball_stiffness_*/*/summary.json")):
-    d = json.load(open(f))
-    e = d["youngs_modulus_pa"] / 1e9
-    es = d["youngs_modulus_secant50_pa"] / 1e9
-    label = "ball 4 R E_c in series" if f.split("/")[-3].endswith("true") else "deformability"
-    print(f"| {label} | {e:.2f} GPa ({e / PUBLISHED['E']:.2f}) | {es:.2f} GPa | "
-          f"{d['poisson_ratio']:.3f} | {d['peak_deviatoric_stress_mpa']:.1f} MPa |")
+
+
+def moduli(e, nu):
+    return e / (3 * (1 - 2 * nu)), e / (2 * (1 + nu))
+
+
+def early_elasticity(history):
+    """E (GPa) and nu on the gauges between 5 and 15 % of the peak deviatoric stress."""
+    rows = list(csv.DictReader(open(history)))
+    q = np.array([float(r["deviatoric_stress_pa"]) for r in rows])
+    ea = np.array([float(r["gauge_axial_strain"]) for r in rows])
+    el = np.array([float(r["gauge_lateral_strain"]) for r in rows])
+    peak = int(q.argmax())
+    pick = [i for i in range(peak) if 0.05 * q[peak] <= q[i] <= 0.15 * q[peak]]
+    if len(pick) < 3:
+        return float("nan"), float("nan")
+    return (np.polyfit(ea[pick], q[pick], 1)[0] / 1e9,
+            -np.polyfit(ea[pick], el[pick], 1)[0])
+
+
+def label(folder):
+    name = os.path.basename(folder)
+    if name.startswith("ball_stiffness_"):
+        return ("ball 4 R E_c in series, gap 5 um" if name.endswith("true")
+                else "deformability, gap 5 um")
+    if name.startswith("gap_"):
+        g = float(name[4:])
+        return f"ball 4 R E_c in series, gap {g * 1e6:g} um"
+    return name
+
+
+def main(root):
+    k, g = moduli(PUBLISHED["E"], PUBLISHED["nu"])
+    print("| run | bonds per interior grain | E_t50 | nu | E, nu at 5-15 % of peak | K | G | UCS |")
+    print("|---|---|---|---|---|---|---|---|")
+    print(f"| PFC3D, published | | {PUBLISHED['E']} GPa | {PUBLISHED['nu']} | | {k:.1f} GPa | "
+          f"{g:.2f} GPa | {PUBLISHED['UCS']} MPa |")
+    runs = sorted(glob.glob(f"{root}/ball_stiffness_*/*/summary.json")) + sorted(
+        glob.glob(f"{root}/gap_*/*/summary.json"),
+        key=lambda f: float(f.split("/")[-3][4:]))
+    for f in runs:
+        d = json.load(open(f))
+        folder = os.path.dirname(os.path.dirname(f))
+        e, nu = d["youngs_modulus_pa"] / 1e9, d["poisson_ratio"]
+        e0, nu0 = early_elasticity(os.path.join(os.path.dirname(f), "history.csv"))
+        k, g = moduli(e0, nu0)
+        z = d["sample"].get("bonds_per_interior_particle", float("nan"))
+        print(f"| {label(folder)} | {z:.2f} | {e:.2f} GPa ({e / PUBLISHED['E']:.2f}) | "
+              f"{nu:.3f} | {e0:.2f} GPa, {nu0:.3f} | {k:.1f} GPa | {g:.2f} GPa | "
+              f"{d['peak_deviatoric_stress_mpa']:.1f} MPa |")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
