@@ -10,6 +10,7 @@ import glob
 import json
 import os
 import sys
+import tomllib
 
 import numpy as np
 
@@ -34,15 +35,12 @@ def early_elasticity(history):
             -np.polyfit(ea[pick], el[pick], 1)[0])
 
 
-def label(folder):
-    name = os.path.basename(folder)
-    if name.startswith("ball_stiffness_"):
-        return ("ball 4 R E_c in series, gap 5 um" if name.endswith("true")
-                else "deformability, gap 5 um")
-    if name.startswith("gap_"):
-        g = float(name[4:])
-        return f"ball 4 R E_c in series, gap {g * 1e6:g} um"
-    return name
+def label(settings):
+    """The stiffness convention and bond gap the run used, from its resolved experiment."""
+    cfg = tomllib.loads(settings)
+    convention = ("ball 4 R E_c in series" if cfg["contact"].get("ball_stiffness")
+                  else "deformability")
+    return f"{convention}, gap {cfg['sample']['bond_gap_tolerance'] * 1e6:g} um"
 
 
 def main(root):
@@ -51,17 +49,16 @@ def main(root):
     print("|---|---|---|---|---|---|---|---|")
     print(f"| PFC3D, published | | {PUBLISHED['E']} GPa | {PUBLISHED['nu']} | | {k:.1f} GPa | "
           f"{g:.2f} GPa | {PUBLISHED['UCS']} MPa |")
-    runs = sorted(glob.glob(f"{root}/ball_stiffness_*/*/summary.json")) + sorted(
-        glob.glob(f"{root}/gap_*/*/summary.json"),
-        key=lambda f: float(f.split("/")[-3][4:]))
-    for f in runs:
-        d = json.load(open(f))
-        folder = os.path.dirname(os.path.dirname(f))
+    runs = [json.load(open(f)) | {"history": os.path.join(os.path.dirname(f), "history.csv")}
+            for f in glob.glob(f"{root}/*/*/summary.json")]
+    runs.sort(key=lambda d: (label(d["sample"]["settings"]).split(",")[0],
+                             d["sample"]["bonds_per_interior_particle"]))
+    for d in runs:
         e, nu = d["youngs_modulus_pa"] / 1e9, d["poisson_ratio"]
-        e0, nu0 = early_elasticity(os.path.join(os.path.dirname(f), "history.csv"))
+        e0, nu0 = early_elasticity(d["history"])
         k, g = moduli(e0, nu0)
-        z = d["sample"].get("bonds_per_interior_particle", float("nan"))
-        print(f"| {label(folder)} | {z:.2f} | {e:.2f} GPa ({e / PUBLISHED['E']:.2f}) | "
+        z = d["sample"]["bonds_per_interior_particle"]
+        print(f"| {label(d['sample']['settings'])} | {z:.2f} | {e:.2f} GPa ({e / PUBLISHED['E']:.2f}) | "
               f"{nu:.3f} | {e0:.2f} GPa, {nu0:.3f} | {k:.1f} GPa | {g:.2f} GPa | "
               f"{d['peak_deviatoric_stress_mpa']:.1f} MPa |")
 
