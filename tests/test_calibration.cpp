@@ -214,7 +214,7 @@ TEST(Calibration, FitSeedsJudgeATrialOnTheMeanOverTheirPackings) {
   const Measurement mean = lab.measure_fit(values, TestPlan{});
   EXPECT_EQ(mean.new_runs, 0) << "both tests are read back";
   for (int seed : {1, 2})
-    EXPECT_NE(lab.sample_report(fmt::format("fit-{}", seed))
+    EXPECT_NE(lab.sample_report(fmt::format("fit-{}", seed), values)
                   .value("settings", std::string())
                   .find(fmt::format("\nseed = {}\n", seed)),
               std::string::npos)
@@ -226,6 +226,56 @@ TEST(Calibration, FitSeedsJudgeATrialOnTheMeanOverTheirPackings) {
   }
   EXPECT_EQ(mean.run_folders.size(), one.run_folders.size() + two.run_folders.size());
   fs::remove_all(dir);
+}
+
+// The bond installation gap is part of the sample's genesis: each gap value a trial asks for
+// gets its own packing, bonded as a run with that gap bonds it, so a wider gap gives more bonds
+// per grain and a stiffer rock (docs/physics.md §7.6: E grows with the coordination). The
+// calibrated rock's fragment carries the gap, and a file that reads it back bonds the same way.
+TEST(Calibration, FreeBondGapPacksAndBondsASampleForEachGap) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_calibration_gap";
+  fs::remove_all(dir);
+  std::string text = tiny_calibration(8e9, 60e6, 6e9, 25e6);
+  text.replace(text.find("[tied]"), 6, "\"sample.bond_gap_tolerance\" = [1e-6, 1e-4]\n[tied]");
+  const CalibrationSpec spec = parse_calibration(text, "gap.toml");
+  ASSERT_EQ(spec.free.size(), 3u);
+  EXPECT_EQ(spec.free[2].stage, CalibrationStage::Elastic);
+  EXPECT_DOUBLE_EQ(spec.free[2].start, 5e-6);  // the experiment's default gap
+  Laboratory lab(spec, dir, [](const std::string&) {});
+  const std::vector<double> narrow{6e9, 25e6, 1e-6}, wide{6e9, 25e6, 6e-5};
+  const Measurement a = lab.measure("calibration", narrow, TestPlan{});
+  const Measurement b = lab.measure("calibration", wide, TestPlan{});
+  const auto bonds = [&](const std::vector<double>& v) {
+    return lab.sample_report("calibration", v).value("bonds", 0);
+  };
+  ASSERT_GT(bonds(narrow), 0);
+  // A gap of 60 um is a fifth of the mean grain radius: many more neighbours are bonded.
+  EXPECT_GT(bonds(wide), bonds(narrow) * 5 / 4);
+  EXPECT_TRUE(fs::exists(dir / "samples" / "calibration-bond_gap_tolerance=1e-06-prism.geom"));
+  EXPECT_TRUE(fs::exists(dir / "samples" / "calibration-bond_gap_tolerance=6e-05-prism.geom"));
+  ASSERT_TRUE(a.properties.count(Property::YoungsModulus) &&
+              b.properties.count(Property::YoungsModulus));
+  EXPECT_GT(b.properties.at(Property::YoungsModulus),
+            1.1 * a.properties.at(Property::YoungsModulus));
+
+  const std::string fragment = material_fragment(spec, wide);
+  EXPECT_NE(fragment.find("bond_gap_tolerance = 6"), std::string::npos) << fragment;
+  const ExperimentSpec back = parse_experiment(fragment, "material.toml", {});
+  EXPECT_DOUBLE_EQ(back.bond_gap_tolerance, 6e-5);
+  // Without the gap free, the fragment leaves it to the experiment that uses the rock.
+  const CalibrationSpec fixed = parse_calibration(tiny_calibration(8e9, 60e6, 6e9, 25e6), "f.toml");
+  EXPECT_EQ(material_fragment(fixed, {6e9, 25e6}).find("bond_gap_tolerance"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// A file's [sample] keys override its preset's, the gap included (a preset applies first).
+TEST(MaterialLibrary, AFilesBondGapOverridesThePresets) {
+  const ExperimentSpec s = parse_experiment(
+      "[material]\npreset = \"berea\"\n[sample]\nbond_gap_tolerance = 2e-5\n", "gap.toml", {});
+  EXPECT_DOUBLE_EQ(s.bond_gap_tolerance, 2e-5);
+  EXPECT_DOUBLE_EQ(
+      parse_experiment("[material]\npreset = \"berea\"\n", "p.toml", {}).bond_gap_tolerance,
+      ExperimentSpec{}.bond_gap_tolerance);
 }
 
 namespace {

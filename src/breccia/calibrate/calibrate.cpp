@@ -428,7 +428,7 @@ std::map<Property, std::vector<double>> Calibrator::measure_verification(
     if (o_.log) o_.log(fmt::format("[calibrate] verifying with packing seed {}", seed));
     const Measurement m = lab_.measure(set, values, tests_for(c_, std::nullopt));
     runs.push_back({{"seed", seed},
-                    {"particles", lab_.sample_report(set).value("particles", 0)},
+                    {"particles", lab_.sample_report(set, values).value("particles", 0)},
                     {"tests", m.tests},
                     {"run_folders", m.run_folders}});
     for (const auto& p : m.problems)
@@ -647,15 +647,14 @@ std::string verdict_table(const CalibrationResult& r) {
   return s;
 }
 
-namespace {
-
-// The [sample] density and the [contact] and [bond] tables of the calibrated experiment, ready
-// to paste into an experiment file (or to ship as a preset).
 std::string material_fragment(const CalibrationSpec& c, const std::vector<double>& values) {
   const ExperimentSpec s =
       parse_experiment_table(c.text, c.path, "experiment", parameter_overrides(c, values));
+  bool gap_calibrated = false;
+  for (const auto& o : parameter_overrides(c, values))
+    gap_calibrated = gap_calibrated || o.starts_with("sample.bond_gap_tolerance=");
   const std::string all = to_toml(s);
-  std::string out;
+  std::string out, sample;
   std::istringstream in(all);
   std::string section;
   for (std::string line; std::getline(in, line);) {
@@ -667,14 +666,14 @@ std::string material_fragment(const CalibrationSpec& c, const std::vector<double
     if (section == "[contact]" || section == "[bond]") {
       // Platen friction is the test's, not the rock's.
       if (!line.empty() && line.rfind("wall_friction", 0) != 0) out += line + "\n";
-    } else if (section == "[sample]" && line.rfind("density =", 0) == 0) {
-      out = "[sample]\n" + line + "\n" + out;
+    } else if (section == "[sample]" &&
+               (line.rfind("density =", 0) == 0 ||
+                (gap_calibrated && line.rfind("bond_gap_tolerance =", 0) == 0))) {
+      sample += line + "\n";
     }
   }
-  return out;
+  return "[sample]\n" + sample + out;
 }
-
-}  // namespace
 
 void Calibrator::write_outputs(const CalibrationResult& r) const {
   const std::string fragment = material_fragment(c_, r.values);
@@ -706,7 +705,7 @@ void Calibrator::write_outputs(const CalibrationResult& r) const {
   for (std::size_t i = 0; i < c_.free.size(); ++i) params[c_.free[i].key] = r.values[i];
   for (const auto& t : c_.tied)
     params[t.key] = t.factor * r.values[static_cast<std::size_t>(free_index(t.follows))];
-  const json& sample = lab_.sample_report(c_.fit_sets().front());
+  const json& sample = lab_.sample_report(c_.fit_sets().front(), r.values);
   // The loading behind the verdicts (a run of the preset that loads faster warns).
   const ExperimentSpec verified =
       parse_experiment_table(c_.text, c_.path, "experiment", c_.verify_set);

@@ -49,6 +49,11 @@ CalibrationResult run_calibration(const CalibrationSpec& spec, const Calibration
 void check_calibration(const CalibrationSpec& spec,
                        const std::function<void(const std::string&)>& log);
 
+// The calibrated rock as an experiment fragment (a preset's material.toml without its header):
+// [sample] density, and the bond installation gap where the calibration freed it (the gap
+// sets how many bonds each grain has, so the rock depends on it), then [contact] and [bond].
+std::string material_fragment(const CalibrationSpec& spec, const std::vector<double>& values);
+
 // The calibration record's verdict table as text (for the command's output).
 std::string verdict_table(const CalibrationResult& r);
 

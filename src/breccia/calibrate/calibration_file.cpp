@@ -93,6 +93,7 @@ constexpr FreeKeyInfo kFreeKeys[] = {
     {"contact.stiffness_ratio", CalibrationStage::Elastic},
     {"contact.shear_modulus", CalibrationStage::Elastic},
     {"contact.poisson_ratio", CalibrationStage::Elastic},
+    {"sample.bond_gap_tolerance", CalibrationStage::Elastic},
     {"bond.tensile_strength", CalibrationStage::Strength},
     {"bond.cohesion", CalibrationStage::Strength},
     {"bond.tensile_strength_sd", CalibrationStage::Strength},
@@ -608,6 +609,13 @@ std::string calibration_docs() {
        "\"log\"|\"linear\", stage = ... }`. The keys a calibration can free, with the stage that "
        "fits each:\n\n| key | stage |\n|---|---|\n";
   for (const auto& k : kFreeKeys) s += fmt::format("| `{}` | {} |\n", k.key, stage_name(k.stage));
+  s += "\n`sample.bond_gap_tolerance` is part of the sample's genesis: the gap up to which "
+       "neighbours are bonded sets the bonds per grain, and with them the shear modulus and "
+       "Poisson's ratio (docs/physics.md §7.6). Each value a trial asks for gets packings of its "
+       "own, made as a run with that gap makes them (samples/<set>-bond_gap_tolerance=<value>-"
+       "*.geom), and the calibrated rock's material.toml carries the gap in its [sample] table, "
+       "so that a run of the preset bonds its grains as the calibration did. Bound it above 0 "
+       "for a log scale, or give scale = \"linear\" to start from 0 (touching pairs only).\n";
   s += "\n### [tied]\n\n`\"section.key\" = { follows = \"<free key>\", factor = 1.0 }`: the "
        "key takes factor x the free parameter's value in every trial (e.g. contact modulus = "
        "bond modulus). The factor is above 0, the key a real-valued one (not the seed or a "

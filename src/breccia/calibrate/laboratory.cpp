@@ -137,20 +137,41 @@ Measurement Laboratory::measure_fit(const std::vector<double>& values, const Tes
   return all;
 }
 
-const json& Laboratory::sample_report(const std::string& set) const {
-  return samples_.at(set).report;
+const json& Laboratory::sample_report(const std::string& set,
+                                      const std::vector<double>& values) const {
+  return samples_.at(packing_name(set, values)).report;
+}
+
+std::vector<std::string> Laboratory::genesis_overrides(const std::vector<double>& values) const {
+  std::vector<std::string> o;
+  for (const std::string& s : parameter_overrides(c_, values))
+    if (s.starts_with("sample.")) o.push_back(s);
+  return o;
+}
+
+std::string Laboratory::packing_name(const std::string& set,
+                                     const std::vector<double>& values) const {
+  // The shortest text that reads back as the same value: distinct values, distinct packings.
+  std::string name = set;
+  for (const std::string& s : genesis_overrides(values)) {
+    const auto eq = s.find('=');
+    name += fmt::format("-{}={}", s.substr(7, eq - 7), std::stod(s.substr(eq + 1)));
+  }
+  return name;
 }
 
 void Laboratory::prepare_samples(const std::string& set, const std::vector<double>& values) {
-  if (samples_.count(set)) return;
+  const std::string name = packing_name(set, values);
+  if (samples_.count(name)) return;
   SamplePaths paths;
-  paths.prism = (folder_ / "samples" / (set + "-prism.geom")).string();
-  paths.disc = (folder_ / "samples" / (set + "-disc.geom")).string();
+  paths.prism = (folder_ / "samples" / (name + "-prism.geom")).string();
+  paths.disc = (folder_ / "samples" / (name + "-disc.geom")).string();
   std::vector<std::string> o = parameter_overrides(c_, values);
   for (const auto& s : set_overrides(set)) o.push_back(s);
   auto pack = [&](const std::string& path, std::vector<std::string> extra, const char* what) {
     if (fs::exists(path) && fs::exists(path + ".json")) return read_json_object(path + ".json");
-    log_(fmt::format("calibrate: packing the {} sample of set \"{}\"", what, set));
+    log_(fmt::format("calibrate: packing the {} sample of set \"{}\"{}", what, set,
+                     name == set ? "" : " (" + name.substr(set.size() + 1) + ")"));
     extra.insert(extra.begin(), o.begin(), o.end());
     const ExperimentSpec s = parse_experiment_table(c_.text, c_.path, "experiment", extra);
     return generate_sample(s, path, [](const std::string&) {}).report;
@@ -166,14 +187,14 @@ void Laboratory::prepare_samples(const std::string& set, const std::vector<doubl
     }
     pack(paths.disc, disc, "Brazilian disc");
   }
-  samples_[set] = paths;
+  samples_[name] = paths;
 }
 
 ExperimentSpec Laboratory::trial_spec(const std::string& set, const std::vector<double>& values,
-                                      const std::string& test, double sigma3) const {
+                                      const std::string& test, double sigma3,
+                                      const SamplePaths& sp) const {
   std::vector<std::string> o = parameter_overrides(c_, values);
   for (const auto& s : set_overrides(set)) o.push_back(s);
-  const SamplePaths& sp = samples_.at(set);
   o.push_back("sample.source=\"file\"");
   o.push_back(fmt::format("sample.file=\"{}\"",
                           fs::absolute(test == "brazilian" ? sp.disc : sp.prism).string()));
@@ -207,22 +228,26 @@ void Laboratory::preflight(const std::vector<std::vector<double>>& points) {
     throw_if_interrupted("checking the calibration");
     prepare_samples(set, points.front());
     // A verification sample is packed with the calibrated values when the time comes (the
-    // contact law packs it): the one packed here for the check is not kept.
+    // contact law packs it): the one packed here for the check is not kept. Every point is
+    // checked on the start's packing: a [sample] key changes where bonds are, not whether a
+    // test can be built.
+    const std::string name = packing_name(set, points.front());
     struct Forget {
       Laboratory* lab;
       const std::string& set;
+      const std::string& name;
       ~Forget() {
-        if (!set.starts_with("verify-") || !lab->samples_.count(set)) return;
+        if (!set.starts_with("verify-") || !lab->samples_.count(name)) return;
         std::error_code ec;
-        for (const std::string& f : {lab->samples_.at(set).prism, lab->samples_.at(set).disc})
+        for (const std::string& f : {lab->samples_.at(name).prism, lab->samples_.at(name).disc})
           for (const std::string& g : {f, f + ".json"}) fs::remove(g, ec);
-        lab->samples_.erase(set);
+        lab->samples_.erase(name);
       }
-    } forget{this, set};
+    } forget{this, set, name};
     for (const auto& [test, sigma3] : tests)
       for (const std::vector<double>& values : points) {
         try {
-          check_buildable(trial_spec(set, values, test, sigma3));
+          check_buildable(trial_spec(set, values, test, sigma3, samples_.at(name)));
         } catch (const InputError& e) {
           std::string at;
           for (const std::string& o : parameter_overrides(c_, values)) at += " " + o;
@@ -292,8 +317,12 @@ std::string Laboratory::test_key(const std::string& set, const std::vector<doubl
 Laboratory::PendingTest Laboratory::pending_test(const std::string& set,
                                                  const std::vector<double>& values,
                                                  const std::string& test, double sigma3) {
-  PendingTest t{test_key(set, values, test),          set, test, sigma3, next_run_++,
-                trial_spec(set, values, test, sigma3)};
+  PendingTest t{test_key(set, values, test),
+                set,
+                test,
+                sigma3,
+                next_run_++,
+                trial_spec(set, values, test, sigma3, samples_.at(packing_name(set, values)))};
   t.spec.name = fmt::format("{:03d}-{}-{}", t.run, set, test);
   return t;
 }

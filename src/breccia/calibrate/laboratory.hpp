@@ -1,10 +1,11 @@
 #pragma once
-// The virtual laboratory a calibration measures with: it packs the samples once, runs the lab
-// tests a parameter set needs (UCS, Brazilian, triaxial at each confining stress) as ordinary run
-// folders, and reads the properties back from their summaries. Every finished test is recorded
-// in trials.jsonl under a key made of the sample, the test and the exact parameter values, so a
-// calibration that is stopped and started again reads its finished tests back instead of
-// re-running them (the optimiser is deterministic and asks for the same points again).
+// The virtual laboratory a calibration measures with: it packs the samples once (once per value
+// of a free [sample] key), runs the lab tests a parameter set needs (UCS, Brazilian, triaxial at
+// each confining stress) as ordinary run folders, and reads the properties back from their
+// summaries. Every finished test is recorded in trials.jsonl under a key made of the sample,
+// the test and the exact parameter values, so a calibration that is stopped and started again
+// reads its finished tests back instead of re-running them (the optimiser is deterministic and
+// asks for the same points again).
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -46,7 +47,9 @@ class Laboratory {
 
   // The samples of a sample set: "calibration" (the [experiment] sample at the start values,
   // its seed), "fit-<seed>" (the same with that seed) or "verify-<seed>" (verify_set overrides,
-  // that seed, packed with `values`).
+  // that seed, packed with `values`). A free [sample] key (the bond installation gap) is part
+  // of the sample's genesis: each of its values gets a packing of its own, made as a run with
+  // that value would make it.
   void prepare_samples(const std::string& set, const std::vector<double>& values);
   Measurement measure(const std::string& set, const std::vector<double>& values,
                       const TestPlan& plan);
@@ -66,7 +69,9 @@ class Laboratory {
   void preflight(const std::vector<std::vector<double>>& points);
 
   std::size_t recorded_tests() const noexcept { return book_.size(); }
-  const nlohmann::json& sample_report(const std::string& set) const;
+  // The report of the set's sample packed for `values` (prepare_samples first).
+  const nlohmann::json& sample_report(const std::string& set,
+                                      const std::vector<double>& values) const;
 
  private:
   struct SamplePaths {
@@ -74,9 +79,15 @@ class Laboratory {
     nlohmann::json report;
   };
   std::vector<std::string> set_overrides(const std::string& set) const;
-  // The experiment of one test of one set at `values` (its run folder under trials/).
+  // The overrides of `values` that shape the sample's genesis ([sample] keys), and the name of
+  // the set's packing for them ("fit-1", or "fit-1-bond_gap_tolerance=2e-05").
+  std::vector<std::string> genesis_overrides(const std::vector<double>& values) const;
+  std::string packing_name(const std::string& set, const std::vector<double>& values) const;
+  // The experiment of one test of one set at `values` on the packing `sample` (its run folder
+  // under trials/).
   ExperimentSpec trial_spec(const std::string& set, const std::vector<double>& values,
-                            const std::string& test, double sigma3) const;
+                            const std::string& test, double sigma3,
+                            const SamplePaths& sample) const;
   void read_trial_record();
   // A test to run: its record's key, its number and its experiment.
   struct PendingTest {
@@ -100,7 +111,7 @@ class Laboratory {
   std::filesystem::path folder_;
   std::function<void(const std::string&)> log_;
   std::map<std::string, nlohmann::json> book_;  // key -> record of a finished test
-  std::map<std::string, SamplePaths> samples_;
+  std::map<std::string, SamplePaths> samples_;  // by packing_name
   int next_run_ = 1;
   RankPool* pool_ = nullptr;
 };

@@ -306,6 +306,7 @@ void apply_preset(ExperimentSpec& s, const std::string& name, const std::string&
   // keep the values of the one before.
   const ExperimentSpec plain;
   s.density = plain.density;
+  s.bond_gap_tolerance = plain.bond_gap_tolerance;  // a preset may carry its calibrated gap
   s.contact = plain.contact;
   s.bond = plain.bond;
   if (name == "custom") return;
