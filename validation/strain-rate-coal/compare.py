@@ -15,6 +15,15 @@ import sys
 SEED_UCS_MPA = {0.05: 10.06, 0.1: 10.1, 10.0: 11.06}
 
 
+def num(text, spec):
+    """A rates.csv cell as printed, or '-' where the sweep has none (a dynamic increase factor
+    needs the rate law, which needs at least three rates)."""
+    try:
+        return format(float(text), spec)
+    except ValueError:
+        return "-"
+
+
 def main(folder):
     sweep = json.load(open(os.path.join(folder, "sweep.json")))
     rows = list(csv.DictReader(open(os.path.join(folder, "rates.csv"))))
@@ -32,11 +41,11 @@ def main(folder):
         if run and os.path.exists(summary_path):
             ok = json.load(open(summary_path)).get("quasi_static", {}).get("ok")
             qs = "yes" if ok else "no"
-        print(f"| {rate:g} | {float(r['ucs_mpa']):.2f} | {seed if seed else '-'} | "
-              f"{float(r['dynamic_increase_factor']):.3f} | {float(r['damage_ratio_percent']):.1f} | "
-              f"{float(r['failure_plane_deg']):.1f} | {float(r['planarity']):.2f} | "
-              f"{float(r['stress_oscillation_relative']):.4f} | {qs} | "
-              f"{run.get('wall_seconds', float('nan')):.0f} |")
+        print(f"| {rate:g} | {num(r['ucs_mpa'], '.2f')} | {seed if seed else '-'} | "
+              f"{num(r['dynamic_increase_factor'], '.3f')} | "
+              f"{num(r['damage_ratio_percent'], '.1f')} | {num(r['failure_plane_deg'], '.1f')} | "
+              f"{num(r['planarity'], '.2f')} | {num(r['stress_oscillation_relative'], '.4f')} | "
+              f"{qs} | {run.get('wall_seconds', float('nan')):.0f} |")
     fit = sweep.get("rate_dependence", {})
     print()
     if fit.get("valid"):
