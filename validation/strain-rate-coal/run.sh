@@ -5,8 +5,8 @@
 #   validation/strain-rate-coal/run.sh [output folder] [rates...]   (default: 0.5 1 5 10)
 #   validation/strain-rate-coal/run.sh SWEEP_FOLDER                  (finish a stopped sweep)
 # The steps grow as 1 / rate: 0.5-10 /s take about 30 min on 2 cores; 0.1 /s (2.27 M steps)
-# about 2 hours of one core, 0.05 /s (4.55 M steps) about 3.4 hours on 2 threads. A sweep stopped on the way (Ctrl-C, a time limit) keeps its
-# checkpoints: give its folder to finish it.
+# about 2 hours of one core, 0.05 /s (4.55 M steps) about 3.4 hours on 2 threads. A sweep
+# stopped on the way (Ctrl-C, a time limit) keeps its checkpoints: give its folder to finish it.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
