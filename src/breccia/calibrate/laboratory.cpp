@@ -142,20 +142,17 @@ const json& Laboratory::sample_report(const std::string& set,
   return samples_.at(packing_name(set, values)).report;
 }
 
-std::vector<std::string> Laboratory::genesis_overrides(const std::vector<double>& values) const {
-  std::vector<std::string> o;
-  for (const std::string& s : parameter_overrides(c_, values))
-    if (s.starts_with("sample.")) o.push_back(s);
-  return o;
-}
-
+// The [sample] keys among the overrides shape the packing itself; each is named by the shortest
+// text that reads back as its value (distinct values, distinct packings).
 std::string Laboratory::packing_name(const std::string& set,
                                      const std::vector<double>& values) const {
-  // The shortest text that reads back as the same value: distinct values, distinct packings.
+  constexpr std::string_view prefix = "sample.";
   std::string name = set;
-  for (const std::string& s : genesis_overrides(values)) {
+  for (const std::string& s : parameter_overrides(c_, values)) {
+    if (!s.starts_with(prefix)) continue;
     const auto eq = s.find('=');
-    name += fmt::format("-{}={}", s.substr(7, eq - 7), std::stod(s.substr(eq + 1)));
+    name += fmt::format("-{}={}", s.substr(prefix.size(), eq - prefix.size()),
+                        std::stod(s.substr(eq + 1)));
   }
   return name;
 }

@@ -79,9 +79,8 @@ class Laboratory {
     nlohmann::json report;
   };
   std::vector<std::string> set_overrides(const std::string& set) const;
-  // The overrides of `values` that shape the sample's genesis ([sample] keys), and the name of
-  // the set's packing for them ("fit-1", or "fit-1-bond_gap_tolerance=2e-05").
-  std::vector<std::string> genesis_overrides(const std::vector<double>& values) const;
+  // The name of the set's packing for `values`: the set, and the values of its free [sample]
+  // keys ("fit-1", or "fit-1-bond_gap_tolerance=2e-05").
   std::string packing_name(const std::string& set, const std::vector<double>& values) const;
   // The experiment of one test of one set at `values` on the packing `sample` (its run folder
   // under trials/).
