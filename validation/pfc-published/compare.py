@@ -5,14 +5,15 @@ For each run: the bonds per interior grain, E_t50 and Poisson's ratio as Breccia
 over 5-15 % of the peak (elastic), the bulk and shear moduli those imply
 (K = E / (3 (1 - 2 nu)), G = E / (2 (1 + nu))), and the UCS.
 """
-import csv
 import glob
 import json
 import os
 import sys
 import tomllib
 
-import numpy as np
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
+                                "preset-resolution"))
+from elastic import bands  # noqa: E402
 
 PUBLISHED = {"E": 14.5, "nu": 0.30, "UCS": 105.0}  # seed 003 Table 2 (PFC3D)
 
@@ -21,18 +22,10 @@ def moduli(e, nu):
     return e / (3 * (1 - 2 * nu)), e / (2 * (1 + nu))
 
 
-def early_elasticity(history):
+def early_elasticity(folder):
     """E (GPa) and nu on the gauges between 5 and 15 % of the peak deviatoric stress."""
-    rows = list(csv.DictReader(open(history)))
-    q = np.array([float(r["deviatoric_stress_pa"]) for r in rows])
-    ea = np.array([float(r["gauge_axial_strain"]) for r in rows])
-    el = np.array([float(r["gauge_lateral_strain"]) for r in rows])
-    peak = int(q.argmax())
-    pick = [i for i in range(peak) if 0.05 * q[peak] <= q[i] <= 0.15 * q[peak]]
-    if len(pick) < 3:
-        return float("nan"), float("nan")
-    return (np.polyfit(ea[pick], q[pick], 1)[0] / 1e9,
-            -np.polyfit(ea[pick], el[pick], 1)[0])
+    _, _, e, nu, _, _ = bands(folder)[0][0]
+    return (e / 1e9, nu) if e is not None else (float("nan"), float("nan"))
 
 
 def label(settings):
@@ -49,13 +42,13 @@ def main(root):
     print("|---|---|---|---|---|---|---|---|")
     print(f"| PFC3D, published | | {PUBLISHED['E']} GPa | {PUBLISHED['nu']} | | {k:.1f} GPa | "
           f"{g:.2f} GPa | {PUBLISHED['UCS']} MPa |")
-    runs = [json.load(open(f)) | {"history": os.path.join(os.path.dirname(f), "history.csv")}
+    runs = [json.load(open(f)) | {"folder": os.path.dirname(f)}
             for f in glob.glob(f"{root}/*/*/summary.json")]
     runs.sort(key=lambda d: (label(d["sample"]["settings"]).split(",")[0],
                              d["sample"]["bonds_per_interior_particle"]))
     for d in runs:
         e, nu = d["youngs_modulus_pa"] / 1e9, d["poisson_ratio"]
-        e0, nu0 = early_elasticity(d["history"])
+        e0, nu0 = early_elasticity(d["folder"])
         k, g = moduli(e0, nu0)
         z = d["sample"]["bonds_per_interior_particle"]
         print(f"| {label(d['sample']['settings'])} | {z:.2f} | {e:.2f} GPa ({e / PUBLISHED['E']:.2f}) | "

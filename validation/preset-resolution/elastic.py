@@ -5,9 +5,10 @@
 
 For each band of the deviatoric stress before the peak (5-15 %, 15-25 %, ... 65-75 % of it),
 the least-squares slopes of q and of the gauges' lateral strain against the gauges' axial
-strain (history.csv: gauge_axial_strain, gauge_lateral_strain), the bonds broken by the
-band's top, and the share of the peak's broken bonds broken by half the peak. The first band is the rock before it cracks; E_t50 and nu of summary.json are the
-45-55 % band's neighbourhood, read where the sample may already be cracking.
+strain (history.csv: gauge_axial_strain, gauge_lateral_strain) and the bonds broken by the
+band's top; and the share of the bonds broken at the peak that have broken by half of it. The
+first band is the rock before it cracks; E_t50 and nu of summary.json are the 45-55 % band's
+neighbourhood, read where the sample may already be cracking.
 """
 import csv
 import json
