@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Seed 003's triaxial tests in the membrane on a sample of over 20,000 grains: the seed's
+# cylinder (10 x 20 mm) and joint (radius 6 mm, dip 63 degrees, friction 0.2) with the grains of
+# examples/triaxial-smooth-joint.toml scaled by 0.75 (0.165-0.27 mm, 21,600 grains against
+# 9,106), so that the joint is unchanged and the sample resolves it twice as finely. The joint's
+# stiffness per unit area is a property of the joint, not of the grains, and stays as it is.
+# Runs two tests at a time, one thread each (THREADS=2: one test at a time on two threads).
+#   validation/seed-003-jointed/large.sh OUTPUT_FOLDER TEST...
+# where each TEST is jointed-20, jointed-40, intact-20, intact-40 (kind and sigma_3 in MPa).
+# Then: tables.py and localisation.py on the run folders (README, "Over 20,000 grains").
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+out="$1"
+shift
+bin="${BRECCIA:-$root/build/breccia}"
+example="$root/examples/triaxial-smooth-joint.toml"
+threads="${THREADS:-1}"
+run_one() {
+  local kind="${1%-*}" s3="${1#*-}"
+  local args=(--set "output.directory=\"$out\"" --set "test.confining_stress=${s3}e6"
+    --set test.membrane=true --set sample.radius_min=0.165e-3 --set sample.radius_max=0.27e-3
+    --set "name=\"triaxial-$kind-$s3-membrane-large\"")
+  case "$kind" in
+    jointed) ;;
+    intact) args+=(--set 'joint.planes=[]') ;;
+    *) echo "large.sh: test '$1': the kind must be jointed or intact" >&2; return 2 ;;
+  esac
+  OMP_NUM_THREADS="$threads" "$bin" run "$example" --quiet "${args[@]}"
+}
+while [ $# -gt 0 ]; do
+  if [ "$threads" = 1 ] && [ $# -gt 1 ]; then
+    run_one "$1" &
+    run_one "$2" &
+    wait
+    shift 2
+  else
+    run_one "$1"
+    shift
+  fi
+done
