@@ -20,6 +20,7 @@ import csv
 import json
 import math
 import pathlib
+import sys
 import tomllib
 
 import numpy as np
@@ -104,7 +105,12 @@ def read_run(run):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs", nargs="+", type=pathlib.Path)
-    rows = [read_run(r) for r in ap.parse_args().runs]
+    runs = ap.parse_args().runs
+    for r in runs:
+        if not (r / "summary.json").exists():
+            print(f"tables.py: {r}: no summary.json (still running, or not a run folder); left out",
+                  file=sys.stderr)
+    rows = [read_run(r) for r in runs if (r / "summary.json").exists()]
     rows.sort(key=lambda r: (r["jointed"], r["s3_mpa"], r["name"]))
 
     def label(r):
