@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Seed 003's triaxial tests in the membrane on a sample of over 20,000 grains: the seed's
 # cylinder (10 x 20 mm) and joint (radius 6 mm, dip 63 degrees, friction 0.2) with the grains of
-# examples/triaxial-smooth-joint.toml scaled by 0.75 (0.165-0.27 mm, 21,600 grains against
-# 9,106), so that the joint is unchanged and the sample resolves it twice as finely. The joint's
-# stiffness per unit area is a property of the joint, not of the grains, and stays as it is.
+# examples/triaxial-smooth-joint.toml scaled by 0.75 (0.165-0.27 mm, 21,580 grains against
+# 9,106), so that the sample and the joint are the seed's and 2.4 times as many grains resolve
+# them. The joint's stiffness per unit area is a property of the joint, not of the grains, and
+# stays as it is. On 2 cores: 40-55 min per jointed test (two side by side, one thread each),
+# 37-43 min per intact test alone on two threads.
 # Runs two tests at a time, one thread each (THREADS=2: one test at a time on two threads).
 #   validation/seed-003-jointed/large.sh OUTPUT_FOLDER TEST...
 # where each TEST is jointed-20, jointed-40, intact-20, intact-40 (kind and sigma_3 in MPa).
