@@ -22,6 +22,10 @@ run_one() {
   local args=(--set "output.directory=\"$out\"" --set "test.confining_stress=${s3}e6"
     --set test.membrane=true --set sample.radius_min=0.165e-3 --set sample.radius_max=0.27e-3
     --set "name=\"triaxial-$kind-$s3-membrane-large\"")
+  if ! [[ "$s3" =~ ^[0-9]+$ ]]; then
+    echo "large.sh: test '$1': expected KIND-SIGMA3 with sigma_3 in whole MPa (jointed-20)" >&2
+    return 2
+  fi
   case "$kind" in
     jointed) ;;
     intact) args+=(--set 'joint.planes=[]') ;;
@@ -32,8 +36,10 @@ run_one() {
 while [ $# -gt 0 ]; do
   if [ "$threads" = 1 ] && [ $# -gt 1 ]; then
     run_one "$1" &
+    first=$!
     run_one "$2" &
-    wait
+    wait "$first"  # each wait fails the script if its test failed
+    wait $!
     shift 2
   else
     run_one "$1"

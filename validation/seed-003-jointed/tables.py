@@ -118,21 +118,24 @@ def main():
     rows = [read_run(r) for r in runs if (r / "summary.json").exists()]
     rows.sort(key=lambda r: (r["jointed"], r["s3_mpa"], r["name"]))
 
+    def seed_of(r):
+        return SEED.get((r["s3_mpa"], r["jointed"]), (None,) * 10)
+
     def label(r):
         return f"{r['s3_mpa']} MPa {'jointed' if r['jointed'] else 'no joint'} ({r['grains']} grains)"
 
     print("| test | peak q, seed | peak q, Breccia | strain at peak | cracks | shear cracks |")
     print("|---|---|---|---|---|---|")
     for r in rows:
-        seed = SEED.get((r["s3_mpa"], r["jointed"]))
-        print(f"| {label(r)} | {fmt(seed[0] if seed else None, '.1f', ' MPa')} | {r['q_mpa']:.1f} MPa | "
+        seed = seed_of(r)
+        print(f"| {label(r)} | {fmt(seed[0], '.1f', ' MPa')} | {r['q_mpa']:.1f} MPa | "
               f"{r['strain_pct']:.2f} % | {r['cracks']} | {r['shear_pct']:.1f} % |")
     print()
     print("| test (Table 4) | kinetic energy, seed | Breccia | boundary work, seed | Breccia | "
           "brittle %, seed | Breccia |")
     print("|---|---|---|---|---|---|---|")
     for r in rows:
-        seed = SEED.get((r["s3_mpa"], r["jointed"])) or (None,) * 10
+        seed = seed_of(r)
         print(f"| {label(r)} | {fmt(seed[1], '.4f', ' J')} | {r['ke']:.4f} J | {fmt(seed[2], '.4f', ' J')} | "
               f"{r['work']:.4f} J | {fmt(seed[3], '.2f')} | {r['brittle_pct']:.2f} |")
     print()
@@ -141,7 +144,7 @@ def main():
           "Breccia D (events) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
-        seed = SEED.get((r["s3_mpa"], r["jointed"])) or (None,) * 10
+        seed = seed_of(r)
         print(f"| {label(r)} | {fmt(seed[4], 'd')} | {r['events']} | {fmt(seed[5], 'd')} | "
               f"{r['single_pct']:.0f} | {fmt(seed[7], '.2f')} | {r['radiated_pct']:.3f} | "
               f"{seed[8] or 'n/a'} | {r['b']} | {seed[9] or 'n/a'} | {r['d2']} | {fmt(r['event_d2'], '.2f')} |")
