@@ -140,8 +140,9 @@ TEST(Protocols, EveryRegisteredTestIsDocumentedRunsATinyCaseAndResumesExactly) {
   fs::remove_all(dir);
   std::vector<std::string> kinds;
   for_each_lab_test([&]<class T>() { kinds.emplace_back(T::name); });
-  EXPECT_EQ(kinds, (std::vector<std::string>{"ucs", "triaxial", "biaxial", "brazilian", "impact",
-                                             "cantilever", "vibration", "abrasion"}));
+  EXPECT_EQ(kinds,
+            (std::vector<std::string>{"ucs", "triaxial", "biaxial", "brazilian", "direct_tension",
+                                      "impact", "cantilever", "vibration", "abrasion"}));
   for_each_lab_test([&]<class T>() {
     const std::string name(T::name);
     EXPECT_NE(docs.find("`test` kind `\"" + name + "\"`"), std::string::npos) << name;

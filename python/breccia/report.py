@@ -335,7 +335,14 @@ def summary_rows(folder, summary):
                             f"density scaling {fmt(summary.get('density_scaling'), '{:g}')}, "
                             f"time step {fmt(summary.get('time_step_s'), '{:.3g}')} s, "
                             f"{summary.get('steps')} steps"))
-    if "tensile_strength_mpa" in summary:
+    if "free_length_m" in summary:
+        rows.append(("direct tensile strength",
+                     f"sigma_t = F/A = {fmt(summary.get('tensile_strength_mpa'))} MPa "
+                     f"(peak force {fmt(summary.get('peak_force_n'), '{:.1f}')} N, A = "
+                     f"{fmt(summary.get('cross_section_m2', 0) * 1e6)} mm^2, grips "
+                     f"{fmt(summary.get('grip_length_m', 0) * 1e3)} mm, free length "
+                     f"{fmt(summary.get('free_length_m', 0) * 1e3)} mm)"))
+    elif "tensile_strength_mpa" in summary:
         rows.append(("tensile strength",
                      f"sigma_t = 2F/(pi D t) = {fmt(summary.get('tensile_strength_mpa'))} MPa "
                      f"(peak force {fmt(summary.get('peak_force_n'), '{:.1f}')} N, D = "
@@ -566,6 +573,11 @@ def slab_test_report(folder, summary, hist, cracks, outdir):
     crack_field_3d(summary, cracks, outdir, figures)
     fragment_sizes(summary, read_csv(os.path.join(folder, "fragments.csv")), outdir, figures)
     rows += [r for r in summary_rows(folder, summary) if r[0] in SHARED_ROWS]
+    if cp.get("direct_tension"):
+        d = cp["direct_tension"]
+        rows.append(("break", f"{fmt(100 * d.get('next_to_grips_share', 0), '{:.0f}')} % of the "
+                              "cracks in the two tenths of the free length next to the grips "
+                              "(a uniform scatter: 20 %)"))
     for w in summary.get("warnings", []):
         rows.append(("warning", w))
     write_html(folder, f"Breccia report: {summary.get('experiment', '')}", rows, figures,
@@ -635,6 +647,11 @@ def run_report(folder):
                               f"of the loaded diameter (first 20 %: "
                               f"{fmt(100 * b.get('early_in_band_share', 0), '{:.0f}')} %, "
                               f"{fmt(100 * b.get('early_tensile_share', 0), '{:.0f}')} % tensile)"))
+    if cp.get("direct_tension"):
+        d = cp["direct_tension"]
+        rows.append(("break", f"{fmt(100 * d.get('next_to_grips_share', 0), '{:.0f}')} % of the "
+                              "cracks in the two tenths of the free length next to the grips "
+                              "(a uniform scatter: 20 %)"))
     for w in summary.get("warnings", []):
         rows.append(("warning", w))
     write_html(folder, f"Breccia report: {summary.get('experiment', '')}", rows, figures,

@@ -205,6 +205,27 @@ std::string summarise_acoustic_emission(const JsonView& ae) {
          b_before_peak_text(ae);
 }
 
+namespace {
+
+// The strength line of a stress-strain test: the tensile strength of a Brazilian or direct
+// tension test (with the modulus in tension), else the peak deviatoric stress.
+std::string strength_line(const JsonView& j) {
+  if (!j.has("tensile_strength_pa"))
+    return fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
+                       mpa(j, "peak_deviatoric_stress_pa"),
+                       plain(j, "axial_strain_at_peak", "{:.5f}"), gpa(j, "youngs_modulus_pa"),
+                       plain(j, "poisson_ratio"));
+  const bool direct = j.has("free_length_m");
+  return fmt::format(
+      "  tensile strength sigma_t = {} {} (peak force {} N) at strain {}{}\n",
+      direct ? "F/A" : "2F/(pi D t)", mpa(j, "tensile_strength_pa"),
+      plain(j, "peak_force_n", "{:.4g}"), plain(j, "axial_strain_at_peak", "{:.5f}"),
+      direct ? "; E_t50 " + gpa(j, "youngs_modulus_pa") + ", Poisson " + plain(j, "poisson_ratio")
+             : std::string());
+}
+
+}  // namespace
+
 std::string summarise_run(const fs::path& file) {
   const json doc = read_json_object(file.string());
   const JsonView j(doc, file.string());
@@ -218,16 +239,7 @@ std::string summarise_run(const fs::path& file) {
   if (headline) {
     for (const JsonView& line : own->elements("headline")) s += "  " + line.as_text() + "\n";
   } else {
-    if (j.has("tensile_strength_pa"))
-      s += fmt::format(
-          "  tensile strength sigma_t = 2F/(pi D t) {} (peak force {} N) at strain {}\n",
-          mpa(j, "tensile_strength_pa"), plain(j, "peak_force_n", "{:.4g}"),
-          plain(j, "axial_strain_at_peak", "{:.5f}"));
-    else
-      s += fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
-                       mpa(j, "peak_deviatoric_stress_pa"),
-                       plain(j, "axial_strain_at_peak", "{:.5f}"), gpa(j, "youngs_modulus_pa"),
-                       plain(j, "poisson_ratio"));
+    s += strength_line(j);
     s += fmt::format("  crack initiation {}, crack damage {}, residual {}\n",
                      mpa(j, "crack_initiation_stress_pa"), mpa(j, "crack_damage_stress_pa"),
                      mpa(j, "residual_strength_pa"));

@@ -12,13 +12,14 @@
 #include "breccia/protocol/brazilian.hpp"
 #include "breccia/protocol/cantilever.hpp"
 #include "breccia/protocol/compression.hpp"
+#include "breccia/protocol/direct_tension.hpp"
 #include "breccia/protocol/impact.hpp"
 #include "breccia/protocol/vibration.hpp"
 
 namespace breccia {
 
-using LabTests = TypeList<UcsTest, TriaxialTest, BiaxialTest, BrazilianTest, ImpactTest,
-                          CantileverTest, VibrationTest, AbrasionTest>;
+using LabTests = TypeList<UcsTest, TriaxialTest, BiaxialTest, BrazilianTest, DirectTensionTest,
+                          ImpactTest, CantileverTest, VibrationTest, AbrasionTest>;
 
 // The chosen test's parameters (the experiment's [test] table).
 using TestParams = ParamsVariant<LabTests>;
