@@ -2,7 +2,7 @@
 """Seed 003's Tables 4 and 5 beside Breccia's runs (run by hand, not by CI).
 
 For each run folder (a triaxial test of examples/triaxial-smooth-joint.toml, jointed or with
-`joint.planes = []`), reads summary.json, experiment.toml and events.csv and prints:
+`joint.planes = []`, or the unconfined test of unconfined.toml), reads summary.json, experiment.toml and events.csv and prints:
 - the strength row: peak differential stress, strain at the peak, cracks and their shear share;
 - Table 4: the kinetic energy of the events (the rise of the grains' kinetic energy around each
   event, docs/analysis.md §4.4, the seed's "kinetic energy from bond breakages"), the boundary
@@ -85,7 +85,8 @@ def read_run(run):
     d2 = ae["d2"]
     return {
         "name": run.name,
-        "s3_mpa": round(s["confining_stress_pa"] / 1e6),
+        "s3_mpa": round((s.get("confining_stress_pa") or 0.0) / 1e6),
+        "platen_friction": exp.get("contact", {}).get("wall_friction", 0.0),
         "jointed": bool(exp.get("joint", {}).get("planes")),
         "grains": s.get("particles"),
         "q_mpa": s["peak_deviatoric_stress_mpa"],
@@ -116,13 +117,14 @@ def main():
             print(f"tables.py: {r}: no summary.json (still running, or not a run folder); left out",
                   file=sys.stderr)
     rows = [read_run(r) for r in runs if (r / "summary.json").exists()]
-    rows.sort(key=lambda r: (r["jointed"], r["s3_mpa"], r["name"]))
+    rows.sort(key=lambda r: (r["jointed"], r["s3_mpa"], -r["platen_friction"], r["name"]))
 
     def seed_of(r):
         return SEED.get((r["s3_mpa"], r["jointed"]), (None,) * 10)
 
     def label(r):
-        return f"{r['s3_mpa']} MPa {'jointed' if r['jointed'] else 'no joint'} ({r['grains']} grains)"
+        platens = "" if r["platen_friction"] == 0.3 else f", platen friction {r['platen_friction']:g}"
+        return f"{r['s3_mpa']} MPa {'jointed' if r['jointed'] else 'no joint'} ({r['grains']} grains{platens})"
 
     print("| test | peak q, seed | peak q, Breccia | strain at peak | cracks | shear cracks |")
     print("|---|---|---|---|---|---|")
