@@ -331,3 +331,24 @@ def test_a_slab_test_report_draws_its_own_figures_and_a_thickness_sweep_its_tren
         bad = subprocess.run([CLI, "sweep", path, "--output", out, "--over",
                               "sample.slab_thicknes", "1e-3"], capture_output=True, text=True)
         assert bad.returncode != 0 and "slab_thicknes" in bad.stderr
+
+
+def test_a_direct_tension_report_gives_the_tensile_strength_and_where_it_broke():
+    """A direct tension run of the small sample: the report names sigma_t = F/A with the grips
+    and the share of the cracks next to them, and reads as text."""
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [CLI, "run", "--quiet", "--output", out, "--set", 'sample.source="file"',
+               "--set", f'sample.file="{SOURCE}/tests/data/ucs-small.geom"',
+               "--set", "engine.density_scaling=100", "--set", 'test.kind="direct_tension"',
+               "--set", "test.platen_speed=0.1", "--set", "test.max_strain=0.01",
+               "--set", "output.plot=false", "--set", "output.snapshot_strain_interval=0"
+               ] + MATERIAL
+        folder = subprocess.run(cmd, capture_output=True, text=True,
+                                check=True).stdout.strip().splitlines()[-1]
+        summary = json.load(open(os.path.join(folder, "summary.json")))
+        assert summary["test_kind"] == "direct_tension" and summary["bonds_broken"] > 0
+        subprocess.run([CLI, "report", folder], capture_output=True, check=True)
+        page = open(os.path.join(folder, "report.html")).read()
+        assert "<th>direct tensile strength</th><td>sigma_t = F/A = " in page
+        assert f"{summary['tensile_strength_mpa']:.2f} MPa" in page
+        assert "next to the grips" in page

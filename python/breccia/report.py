@@ -573,11 +573,6 @@ def slab_test_report(folder, summary, hist, cracks, outdir):
     crack_field_3d(summary, cracks, outdir, figures)
     fragment_sizes(summary, read_csv(os.path.join(folder, "fragments.csv")), outdir, figures)
     rows += [r for r in summary_rows(folder, summary) if r[0] in SHARED_ROWS]
-    if cp.get("direct_tension"):
-        d = cp["direct_tension"]
-        rows.append(("break", f"{fmt(100 * d.get('next_to_grips_share', 0), '{:.0f}')} % of the "
-                              "cracks in the two tenths of the free length next to the grips "
-                              "(a uniform scatter: 20 %)"))
     for w in summary.get("warnings", []):
         rows.append(("warning", w))
     write_html(folder, f"Breccia report: {summary.get('experiment', '')}", rows, figures,
