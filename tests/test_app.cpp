@@ -691,3 +691,40 @@ TEST(MemoryBudget, ASampleLargerThanTheMemoryIsRefusedWithTheEstimate) {
             std::string::npos);
   EXPECT_NE(check_memory(spec, 1000000, 3000000, 0.0).find("unknown"), std::string::npos);
 }
+
+// Runs started together (a sweep's processes, or a user's) pack the same sample at the same time
+// and write it to the same cache: every run completes, each on the same packing, and no
+// temporary file is left behind. The sample (about 2,500 grains, a few seconds to pack) makes
+// the writes long enough to overlap: with one temporary name for all writers, two of six runs
+// failed ("...geom.tmp: No such file or directory").
+TEST(App, RunsStartedTogetherShareOnePackedSample) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_shared_cache";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "tiny.toml")
+      << "name = \"tiny\"\n[output]\nplot = false\nsnapshot_strain_interval = 0\n"
+         "[engine]\nthreads = 1\ndensity_scaling = 100\n"
+         "[sample]\nwidth = 0.006\ndepth = 0.006\nheight = 0.012\n"
+         "[test]\nplaten_speed = 0.1\nmax_strain = 0.0002\n";
+  std::string cmd = "cd " + dir.string() + " && (";
+  for (int i = 0; i < 6; ++i)
+    cmd += std::string(BRECCIA_CLI) + " run --quiet --output runs tiny.toml > out" +
+           std::to_string(i) + ".txt 2>&1 & ";
+  cmd += "wait)";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::string cached;
+  for (int i = 0; i < 6; ++i) {
+    const std::string out = read(dir / ("out" + std::to_string(i) + ".txt"));
+    const fs::path folder = dir / last_line(out);
+    ASSERT_TRUE(fs::exists(folder / "summary.json")) << out;
+    const auto m = nlohmann::json::parse(read(folder / "manifest.json"));
+    EXPECT_EQ(m["status"], "complete") << out;
+    const std::string file = m["sample"]["cached_file"].get<std::string>();
+    if (i == 0) cached = file;
+    EXPECT_EQ(file, cached);
+  }
+  for (const auto& e : fs::directory_iterator(dir / "runs" / "samples"))
+    EXPECT_EQ(e.path().extension(), e.path().extension() == ".json" ? ".json" : ".geom")
+        << e.path();
+  fs::remove_all(dir);
+}

@@ -1,7 +1,9 @@
 #include "breccia/run/sample_build.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -164,6 +166,23 @@ PackingSettings packing_settings(const ExperimentSpec& s) {
   return p;
 }
 
+namespace {
+
+// Writes a packed sample where other runs find it. Runs started together (a sweep's processes)
+// pack the same sample at the same time and write the same file: each writes under a name of its
+// own and renames it into place, the report first, so that a reader who finds the geometry finds
+// its report whole.
+void write_cached_sample(const fs::path& p, const GeneratedSample& out) {
+  static std::atomic<unsigned> count{0};
+  const std::string own = fmt::format(".{}-{}.tmp", static_cast<long>(::getpid()), count++);
+  write_json(p.string() + ".json" + own, out.report);
+  fs::rename(p.string() + ".json" + own, p.string() + ".json");
+  write_geometry(p.string() + own, out.geometry);
+  fs::rename(p.string() + own, p);
+}
+
+}  // namespace
+
 GeneratedSample generate_sample(const ExperimentSpec& s, const std::string& path,
                                 const std::function<void(const std::string&)>& log) {
   PackedSample packed = pack_sample(packing_settings(s), log);
@@ -173,9 +192,7 @@ GeneratedSample generate_sample(const ExperimentSpec& s, const std::string& path
   if (!path.empty()) {
     const fs::path p(path);
     if (p.has_parent_path()) fs::create_directories(p.parent_path());
-    write_geometry(p.string() + ".tmp", out.geometry);
-    fs::rename(p.string() + ".tmp", p);
-    write_json(p.string() + ".json", out.report);
+    write_cached_sample(p, out);
   }
   return out;
 }
