@@ -347,6 +347,8 @@ def test_a_direct_tension_report_gives_the_tensile_strength_and_where_it_broke()
                                 check=True).stdout.strip().splitlines()[-1]
         summary = json.load(open(os.path.join(folder, "summary.json")))
         assert summary["test_kind"] == "direct_tension" and summary["bonds_broken"] > 0
+        # Pulled, the sample narrows: the lateral strain's sign makes Poisson's ratio positive.
+        assert 0.0 < summary["poisson_ratio"] < 0.5
         subprocess.run([CLI, "report", folder], capture_output=True, check=True)
         page = open(os.path.join(folder, "report.html")).read()
         assert "<th>direct tensile strength</th><td>sigma_t = F/A = " in page
