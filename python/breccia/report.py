@@ -335,19 +335,13 @@ def summary_rows(folder, summary):
                             f"density scaling {fmt(summary.get('density_scaling'), '{:g}')}, "
                             f"time step {fmt(summary.get('time_step_s'), '{:.3g}')} s, "
                             f"{summary.get('steps')} steps"))
-    if "free_length_m" in summary:
-        rows.append(("direct tensile strength",
-                     f"sigma_t = F/A = {fmt(summary.get('tensile_strength_mpa'))} MPa "
-                     f"(peak force {fmt(summary.get('peak_force_n'), '{:.1f}')} N, A = "
-                     f"{fmt(summary.get('cross_section_m2', 0) * 1e6)} mm^2, grips "
-                     f"{fmt(summary.get('grip_length_m', 0) * 1e3)} mm, free length "
-                     f"{fmt(summary.get('free_length_m', 0) * 1e3)} mm)"))
-    elif "tensile_strength_mpa" in summary:
-        rows.append(("tensile strength",
-                     f"sigma_t = 2F/(pi D t) = {fmt(summary.get('tensile_strength_mpa'))} MPa "
-                     f"(peak force {fmt(summary.get('peak_force_n'), '{:.1f}')} N, D = "
-                     f"{fmt(summary.get('disc_diameter_m', 0) * 1e3)} mm, t = "
-                     f"{fmt(summary.get('disc_thickness_m', 0) * 1e3)} mm)"))
+    if "tensile_strength_reading" in summary:
+        # A tensile test says how it reads its strength: its name, formula and specimen.
+        t = summary["tensile_strength_reading"]
+        rows.append((t["name"], f"sigma_t = {t['formula']} = "
+                                f"{fmt(summary.get('tensile_strength_mpa'))} MPa (peak force "
+                                f"{fmt(summary.get('peak_force_n'), '{:.1f}')} N, "
+                                f"{t['specimen']})"))
     else:
         rows.append(("peak deviatoric stress",
                      f"{fmt(summary.get('peak_deviatoric_stress_mpa'))} MPa at axial strain "

@@ -207,21 +207,23 @@ std::string summarise_acoustic_emission(const JsonView& ae) {
 
 namespace {
 
-// The strength line of a stress-strain test: the tensile strength of a Brazilian or direct
-// tension test (with the modulus in tension), else the peak deviatoric stress.
+// The strength line of a stress-strain test: a tensile test's strength as the test reads it
+// (its tensile_strength_reading: name and formula), with the modulus where its rows are the
+// sample's stress and strain (sample_moduli), else the peak deviatoric stress.
 std::string strength_line(const JsonView& j) {
-  if (!j.has("tensile_strength_pa"))
+  const auto reading = j.find("tensile_strength_reading");
+  if (!reading)
     return fmt::format("  peak q {} at axial strain {}; E_t50 {}; Poisson {}\n",
                        mpa(j, "peak_deviatoric_stress_pa"),
                        plain(j, "axial_strain_at_peak", "{:.5f}"), gpa(j, "youngs_modulus_pa"),
                        plain(j, "poisson_ratio"));
-  const bool direct = j.has("free_length_m");
   return fmt::format(
-      "  tensile strength sigma_t = {} {} (peak force {} N) at strain {}{}\n",
-      direct ? "F/A" : "2F/(pi D t)", mpa(j, "tensile_strength_pa"),
+      "  {} sigma_t = {} {} (peak force {} N) at strain {}{}\n", reading->text("name", ""),
+      reading->text("formula", ""), mpa(j, "tensile_strength_pa"),
       plain(j, "peak_force_n", "{:.4g}"), plain(j, "axial_strain_at_peak", "{:.5f}"),
-      direct ? "; E_t50 " + gpa(j, "youngs_modulus_pa") + ", Poisson " + plain(j, "poisson_ratio")
-             : std::string());
+      reading->has("sample_moduli")
+          ? "; E_t50 " + gpa(j, "youngs_modulus_pa") + ", Poisson " + plain(j, "poisson_ratio")
+          : std::string());
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "breccia/protocol/brazilian.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -86,12 +88,7 @@ std::uint64_t BrazilianTest::start(Simulation& sim, double bar_wave_speed) {
   d0_ = W[top_].point.y - W[bottom_].point.y;
   y0_ = W[bottom_].point.y;
   const ParticleStore& ps = sim.particles();
-  auto mean = [&](const std::vector<std::uint32_t>& ids, double sign) {
-    double s = 0.0;
-    for (std::uint32_t i : ids) s += ps.pos_rad[i].x.x + sign * ps.pos_rad[i].r;
-    return ids.empty() ? 0.0 : s / static_cast<double>(ids.size());
-  };
-  w0_ = mean(right_, 1.0) - mean(left_, -1.0);
+  w0_ = width_between(ps, left_, right_, 0);
   double ramp = p_.ramp_time;
   if (ramp <= 0.0) ramp = std::max(10.0 * d0_ / bar_wave_speed, 1000.0 * sim.time_step());
   for (auto [w, sign] : {std::pair{bottom_, 1.0}, std::pair{top_, -1.0}}) {
@@ -122,12 +119,7 @@ AxialState BrazilianTest::measure(const Simulation& sim) const {
   s.stress = 2.0 * f / (std::numbers::pi * d0_ * t_);
   s.stress_nominal = s.stress;
   const ParticleStore& ps = sim.particles();
-  auto mean = [&](const std::vector<std::uint32_t>& ids, double sign) {
-    double v = 0.0;
-    for (std::uint32_t i : ids) v += ps.pos_rad[i].x.x + sign * ps.pos_rad[i].r;
-    return ids.empty() ? 0.0 : v / static_cast<double>(ids.size());
-  };
-  const double w = mean(right_, 1.0) - mean(left_, -1.0);
+  const double w = width_between(ps, left_, right_, 0);
   s.lateral_strain = w0_ > 0.0 ? (w0_ - w) / w0_ : 0.0;
   s.volumetric_strain = s.strain + s.lateral_strain;
   s.deviatoric = s.stress;
@@ -196,6 +188,10 @@ void BrazilianTest::summarise_curve(const analysis::CompressionResult& an,
   out["tensile_strength_method"] =
       "sigma_t = 2 F / (pi D t) at the largest mean platen force F (ISRM Brazilian test)";
   out["peak_force_n"] = 0.5 * an.peak_deviatoric * std::numbers::pi * d0_ * t_;
+  out["tensile_strength_reading"] = {
+      {"name", "tensile strength"},
+      {"formula", "2F/(pi D t)"},
+      {"specimen", fmt::format("D = {:.4g} mm, t = {:.4g} mm", d0_ * 1e3, t_ * 1e3)}};
   out["disc_diameter_m"] = d0_;
   out["disc_thickness_m"] = t_;
 }

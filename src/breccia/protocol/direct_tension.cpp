@@ -1,5 +1,7 @@
 #include "breccia/protocol/direct_tension.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -91,22 +93,12 @@ double DirectTensionTest::mean_position(const Simulation& sim,
   return z / static_cast<double>(grip.size());
 }
 
-double DirectTensionTest::width_at_mid_height(const Simulation& sim) const {
-  const ParticleStore& ps = sim.particles();
-  auto mean = [&](const std::vector<std::uint32_t>& ids, double sign) {
-    double v = 0.0;
-    for (std::uint32_t i : ids) v += ps.pos_rad[i].x[across_] + sign * ps.pos_rad[i].r;
-    return ids.empty() ? 0.0 : v / static_cast<double>(ids.size());
-  };
-  return mean(right_, 1.0) - mean(left_, -1.0);
-}
-
 std::uint64_t DirectTensionTest::start(Simulation& sim, double bar_wave_speed) {
   t0_ = sim.time();
   ramp_ = p_.ramp_time > 0.0 ? p_.ramp_time
                              : std::max(10.0 * length_ / bar_wave_speed, 1000.0 * sim.time_step());
   separation0_ = mean_position(sim, top_) - mean_position(sim, bottom_);
-  w0_ = width_at_mid_height(sim);
+  w0_ = width_between(sim.particles(), left_, right_, across_);
   peak_ = 0.0;
   return 0;
 }
@@ -138,7 +130,7 @@ AxialState DirectTensionTest::measure(const Simulation& sim) const {
   s.stress = 0.5 * (s.force_bottom + s.force_top) / area_;
   s.stress_nominal = s.stress;
   s.deviatoric = s.stress;
-  const double w = width_at_mid_height(sim);
+  const double w = width_between(sim.particles(), left_, right_, across_);
   s.lateral_strain = w0_ > 0.0 ? (w - w0_) / w0_ : 0.0;
   s.volumetric_strain = s.strain + (sim.particles().planar() ? 1.0 : 2.0) * s.lateral_strain;
   return s;
@@ -229,6 +221,12 @@ void DirectTensionTest::summarise_curve(const analysis::CompressionResult& an,
       "sigma_t = F / A at the largest mean grip force F over the cross-section A (direct "
       "tension)";
   out["peak_force_n"] = an.peak_deviatoric * area_;
+  out["tensile_strength_reading"] = {
+      {"name", "direct tensile strength"},
+      {"formula", "F/A"},
+      {"sample_moduli", true},  // the rows are the sample's stress and strain
+      {"specimen", fmt::format("A = {:.4g} mm^2, grips {:.3g} mm, free length {:.4g} mm",
+                               area_ * 1e6, grip_ * 1e3, free_length_ * 1e3)}};
   out["cross_section_m2"] = area_;
   out["grip_length_m"] = grip_;
   out["free_length_m"] = free_length_;

@@ -103,7 +103,6 @@ class DirectTensionTest final : public Protocol, public StressStrainTest {
   double grip_tension(const Simulation& sim, const std::vector<std::uint32_t>& grip,
                       double sign) const;
   double mean_position(const Simulation& sim, const std::vector<std::uint32_t>& grip) const;
-  double width_at_mid_height(const Simulation& sim) const;
 
   Params p_;
   int axis_ = 2, across_ = 0;  // the loading axis, and the one the width is read along

@@ -78,6 +78,19 @@ inline SampleBounds sample_bounds(const ParticleStore& p) {
   return b;
 }
 
+// The sample's width along `axis` read on two sets of grains at its opposite faces: the mean
+// outer surface of `high` (centre plus radius) less the mean outer surface of `low` (centre less
+// radius); an empty set counts as 0.
+inline double width_between(const ParticleStore& p, const std::vector<std::uint32_t>& low,
+                            const std::vector<std::uint32_t>& high, int axis) {
+  auto mean = [&](const std::vector<std::uint32_t>& ids, double sign) {
+    double v = 0.0;
+    for (std::uint32_t i : ids) v += p.pos_rad[i].x[axis] + sign * p.pos_rad[i].r;
+    return ids.empty() ? 0.0 : v / static_cast<double>(ids.size());
+  };
+  return mean(high, 1.0) - mean(low, -1.0);
+}
+
 // The smallest stiffness a wall servo divides by (docs/physics.md §6.2): one wall contact of a
 // mean-size grain at a small overlap, so that a wall without contacts still moves at a bounded
 // speed.
