@@ -228,6 +228,41 @@ TEST(Calibration, FitSeedsJudgeATrialOnTheMeanOverTheirPackings) {
   fs::remove_all(dir);
 }
 
+// With calibration.tensile_test = "direct_tension" the tensile target is measured by pulling the
+// compression prism apart in grips at the calibration's grip speed: no disc is packed, the
+// Brazilian test does not run, and the property is the test's own sigma_t = F / A.
+TEST(Calibration, DirectTensionMeasuresTheTensileTargetOnTheCompressionPrism) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_calibration_direct_tension";
+  fs::remove_all(dir);
+  std::string text = tiny_calibration(8e9, 60e6, 6e9, 25e6);
+  text.replace(text.find("verify_seeds = []"), 17,
+               "verify_seeds = []\ntensile_test = \"direct_tension\"\ngrip_speed = 0.015");
+  text.replace(text.find("[free]"), 6, "tensile_strength = 10e6\n[free]");
+  const CalibrationSpec spec = parse_calibration(text, "direct.toml");
+  const TestPlan plan = tests_for(spec, CalibrationStage::Strength);
+  ASSERT_TRUE(plan.tensile);
+  Laboratory lab(spec, dir, [](const std::string&) {});
+  const Measurement m = lab.measure("calibration", {6e9, 25e6}, plan);
+  ASSERT_TRUE(m.tests.contains("direct_tension")) << m.tests.dump();
+  EXPECT_FALSE(m.tests.contains("brazilian"));
+  for (const auto& f : fs::directory_iterator(dir / "samples"))
+    EXPECT_EQ(f.path().filename().string().find("-disc"), std::string::npos) << f.path();
+  fs::path folder;
+  for (const std::string& f : m.run_folders)
+    if (f.find("direct_tension") != std::string::npos) folder = f;
+  ASSERT_FALSE(folder.empty());
+  const std::string resolved = breccia::testing::read(folder / "experiment.toml");
+  EXPECT_NE(resolved.find("kind = \"direct_tension\""), std::string::npos);
+  EXPECT_NE(resolved.find("platen_speed = 0.015"), std::string::npos);
+  EXPECT_NE(resolved.find("-prism.geom\""), std::string::npos);
+  const auto summary = nlohmann::json::parse(breccia::testing::read(folder / "summary.json"));
+  ASSERT_TRUE(summary.value("peak_reached", false));
+  ASSERT_TRUE(m.properties.count(Property::TensileStrength));
+  EXPECT_EQ(m.properties.at(Property::TensileStrength),
+            summary["tensile_strength_pa"].get<double>());
+  fs::remove_all(dir);
+}
+
 // The bond installation gap is part of the sample's genesis: each gap value a trial asks for
 // gets its own packing, bonded as a run with that gap bonds it, so a wider gap gives more bonds
 // per grain and a stiffer rock (docs/physics.md §7.6: E grows with the coordination). The
@@ -359,6 +394,12 @@ std::vector<BadCalibration> bad_calibrations() {
       {"TooManySizeCorrections",
        with_experiment(e_target + free_e + "[calibration]\nsize_corrections = 9\n"),
        {"bad.toml:6", "calibration.size_corrections", "9"}},
+      {"UnknownTensileTest",
+       with_experiment(e_target + free_e + "[calibration]\ntensile_test = \"pull\"\n"),
+       {"bad.toml:6", "calibration.tensile_test", "pull", "direct_tension"}},
+      {"GripsNotMoving",
+       with_experiment(e_target + free_e + "[calibration]\ngrip_speed = 0\n"),
+       {"bad.toml:6", "calibration.grip_speed", "above 0 m/s"}},
       {"SizeCorrectionWithoutVerification",
        with_experiment(e_target + free_e +
                        "[calibration]\nsize_corrections = 1\nverify_seeds = []\n"),

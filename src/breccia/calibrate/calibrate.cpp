@@ -758,10 +758,11 @@ CalibrationResult run_calibration(const CalibrationSpec& c, const CalibrationOpt
     const CalibrationSpec before = parse_calibration(ss.str(), copy.string());
     if (to_toml(before.base) != to_toml(c.base) || before.verify_set != c.verify_set ||
         before.disc_diameter != c.disc_diameter || before.disc_thickness != c.disc_thickness ||
-        before.disc_platen_speed != c.disc_platen_speed)
+        before.disc_platen_speed != c.disc_platen_speed || before.tensile_test != c.tensile_test ||
+        before.grip_speed != c.grip_speed)
       throw InputError(folder.string(), "", "",
                        "holds a calibration of another sample or other laws ([experiment], "
-                       "verify_set or the Brazilian disc differ); move it away or choose another "
+                       "verify_set or the tensile test differ); move it away or choose another "
                        "--output");
     if (ss.str() != c.text) write_text(copy, c.text);
     if (o.log)

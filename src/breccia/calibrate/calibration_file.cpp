@@ -40,7 +40,9 @@ const std::vector<PropertyInfo>& property_table() {
       {Property::UniaxialStrength, "uniaxial_strength", "Pa", "UCS: peak axial stress, sigma_3 = 0",
        S::Strength, true, 0.05, 0.5},
       {Property::TensileStrength, "tensile_strength", "Pa",
-       "Brazilian tensile strength 2 F / (pi D t)", S::Strength, true, 0.10, 0.5},
+       "tensile strength: Brazilian 2 F / (pi D t), or direct F / A with calibration.tensile_test "
+       "= \"direct_tension\"",
+       S::Strength, true, 0.10, 0.5},
       {Property::CrackInitiationRatio, "crack_initiation_ratio", "-",
        "crack-initiation stress over the UCS", S::Strength, false, 0.05, 0.3},
       {Property::StrainAtPeak, "strain_at_peak", "-",
@@ -358,11 +360,19 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
     } else if (item == "brazilian_platen_speed") {
       c.disc_platen_speed = real_of(v, w, key);
       if (!(c.disc_platen_speed > 0.0)) throw InputError(w, key, show(v), "must be above 0 m/s");
+    } else if (item == "tensile_test") {
+      c.tensile_test = string_of(v, w, key);
+      if (c.tensile_test != "brazilian" && c.tensile_test != "direct_tension")
+        throw InputError(w, key, show(v), "expected \"brazilian\" or \"direct_tension\"");
+    } else if (item == "grip_speed") {
+      c.grip_speed = real_of(v, w, key);
+      if (!(c.grip_speed > 0.0)) throw InputError(w, key, show(v), "must be above 0 m/s");
     } else {
       throw InputError(w, key, show(v),
                        "unknown key; allowed: name, rock, confining_stresses, trials_per_stage, "
                        "passes, aim, fit_seeds, verify_seeds, verify_set, size_corrections, "
-                       "brazilian_diameter, brazilian_thickness, brazilian_platen_speed");
+                       "tensile_test, brazilian_diameter, brazilian_thickness, "
+                       "brazilian_platen_speed, grip_speed");
     }
   }
 }
@@ -582,13 +592,20 @@ std::string calibration_docs() {
       "(relative targets by their ratio, the others by their difference) and the search runs "
       "again on the small sample. It stops when every target is met at the verification size; "
       "each round costs one verification. Needs `verify_seeds` |\n"
+      "| `tensile_test` | \"brazilian\" | the test that measures `tensile_strength`: "
+      "\"brazilian\" (a disc split across a diameter, 2 F / (pi D t); its own packing) or "
+      "\"direct_tension\" (the compression sample held by its ends in grips that pull apart, "
+      "F / A; the test's default grips, two largest grain diameters). The two differ for a "
+      "bonded-grain rock, whose disc fails under a stress gradient with its contacts compressed "
+      "across the split (docs/analysis.md §1.11) |\n"
       "| `brazilian_diameter`, `brazilian_thickness` | the prism's width, half of it | the "
       "Brazilian disc, m, above 0 |\n"
-      "| `brazilian_platen_speed` | 0.02 | m/s |\n\n"
+      "| `brazilian_platen_speed` | 0.02 | m/s |\n"
+      "| `grip_speed` | 0.02 | direct tension: each grip's speed, m/s, above 0 |\n\n"
       "### [experiment]\n\nRequired. The keys of an experiment file (docs/experiment.md) as "
       "sub-tables (`[experiment.sample]`, `[experiment.bond]`, ...): the sample, the laws, the "
       "fixed micro-parameters and the start values of the free ones. The calibration sets the "
-      "test kind itself (UCS, triaxial, Brazilian) and packs its own samples, so "
+      "test kind itself (UCS, triaxial, Brazilian or direct tension) and packs its own samples, so "
       "`sample.source` is `\"generate\"`. Before the first trial (and with `--check`) the "
       "samples of every set are packed and each test is built on them at the start values and "
       "with every free parameter at its lower, then its upper bound: a test that could not run "

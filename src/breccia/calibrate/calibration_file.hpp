@@ -73,7 +73,11 @@ struct CalibrationSpec {
   std::vector<FreeParameter> free;
   std::vector<TiedParameter> tied;
   std::vector<double> confining_stresses;  // triaxial (biaxial) tests for the envelope, Pa
+  // The test that measures tensile_strength: "brazilian" (a disc split across a diameter) or
+  // "direct_tension" (the compression prism pulled apart by its ends).
+  std::string tensile_test = "brazilian";
   double disc_diameter = 0.0, disc_thickness = 0.0, disc_platen_speed = 0.02;  // Brazilian
+  double grip_speed = 0.02;  // direct tension: each grip's speed, m/s
   std::int64_t trials_per_stage = 10;
   std::int64_t passes = 2;
   // Fraction of each tolerance a trial must reach to count as met during the search; below 1 it
@@ -94,7 +98,8 @@ struct CalibrationSpec {
   std::vector<std::string> fit_sets() const;
   bool has_target(Property p) const;
   const Target* target(Property p) const;
-  bool needs_brazilian() const { return has_target(Property::TensileStrength); }
+  bool needs_tensile() const { return has_target(Property::TensileStrength); }
+  bool needs_disc() const { return needs_tensile() && tensile_test == "brazilian"; }
   bool needs_envelope() const {
     return has_target(Property::Cohesion) || has_target(Property::FrictionAngle);
   }

@@ -24,7 +24,7 @@ using nlohmann::json;
 TestPlan tests_for(const CalibrationSpec& c, std::optional<CalibrationStage> stage) {
   TestPlan p;
   const bool all = !stage.has_value();
-  p.brazilian = c.needs_brazilian() && (all || *stage == CalibrationStage::Strength);
+  p.tensile = c.needs_tensile() && (all || *stage == CalibrationStage::Strength);
   p.envelope = c.needs_envelope() && (all || *stage == CalibrationStage::Friction);
   return p;
 }
@@ -174,7 +174,7 @@ void Laboratory::prepare_samples(const std::string& set, const std::vector<doubl
     return generate_sample(s, path, [](const std::string&) {}).report;
   };
   paths.report = pack(paths.prism, {}, "compression");
-  if (c_.needs_brazilian()) {
+  if (c_.needs_disc()) {
     std::vector<std::string> disc{fmt::format("sample.diameter={:.17g}", c_.disc_diameter)};
     if (c_.base.dimension == 2) {
       disc.push_back("sample.shape=\"disk\"");
@@ -200,6 +200,10 @@ ExperimentSpec Laboratory::trial_spec(const std::string& set, const std::vector<
     BrazilianTest::Params p;
     p.platen_speed = c_.disc_platen_speed;
     spec.test = p;
+  } else if (test == "direct_tension") {
+    DirectTensionTest::Params p;
+    p.platen_speed = c_.grip_speed;
+    spec.test = p;
   } else {
     set_confining_stress(spec, sigma3, c_.path);
   }
@@ -217,7 +221,7 @@ void Laboratory::preflight(const std::vector<std::vector<double>>& points) {
   std::vector<std::string> sets = c_.fit_sets();
   for (auto seed : c_.verify_seeds) sets.push_back(fmt::format("verify-{}", seed));
   std::vector<std::pair<std::string, double>> tests{{"ucs", 0.0}};
-  if (c_.needs_brazilian()) tests.emplace_back("brazilian", 0.0);
+  if (c_.needs_tensile()) tests.emplace_back(c_.tensile_test, 0.0);
   if (c_.needs_envelope())
     for (double s3 : c_.confining_stresses)
       tests.emplace_back(fmt::format("triaxial-{:g}MPa", s3 / 1e6), s3);
@@ -287,7 +291,7 @@ json test_properties(const std::string& test, const JsonView& s, std::vector<std
       if (auto ci = number_or_none(s, "crack_initiation_stress_pa"); ci && q > 0)
         p["crack_initiation_ratio"] = *ci / q;
     }
-  } else if (test == "brazilian") {
+  } else if (test == "brazilian" || test == "direct_tension") {
     if (peak) p["tensile_strength"] = s.number("tensile_strength_pa");
   } else if (peak) {
     p["sigma1_at_peak"] = s.number("sigma1_at_peak_pa");
@@ -379,7 +383,7 @@ Measurement Laboratory::prefetch(const std::vector<std::string>& sets,
   Measurement m;
   if (pool_ == nullptr || ranks::size() == 1) return m;
   std::vector<std::pair<std::string, double>> tests{{"ucs", 0.0}};
-  if (plan.brazilian) tests.emplace_back("brazilian", 0.0);
+  if (plan.tensile) tests.emplace_back(c_.tensile_test, 0.0);
   if (plan.envelope)
     for (double sigma3 : c_.confining_stresses) tests.emplace_back(triaxial_name(sigma3), sigma3);
   std::vector<PendingTest> todo;
@@ -426,8 +430,8 @@ Measurement Laboratory::measure(const std::string& set, const std::vector<double
   for (const auto& i : property_table())
     if (ucs.contains(std::string(i.key)))
       m.properties[i.property] = ucs[std::string(i.key)].get<double>();
-  if (plan.brazilian) {
-    const json b = take(run_test(set, values, "brazilian", 0.0, m));
+  if (plan.tensile) {
+    const json b = take(run_test(set, values, c_.tensile_test, 0.0, m));
     if (b.contains("tensile_strength"))
       m.properties[Property::TensileStrength] = b["tensile_strength"].get<double>();
   }

@@ -24,7 +24,7 @@ using Properties = std::map<Property, double>;
 // Which tests a measurement needs.
 struct TestPlan {
   bool ucs = true;
-  bool brazilian = false;
+  bool tensile = false;   // the calibration's tensile test (Brazilian or direct tension)
   bool envelope = false;  // triaxial tests at the calibration's confining stresses
 };
 TestPlan tests_for(const CalibrationSpec& c, std::optional<CalibrationStage> stage);

@@ -89,10 +89,10 @@ std::vector<std::string> verification_tests(const json& r) {
 }
 
 // The shear-crack check applies to the compression tests (UCS, triaxial, biaxial), where a
-// rock that breaks no bond in shear has been bent to its targets; a Brazilian disc splits in
-// tension by design.
+// rock that breaks no bond in shear has been bent to its targets; a Brazilian disc and a sample
+// pulled apart break in tension by design.
 bool is_compression_test(const std::string& test) {
-  return test != "brazilian";
+  return test != "brazilian" && test != "direct_tension";
 }
 
 std::string verdict(bool pass) {
@@ -546,8 +546,32 @@ double verdict_mean(const json& r, const std::string& target) {
   return std::nan("");
 }
 
-// UCS over Brazilian strength and the friction angle: one row per preset that has either as a
-// target (from its record), then the probes that show where each law's ratio comes from.
+// One row per preset that has a tensile strength or a friction angle as a target (from its
+// record): its UCS over its tensile strength (marked where the direct tension test measured it)
+// and its friction angle.
+std::string preset_reach_rows() {
+  std::string s;
+  for (const auto& m : embedded_materials()) {
+    const json r = record_of(m);
+    const double ucs = verdict_mean(r, "uniaxial_strength");
+    const double ts = verdict_mean(r, "tensile_strength");
+    const double phi = verdict_mean(r, "friction_angle_deg");
+    if (!std::isfinite(ts) && !std::isfinite(phi)) continue;
+    const std::vector<std::string> tests = verification_tests(r);
+    const bool direct = std::find(tests.begin(), tests.end(), "direct_tension") != tests.end();
+    s += fmt::format(
+        "| `{}` | {}D, `{}` | {} | {}{} | {} | {} |\n", m.name, r.value("dimension", 3),
+        r.value("bond_law", "?"), shown("uniaxial_strength", ucs),
+        std::isfinite(ts) ? shown("tensile_strength", ts) : "not a target",
+        std::isfinite(ts) && direct ? " (direct tension)" : "",
+        std::isfinite(ts) && std::isfinite(ucs) ? fmt::format("{:.1f}", ucs / ts) : "n/a",
+        std::isfinite(phi) ? shown("friction_angle_deg", phi) : "not a target");
+  }
+  return s;
+}
+
+// UCS over Brazilian strength and the friction angle: the presets' rows, then the probes that
+// show where each law's ratio comes from.
 std::string law_reach_notes() {
   std::string s =
       "\n## What each law reaches\n\n"
@@ -555,20 +579,8 @@ std::string law_reach_notes() {
       "about 60 degrees at low confinement. The presets that have them as targets reach (means "
       "over their verification packings; the friction angle from the UCS and the triaxial "
       "tests of the record):\n\n"
-      "| preset | laws | UCS | TS | UCS/TS | friction angle |\n|---|---|---|---|---|---|\n";
-  for (const auto& m : embedded_materials()) {
-    const json r = record_of(m);
-    const double ucs = verdict_mean(r, "uniaxial_strength");
-    const double ts = verdict_mean(r, "tensile_strength");
-    const double phi = verdict_mean(r, "friction_angle_deg");
-    if (!std::isfinite(ts) && !std::isfinite(phi)) continue;
-    s += fmt::format(
-        "| `{}` | {}D, `{}` | {} | {} | {} | {} |\n", m.name, r.value("dimension", 3),
-        r.value("bond_law", "?"), shown("uniaxial_strength", ucs),
-        std::isfinite(ts) ? shown("tensile_strength", ts) : "not a target",
-        std::isfinite(ts) && std::isfinite(ucs) ? fmt::format("{:.1f}", ucs / ts) : "n/a",
-        std::isfinite(phi) ? shown("friction_angle_deg", phi) : "not a target");
-  }
+      "| preset | laws | UCS | TS | UCS/TS | friction angle |\n|---|---|---|---|---|---|\n" +
+      preset_reach_rows();
   s +=
       "\nProbes, a UCS and a Brazilian test each (and a 10 MPa triaxial test where a friction "
       "angle is given), in 3D on the "
