@@ -397,9 +397,19 @@ std::vector<BadCalibration> bad_calibrations() {
       {"UnknownTensileTest",
        with_experiment(e_target + free_e + "[calibration]\ntensile_test = \"pull\"\n"),
        {"bad.toml:6", "calibration.tensile_test", "pull", "direct_tension"}},
+      {"GripSpeedOfATestThatDoesNotRun",
+       with_experiment(e_target + free_e + "[calibration]\ngrip_speed = 0.01\n"),
+       {"bad.toml:6", "calibration.grip_speed", "0.01", "direct tension test, which does not run",
+        "\"brazilian\""}},
+      {"DiscOfATestThatDoesNotRun",
+       with_experiment(e_target + free_e +
+                       "[calibration]\ntensile_test = \"direct_tension\"\nbrazilian_diameter = "
+                       "0.01\n"),
+       {"bad.toml:7", "calibration.brazilian_diameter", "Brazilian test, which does not run"}},
       {"GripsNotMoving",
-       with_experiment(e_target + free_e + "[calibration]\ngrip_speed = 0\n"),
-       {"bad.toml:6", "calibration.grip_speed", "above 0 m/s"}},
+       with_experiment(e_target + free_e +
+                       "[calibration]\ntensile_test = \"direct_tension\"\ngrip_speed = 0\n"),
+       {"bad.toml:7", "calibration.grip_speed", "above 0 m/s"}},
       {"SizeCorrectionWithoutVerification",
        with_experiment(e_target + free_e +
                        "[calibration]\nsize_corrections = 1\nverify_seeds = []\n"),

@@ -377,6 +377,23 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
   }
 }
 
+// A setting of the tensile test the calibration does not run is refused, so that nobody takes
+// it for one that shaped the result.
+void check_tensile_settings(const CalibrationSpec& c, const toml::table& tbl,
+                            const std::string& source) {
+  const bool direct = c.tensile_test == "direct_tension";
+  for (const std::string item :
+       {"brazilian_diameter", "brazilian_thickness", "brazilian_platen_speed", "grip_speed"}) {
+    const toml::node* v = tbl.get(item);
+    const bool for_direct = item == "grip_speed";
+    if (v && for_direct != direct)
+      throw InputError(where_of(source, *v), "calibration." + item, show(*v),
+                       fmt::format("a setting of the {} test, which does not run: "
+                                   "calibration.tensile_test is \"{}\"",
+                                   for_direct ? "direct tension" : "Brazilian", c.tensile_test));
+  }
+}
+
 // Every free parameter drives a stage with targets; every target the tests cannot measure is
 // refused before anything runs.
 void check_coverage(const CalibrationSpec& c, const toml::table& root, const std::string& source) {
@@ -513,7 +530,10 @@ CalibrationSpec parse_calibration(const std::string& text, const std::string& so
                        "[tied]");
     if (!v.is_table()) throw InputError(where_of(source, v), name, show(v), "expected a table");
   }
-  if (const auto* t = root["calibration"].as_table()) read_settings(c, *t, source);
+  if (const auto* t = root["calibration"].as_table()) {
+    read_settings(c, *t, source);
+    check_tensile_settings(c, *t, source);
+  }
   if (const auto* t = root["targets"].as_table())
     for (const auto& [k, v] : *t) c.targets.push_back(read_target(std::string(k.str()), v, source));
   if (const auto* t = root["free"].as_table())
