@@ -622,6 +622,8 @@ std::string calibration_docs() {
       "Brazilian disc, m, above 0 |\n"
       "| `brazilian_platen_speed` | 0.02 | m/s |\n"
       "| `grip_speed` | 0.02 | direct tension: each grip's speed, m/s, above 0 |\n\n"
+      "The `brazilian_*` keys belong to the Brazilian test and `grip_speed` to direct tension; "
+      "a key of the test that does not run is refused.\n\n"
       "### [experiment]\n\nRequired. The keys of an experiment file (docs/experiment.md) as "
       "sub-tables (`[experiment.sample]`, `[experiment.bond]`, ...): the sample, the laws, the "
       "fixed micro-parameters and the start values of the free ones. The calibration sets the "
