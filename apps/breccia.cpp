@@ -31,7 +31,8 @@
 #include "breccia/version.hpp"
 
 namespace {
-extern "C" void on_signal(int) {
+extern "C" void on_signal(int number) {
+  breccia::interrupt_signal().store(number);
   breccia::interrupt_flag().store(true);
 }
 
@@ -530,8 +531,8 @@ int guarded(const std::function<int()>& body) {
   };
   try {
     return body();
-  } catch (const breccia::ranks::RootFailed&) {
-    return 1;  // root prints it
+  } catch (const breccia::ranks::RootFailed& e) {
+    return e.interrupted() ? 130 : 1;  // root prints it
   } catch (const breccia::Interrupted& e) {
     return fail(130, false, std::string(e.what()) + "; nothing was written");
   } catch (const breccia::InputError& e) {

@@ -400,6 +400,148 @@ TEST(Mpi, ASplitRunResumesAtAnotherRankCount) {
 
 namespace {
 
+// Starts `breccia run` with `args` under mpirun on `ranks`, runs `act` (a shell command; $pid is
+// mpirun's) once `ready` (a shell condition) holds, or after a minute, and waits for mpirun: what
+// the ranks printed and mpirun's exit status.
+Result acted_on_run(int ranks, const std::string& args, const std::string& ready,
+                    const std::string& act, const fs::path& log) {
+  const Result r = shell(mpirun(ranks) + BRECCIA_CLI + " run " + args + " > " + log.string() +
+                         " 2>&1 & pid=$!; n=0; until " + ready +
+                         " || [ $n -ge 1200 ]; do sleep 0.05; n=$((n+1)); done; " + act +
+                         "; wait $pid; s=$?; cat " + log.string() + "; exit $s");
+  return r;
+}
+
+// A shell condition: the run folder under `out` holds at least `rows` rows of history.csv.
+std::string history_rows(const fs::path& out, int rows) {
+  return "[ $(cat " + out.string() + "/*/history.csv 2>/dev/null | wc -l) -gt " +
+         std::to_string(rows) + " ]";
+}
+
+// Every file under `dir` whose name ends in .tmp (a write that was never finished).
+std::vector<fs::path> temporaries(const fs::path& dir) {
+  std::vector<fs::path> out;
+  if (!fs::exists(dir)) return out;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.path().extension() == ".tmp") out.push_back(e.path());
+  return out;
+}
+
+// The small UCS loaded slowly enough (about 7 s in one process) for a signal to arrive during
+// its loading, with a checkpoint every half second of wall time.
+std::string slow_small_ucs() {
+  return small_ucs() +
+         " --set loading.platen_speed=0.05 --set output.checkpoint_interval_s=0.5 --quiet";
+}
+
+}  // namespace
+
+// SIGINT, SIGTERM or SIGUSR1 to mpirun while the sample is packed or consolidated (each rank
+// consolidates root's packing): every rank stops there, the error is printed once, and no run
+// folder is left half made (the run starts again from the sample cache, when one was written).
+TEST(Mpi, ASignalWhileTheSampleIsBuiltStopsEveryRankAndLeavesNoRun) {
+  const fs::path out =
+      fs::temp_directory_path() / ("breccia_mpi_build_" + std::to_string(getpid()));
+  const std::string sample =
+      " --set sample.width=0.005 --set sample.depth=0.005 --set sample.height=0.01"
+      " --set engine.threads=1 --set test.kind=\"triaxial\" --set test.confining_stress=30e6"
+      " --set engine.density_scaling=1 --set output.plot=false";
+  struct Case {
+    int ranks;
+    const char* signal;
+    const char* phase;
+    const char* ready;  // a line the log shows once the phase has begun
+  };
+  for (const Case& c : {Case{2, "INT", "preparing the sample", "packing:"},
+                        Case{3, "TERM", "consolidating the sample", "packing ("},
+                        Case{2, "USR1", "consolidating the sample", "packing ("}}) {
+    const std::string how = std::string("SIG") + c.signal + " on " + std::to_string(c.ranks) +
+                            " ranks while " + c.phase;
+    fs::remove_all(out);
+    const fs::path log = out.string() + ".log";
+    const Result r = acted_on_run(c.ranks, "--output " + out.string() + sample,
+                                  "grep -q \"" + std::string(c.ready) + "\" " + log.string(),
+                                  std::string("kill -") + c.signal + " $pid", log);
+    EXPECT_NE(r.code, 0) << how << "\n" << r.out;
+    EXPECT_EQ(count(r.out, "error: interrupted by a signal while "), 1) << how << "\n" << r.out;
+    EXPECT_EQ(count(r.out, std::string("while ") + c.phase), 1) << how << "\n" << r.out;
+    if (fs::exists(out)) {
+      for (const auto& e : fs::directory_iterator(out))
+        EXPECT_EQ(e.path().filename(), "samples") << how << ": a run folder was left";
+    }
+    EXPECT_TRUE(temporaries(out).empty()) << how;
+    fs::remove(log);
+  }
+  fs::remove_all(out);
+}
+
+// SIGINT, SIGTERM or SIGUSR1 to mpirun during the loading, on 2 or 3 ranks: every rank stops at
+// the same step with one checkpoint, the manifest says interrupted, and the run resumed at
+// another rank count gives the files of one uninterrupted process.
+TEST(Mpi, ASignalDuringTheLoadingLeavesACheckpointThatResumesAtAnotherRankCount) {
+  const fs::path out =
+      fs::temp_directory_path() / ("breccia_mpi_signal_" + std::to_string(getpid()));
+  fs::remove_all(out);
+  const Result one = run("run --output " + (out / "one").string() + slow_small_ucs());
+  ASSERT_EQ(one.code, 0) << one.out;
+  struct Case {
+    int ranks;
+    const char* signal;
+    int resume_ranks;  // 1: one process, without mpirun
+  };
+  for (const Case& c : {Case{2, "TERM", 3}, Case{3, "USR1", 1}, Case{3, "INT", 2}}) {
+    const std::string how = std::string("SIG") + c.signal + " on " + std::to_string(c.ranks) +
+                            " ranks, resumed on " + std::to_string(c.resume_ranks);
+    const fs::path dir = out / c.signal;
+    const Result r =
+        acted_on_run(c.ranks, "--output " + dir.string() + slow_small_ucs(), history_rows(dir, 6),
+                     std::string("kill -") + c.signal + " $pid", out / "log");
+    EXPECT_NE(r.code, 0) << how << "\n" << r.out;
+    const fs::path b = only_folder(dir);
+    ASSERT_TRUE(fs::exists(b / "checkpoint.bin")) << how << "\n" << r.out;
+    const auto m = nlohmann::json::parse(read(b / "manifest.json"));
+    EXPECT_EQ(m["status"], "interrupted") << how;
+    EXPECT_EQ(m["stop_reason"], "interrupted by a signal") << how;
+    EXPECT_TRUE(m["checkpoint"]["step"].is_number()) << how << ": " << m.dump();
+    EXPECT_TRUE(temporaries(dir).empty()) << how;
+    const Result resumed = c.resume_ranks == 1 ? run("resume --quiet " + b.string())
+                                               : run_with_prefix(mpirun(c.resume_ranks),
+                                                                 "resume --quiet " + b.string());
+    ASSERT_EQ(resumed.code, 0) << how << "\n" << resumed.out;
+    expect_same_run_files(last_line(one.out), b, how);
+  }
+  fs::remove_all(out);
+}
+
+// One rank killed outright (SIGKILL: mpirun then ends the others with SIGTERM, and SIGKILL a
+// second later): the last complete checkpoint is intact, the manifest says interrupted and why,
+// and the run resumes on 2 ranks to the files of one process.
+TEST(Mpi, ARankKilledOutrightLeavesTheLastCheckpointAndAManifestThatSaysSo) {
+  const fs::path out = fs::temp_directory_path() / ("breccia_mpi_kill_" + std::to_string(getpid()));
+  fs::remove_all(out);
+  const Result one = run("run --output " + (out / "one").string() + slow_small_ucs());
+  ASSERT_EQ(one.code, 0) << one.out;
+  const fs::path dir = out / "killed";
+  // The rank mpirun started first (root, as Open MPI starts them).
+  const Result r =
+      acted_on_run(3, "--output " + dir.string() + slow_small_ucs(),
+                   "[ -f " + dir.string() + "/*/checkpoint.bin ] && " + history_rows(dir, 8),
+                   "kill -9 $(cut -d\" \" -f1 /proc/$pid/task/*/children | head -n1)", out / "log");
+  EXPECT_NE(r.code, 0) << r.out;
+  const fs::path b = only_folder(dir);
+  ASSERT_TRUE(fs::exists(b / "checkpoint.bin")) << r.out;
+  const auto m = nlohmann::json::parse(read(b / "manifest.json"));
+  EXPECT_EQ(m["status"], "interrupted") << r.out;
+  EXPECT_NE(m["stop_reason"].get<std::string>().find("SIGTERM arrived"), std::string::npos)
+      << m["stop_reason"];
+  const Result resumed = run_with_prefix(mpirun(2), "resume --quiet " + b.string());
+  ASSERT_EQ(resumed.code, 0) << resumed.out;
+  expect_same_run_files(last_line(one.out), b, "a rank killed on 3, resumed on 2");
+  fs::remove_all(out);
+}
+
+namespace {
+
 // trials.jsonl without what depends on the machine (the folder's time stamp, the wall time).
 std::vector<nlohmann::json> trial_records(const fs::path& file) {
   std::vector<nlohmann::json> out;

@@ -1,5 +1,7 @@
 #include "breccia/core/ranks.hpp"
 
+#include "breccia/core/interrupt.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -367,18 +369,24 @@ std::string on_root(const std::function<std::string()>& work) {
   if (size() == 1) return work();
   std::string text;
   std::exception_ptr failure;
+  char flag = 'K';  // K: done, E: failed, I: stopped by a signal
   if (root()) {
     try {
       text = work();
+    } catch (const Interrupted& e) {
+      failure = std::current_exception();
+      flag = 'I';
+      text = e.what();
     } catch (const std::exception& e) {
       failure = std::current_exception();
+      flag = 'E';
       text = e.what();
     }
   }
-  const std::string flagged = broadcast((failure ? "E" : "K") + text);
-  if (flagged.front() == 'E') state().shared_failure = true;
+  const std::string flagged = broadcast(flag + text);
+  if (flagged.front() != 'K') state().shared_failure = true;
   if (failure) std::rethrow_exception(failure);
-  if (flagged.front() == 'E') throw RootFailed(flagged.substr(1));
+  if (flagged.front() != 'K') throw RootFailed(flagged.substr(1), flagged.front() == 'I');
   return flagged.substr(1);
 }
 

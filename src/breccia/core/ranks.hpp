@@ -107,7 +107,13 @@ std::vector<std::string> all_gather(const std::string& mine,
 // does).
 class RootFailed : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  RootFailed(const std::string& what, bool interrupted)
+      : std::runtime_error(what), interrupted_(interrupted) {}
+  // Root stopped at a signal (Interrupted), not at an error: every rank ends as interrupted.
+  bool interrupted() const noexcept { return interrupted_; }
+
+ private:
+  bool interrupted_;
 };
 
 // Runs `work` on root only and gives its text to every rank. If it throws, every rank throws:

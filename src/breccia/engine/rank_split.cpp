@@ -5,6 +5,8 @@
 // is made whole on every rank before it is added in block order. The ranks thus walk the blocks
 // and pairs one process walks, and add the same numbers in the same order: the results are those
 // of one process to the bit.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cstring>
 #include <stdexcept>
@@ -444,10 +446,15 @@ void Simulation::exchange_step_loads(const PairList& pairs) {
     take_range(from, at, block_joint_dis_.data() + their_pb.begin, their_pb.size());
     for (std::size_t w = 0; w < walls; ++w)
       take_range(from, at, wall_blocks_.data() + w * wall_nb + their_wb.begin, their_wb.size());
-    stop = stop || take<std::uint32_t>(from, at) != 0;
+    // Read whatever the others said: a short-circuit here would skip the field's bytes.
+    const bool stop_there = take<std::uint32_t>(from, at) != 0;
+    stop = stop || stop_there;
     crack_counts[r] = take<std::uint64_t>(from, at);
     if (at != from.size())
-      throw std::logic_error("Simulation::exchange_step_loads: a message of another layout");
+      throw std::logic_error(fmt::format(
+          "Simulation::exchange_step_loads: a message of another layout at step {} (from rank {}: "
+          "{} bytes, {} read)",
+          step_, r, from.size(), at));
   }
   s.stop_anywhere = stop;
   arrange_shares(s.own, shares, s.incoming);

@@ -31,6 +31,7 @@
 #include "breccia/io/run_folder.hpp"
 #include "breccia/material/library.hpp"
 #include "breccia/run/failure_analysis.hpp"
+#include "breccia/run/manifest_file.hpp"
 #include "breccia/run/quality.hpp"
 #include "breccia/run/sample_build.hpp"
 #include "breccia/run/session.hpp"
@@ -243,7 +244,7 @@ RunProgress progress_of(const Session& ss, const AxialState& a, double elapsed) 
 // Steps the test until it stops, the run is interrupted (a signal or --stop-at-step: then it
 // saves a checkpoint first) or it fails. `wall` gives the run's wall time so far.
 LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptions& opt,
-                         const std::function<void()>& checkpoint,
+                         const std::function<void(const std::string&)>& checkpoint,
                          const std::function<double()>& wall,
                          const std::function<void(const std::string&)>& log,
                          const fs::path& folder) {
@@ -273,8 +274,10 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
           ended("interrupted",
                 stop_step ? fmt::format("stopped at step {} (--stop-at-step)", sim.step_count())
                           : "interrupted by a signal");
-      // Between two steps: the checkpoint continues exactly from here.
-      checkpoint();
+      // Between two steps: the checkpoint continues exactly from here. The manifest says
+      // "interrupted" with it, before the analysis of what was recorded (a launcher may end the
+      // process before that is done).
+      checkpoint(e.reason);
       log(fmt::format("checkpoint at step {}: continue with `breccia resume {}`", sim.step_count(),
                       folder.string()));
       return e;
@@ -306,7 +309,7 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
     // Root's clock decides for every rank of a split sample.
     if (sim.split()) checkpoint_due = ranks::broadcast(checkpoint_due ? "1" : "0") == "1";
     if (checkpoint_due) {
-      checkpoint();
+      checkpoint({});
       last_checkpoint = std::chrono::steady_clock::now();
       checkpoint_seconds += std::chrono::duration<double>(last_checkpoint - now).count();
     }
@@ -495,21 +498,6 @@ void list_run_files(const ExperimentSpec& spec, const fs::path& folder, const Se
   }
 }
 
-// The manifest of a run that failed, perhaps because the disk is full: written whole if it can
-// be, else over the old one in place (rewriting frees the old one's blocks first), so that it
-// does not go on saying "running". Never throws: the run's own error is the one to report.
-void write_final_manifest(const fs::path& path, const json& manifest) {
-  try {
-    write_json(path, manifest);
-  } catch (const std::exception&) {
-    if (std::FILE* f = std::fopen(path.c_str(), "w")) {
-      const std::string text = manifest.dump(2) + "\n";
-      std::fwrite(text.data(), 1, text.size(), f);
-      std::fclose(f);
-    }
-  }
-}
-
 // What each rank of a split sample has received from the others, and its wall time inside the
 // exchanges (waiting included), in this process's life: the split, the ghosts and shares of each
 // step, the grains the test and recorders read, the rows' and checkpoints' gathers. Collective.
@@ -588,8 +576,9 @@ RunResult conclude_run(const ExperimentSpec& spec, const fs::path& folder, json&
 
 // Loads the loop, runs it to its end (or the next interruption), and writes the summary and the
 // final manifest. `t_start` is when this session began.
-RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& manifest, Session& ss,
-                  const RunOptions& opt, std::chrono::steady_clock::time_point t_start) {
+RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& manifest,
+                  ManifestFile& manifest_file, Session& ss, const RunOptions& opt,
+                  std::chrono::steady_clock::time_point t_start) {
   auto log = [&](const std::string& m) {
     if (opt.log) opt.log(m);
   };
@@ -603,11 +592,12 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
     manifest["stop_reason"] = reason;
     manifest["wall_seconds"] = seconds;
     if (status == "failed")
-      write_final_manifest(folder / "manifest.json", manifest);
+      manifest_file.write_final(manifest);
     else
-      write_json(folder / "manifest.json", manifest);
+      manifest_file.write(manifest);
   };
-  auto checkpoint = [&] {
+  // `stop_reason`: why the loop stops here (empty: a periodic checkpoint, the run goes on).
+  auto checkpoint = [&](const std::string& stop_reason) {
     const double before = ss.loop.wall_seconds;
     ss.loop.wall_seconds = wall();
     write_checkpoint(folder, spec, ss);
@@ -616,7 +606,11 @@ RunResult execute(const ExperimentSpec& spec, const fs::path& folder, json& mani
                               {"step", ss.sim.step_count()},
                               {"time_s", ss.sim.time()},
                               {"resume_command", "breccia resume " + folder.string()}};
-    write_json(folder / "manifest.json", manifest);
+    if (!stop_reason.empty()) {
+      manifest["status"] = "interrupted";
+      manifest["stop_reason"] = stop_reason + " (checkpoint written)";
+    }
+    manifest_file.write(manifest);
   };
   try {
     const LoopEnd end = run_loading_loop(spec, ss, opt, checkpoint, wall, log, folder);
@@ -764,17 +758,44 @@ Built build_on_every_rank(const ExperimentSpec& spec, const RunOptions& opt,
     b.emplace(build(spec, log));
     return std::string();
   });
-  if (!b) b.emplace(build(spec, log));
+  // A signal may reach the ranks at different moments of their builds (the others build from
+  // root's packing, consolidating each on its own): they stop together, or not at all.
+  bool stopped = false;
+  if (!b) {
+    try {
+      b.emplace(build(spec, log));
+    } catch (const Interrupted&) {
+      stopped = true;
+    }
+  }
+  stopped = stopped || (opt.interrupt && opt.interrupt->load());
+  if (ranks::any_flags(stopped ? 1u : 0u) != 0) {
+    ranks::failure_released_the_others();
+    throw Interrupted("building the sample (on every rank)");
+  }
   return std::move(*b);
 }
 
-// A split sample's root makes the run folder (its failure is every rank's); the other ranks
-// write into scratch folders.
-fs::path run_folder_of_rank(const ExperimentSpec& spec, const RunOptions& opt,
-                            ScratchFolder& scratch) {
-  if (!opt.split_over_ranks) return make_folder(spec);
-  const std::string made = ranks::on_root([&] { return make_folder(spec).string(); });
-  return ranks::root() ? fs::path(made) : scratch.make();
+// Where a rank writes (`own`) and the run folder (`run`). A split sample's root makes the run
+// folder (its failure is every rank's); the other ranks write into scratch folders.
+struct RankFolders {
+  fs::path own, run;
+};
+
+RankFolders run_folder_of_rank(const ExperimentSpec& spec, const RunOptions& opt,
+                               ScratchFolder& scratch) {
+  if (!opt.split_over_ranks) {
+    const fs::path made = make_folder(spec);
+    return {made, made};
+  }
+  const fs::path made = ranks::on_root([&] { return make_folder(spec).string(); });
+  return {ranks::root() ? made : scratch.make(), made};
+}
+
+// The run folder's manifest: written by the process that owns the run folder, marked by any
+// rank when a signal comes.
+bool writes_manifest(const RunOptions& opt) {
+  return !opt.split_over_ranks || ranks::root();
 }
 
 }  // namespace
@@ -788,10 +809,13 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   // Build first: a bad sample (geometry file, bond list) fails before any file is written.
   Built b = build_on_every_rank(spec, opt, log);
   ScratchFolder scratch;
-  const fs::path folder = run_folder_of_rank(spec, opt, scratch);
+  const RankFolders folders = run_folder_of_rank(spec, opt, scratch);
+  const fs::path& folder = folders.own;
+  ManifestFile manifest_file(folders.run, writes_manifest(opt));
+  const SignalWatch watch(opt.interrupt, manifest_file);
   json manifest = initial_manifest(spec, b, opt);
   write_file_atomically(folder / "experiment.toml", to_toml(spec));
-  write_json(folder / "manifest.json", manifest);
+  manifest_file.write(manifest);
 
   Simulation& sim = b.sim;
   sim.record_cracks_in(folder / kCrackCatalogueFile,
@@ -816,7 +840,7 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
   manifest["bonds"] = sim.intact_bonds();
   manifest["consolidation_steps"] = b.consolidation_steps;
   manifest["strain_rate_per_s"] = strain_rate(test);
-  write_json(folder / "manifest.json", manifest);
+  manifest_file.write(manifest);
   log(fmt::format("sample: {} particles, {} bonds; time step {:.3g} s (critical {:.3g} s){}",
                   sim.particles().size(), sim.intact_bonds(), sim.time_step(),
                   sim.critical_time_step(),
@@ -843,17 +867,17 @@ RunResult run_experiment(const ExperimentSpec& spec, const RunOptions& opt) {
     if (opt.split_over_ranks) {
       sim.split_over_ranks();
       manifest["mpi"] = decomposition(sim);
-      write_json(folder / "manifest.json", manifest);
+      manifest_file.write(manifest);
     }
     ss.reset(new Session{std::move(b.sim), std::move(b.protocol), std::move(loop),
                          std::move(recorders)});
   } catch (const std::exception& e) {
     manifest["status"] = "failed";
     manifest["stop_reason"] = e.what();
-    write_final_manifest(folder / "manifest.json", manifest);
+    manifest_file.write_final(manifest);
     throw;
   }
-  return execute(spec, folder, manifest, *ss, opt, t_start);
+  return execute(spec, folder, manifest, manifest_file, *ss, opt, t_start);
 }
 
 namespace {
@@ -938,9 +962,11 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   manifest["resumed"].push_back(entry);
   manifest["status"] = "running";
   manifest.erase("stop_reason");
-  write_json(folder / "manifest.json", manifest);
+  ManifestFile manifest_file(source, writes_manifest(opt));
+  const SignalWatch watch(opt.interrupt, manifest_file);
+  manifest_file.write(manifest);
   Session ss{std::move(sim), std::move(test), std::move(loop), std::move(recorders)};
-  return execute(spec, folder, manifest, ss, opt, t_start);
+  return execute(spec, folder, manifest, manifest_file, ss, opt, t_start);
 }
 
 }  // namespace breccia

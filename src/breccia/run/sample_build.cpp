@@ -216,7 +216,8 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info
       report = read_json_object(cache.string() + ".json");
       report["cached_file"] = cache.string();
     } else {
-      log("sample: generating (cached afterwards in " + cache.string() + ")");
+      log(s.cache ? "sample: generating (cached afterwards in " + cache.string() + ")"
+                  : std::string("sample: generating (not cached: sample.cache = false)"));
       GeneratedSample gs = generate_sample(s, s.cache ? cache.string() : std::string(), log);
       g = std::move(gs.geometry);
       report = gs.report;
