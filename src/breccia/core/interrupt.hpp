@@ -24,10 +24,14 @@ inline std::atomic<int>& interrupt_signal() noexcept {
 // "SIGTERM", "SIGINT", ... for a message; "a signal" when the number is not known.
 inline std::string signal_name(int number) {
   switch (number) {
-    case SIGINT: return "SIGINT";
-    case SIGTERM: return "SIGTERM";
-    case SIGUSR1: return "SIGUSR1";
-    default: return number > 0 ? "signal " + std::to_string(number) : "a signal";
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGUSR1:
+      return "SIGUSR1";
+    default:
+      return number > 0 ? "signal " + std::to_string(number) : "a signal";
   }
 }
 

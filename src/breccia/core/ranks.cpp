@@ -1,7 +1,5 @@
 #include "breccia/core/ranks.hpp"
 
-#include "breccia/core/interrupt.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -11,6 +9,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+
+#include "breccia/core/interrupt.hpp"
 
 #ifdef BRECCIA_HAVE_MPI
 #include <mpi.h>
