@@ -275,15 +275,20 @@ Command add_generate(CLI::App& app) {
     std::vector<std::string> overrides;
   };
   auto o = std::make_shared<Options>();
-  auto* c = app.add_subcommand("generate",
-                               "pack and bond a sample ([sample] keys) and save it to a file");
+  auto* c = app.add_subcommand(
+      "generate",
+      "pack and bond a sample ([sample] keys) and save it to a file (a lattice, or a table or "
+      "GenGeo sample, is written as it is read)");
   c->add_option("experiment", o->file, "experiment file (TOML); omit for the default");
   c->add_option("--set", o->overrides, "override a key: section.key=value")->take_all();
-  c->add_option("--output", o->output, "sample file to write (breccia-geometry)")->required();
+  c->add_option("--output", o->output,
+                "sample file to write (breccia-geometry, its report beside it in .json); never a "
+                "file the experiment reads, nor one that is not a sample")
+      ->required();
   return {c, [o] {
             const breccia::ExperimentSpec spec = load_spec(o->file, o->overrides);
             catch_signals();
-            breccia::generate_sample(spec, o->output, log_to_stderr);
+            breccia::write_sample(spec, o->output, "--output", log_to_stderr);
             std::cout << o->output << std::endl;
             return 0;
           }};

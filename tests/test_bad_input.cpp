@@ -714,6 +714,57 @@ INSTANTIATE_TEST_SUITE_P(Cases, BadInput, ::testing::ValuesIn(cases()),
                            return std::string(i.param.name);
                          });
 
+// `breccia generate` never writes over a file it reads or one that is not a sample, and a refused
+// or failed write leaves every file as it was and no temporary behind: each output path here is
+// refused, naming the option, the path and why.
+TEST(Generate, NeverWritesOverAnInputAndLeavesNoTemporary) {
+  const fs::path dir = fs::temp_directory_path() / "breccia_generate_outputs";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "adir");
+  std::ofstream(dir / "lattice.toml") << "[sample]\nsource = \"lattice\"\ncells = [2, 2, 4]\n";
+  const Result lattice =
+      run("generate " + (dir / "lattice.toml").string() + " --output " + (dir / "s.geom").string());
+  ASSERT_EQ(lattice.code, 0) << lattice.out;
+  std::ofstream(dir / "e.toml") << "[sample]\nsource = \"file\"\nfile = \"s.geom\"\n";
+  std::ofstream(dir / "notes.txt") << "a user's notes\n";
+  std::ofstream(dir / "results.json") << "[1, 2]\n";
+  // Every file's bytes before: none may change.
+  std::vector<std::pair<fs::path, std::string>> before;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) before.emplace_back(e.path(), read(e.path()));
+  const std::vector<std::pair<std::string, std::string>> outputs = {
+      {"e.toml", "would replace the experiment file"},
+      {"s.geom", "would replace the sample file the experiment reads"},
+      {"s.geom.json", "would replace the report beside the sample file"},
+      {"''", "the sample file to write"},
+      {"adir", "a file to write, not a folder"},
+      {"newdir/", "a file to write, not a folder"},
+      {"notes.txt", "not a breccia-geometry sample"},
+      {"results", "results.json exists and is not a sample's report"},
+      {"notes.txt/s.geom", "cannot write the sample there"}};
+  for (const auto& [output, why] : outputs) {
+    const std::string path = output == "''" ? output : (dir / output).string();
+    const Result r = run("generate " + (dir / "e.toml").string() + " --output " + path);
+    EXPECT_EQ(r.code, 2) << output << "\n" << r.out;
+    EXPECT_NE(r.out.find("'--output' = " + path), std::string::npos) << output << "\n" << r.out;
+    EXPECT_NE(r.out.find(why), std::string::npos) << output << "\n" << r.out;
+    EXPECT_EQ(r.out.find(".tmp"), std::string::npos) << output << "\n" << r.out;
+  }
+  for (const auto& [file, text] : before) EXPECT_EQ(read(file), text) << file;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    EXPECT_NE(e.path().extension(), ".tmp") << e.path();
+    EXPECT_NE(e.path().filename(), "newdir") << "a folder was made for a refused output";
+  }
+  // A sample read from a file is written again as it was read; a lattice is written, not packed.
+  const Result copy =
+      run("generate " + (dir / "e.toml").string() + " --output " + (dir / "copy.geom").string());
+  ASSERT_EQ(copy.code, 0) << copy.out;
+  EXPECT_EQ(read(dir / "copy.geom"), read(dir / "s.geom"));
+  EXPECT_NE(read(dir / "s.geom").find("\nparticles 64\n"), std::string::npos)
+      << "2 x 2 x 4 FCC cells hold 64 grains";
+  fs::remove_all(dir);
+}
+
 // A real checkpoint, damaged three ways: a flipped byte in the middle, a cut, and the hash
 // trailer rewritten. Each is refused by name before any of it is used; none resumes to
 // "complete".

@@ -370,6 +370,10 @@ def test_a_sample_generated_from_python_is_the_commands_and_reads_back():
         assert bonds.isin(set(particles["tag"])).all().all()
         with pytest.raises(breccia.InputError, match="cannot open"):
             breccia.read_sample(os.path.join(out, "missing.geom"))
+        # Into a folder: refused by the argument's name, with nothing left behind.
+        with pytest.raises(breccia.InputError, match="'path' = .*: a file to write, not a folder"):
+            breccia.generate(breccia.Experiment(overrides=tiny), out)
+        assert sorted(os.listdir(out)) == ["cli.geom", "cli.geom.json", "py.geom", "py.geom.json"]
 
 
 def test_the_rate_law_fit_reproduces_the_worked_example():

@@ -24,7 +24,7 @@ py::dict generate(const ExperimentSpec& spec, const std::string& path,
   {
     py::gil_scoped_release release;
     const SubnormalsFlushed flushed;  // the engine's mode while it runs, Python's after
-    g = generate_sample(spec, path, logger);
+    g = write_sample(spec, path, "path", logger);
   }
   // The packing report as a Python dict, through its JSON text.
   return py::module_::import("json").attr("loads")(g.report.dump());

@@ -175,10 +175,87 @@ namespace {
 void write_cached_sample(const fs::path& p, const GeneratedSample& out) {
   static std::atomic<unsigned> count{0};
   const std::string own = fmt::format(".{}-{}.tmp", static_cast<long>(::getpid()), count++);
-  write_json(p.string() + ".json" + own, out.report);
-  fs::rename(p.string() + ".json" + own, p.string() + ".json");
-  write_geometry(p.string() + own, out.geometry);
-  fs::rename(p.string() + own, p);
+  const fs::path report = p.string() + ".json", report_tmp = report.string() + own,
+                 geometry_tmp = p.string() + own;
+  // Both written before either is renamed: a failure (a full disk) leaves neither behind.
+  try {
+    write_json(report_tmp, out.report);
+    write_geometry(geometry_tmp.string(), out.geometry);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(report_tmp, ec);
+    fs::remove(geometry_tmp, ec);
+    throw;
+  }
+  fs::rename(report_tmp, report);
+  fs::rename(geometry_tmp, p);
+}
+
+// Whether `a` and `b` name the same file (`b` need not exist).
+bool same_file(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
+}
+
+// The files `breccia generate` reads for an experiment, with what each is.
+std::vector<std::pair<fs::path, std::string>> files_read(const ExperimentSpec& s) {
+  std::vector<std::pair<fs::path, std::string>> in;
+  if (s.source != "built-in default") in.emplace_back(s.source, "the experiment file");
+  if (s.sample_source == "file" || s.sample_source == "table" || s.sample_source == "gengeo") {
+    const std::string p = resolve(s, s.geometry_file);
+    in.emplace_back(p, "the sample file the experiment reads (sample.file)");
+    in.emplace_back(p + ".json", "the report beside the sample file the experiment reads");
+  }
+  return in;
+}
+
+// A file `breccia generate` may replace: a breccia-geometry sample, or a sample's report.
+bool is_sample_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::string head(17, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  return in && head == "breccia-geometry ";
+}
+bool is_sample_report(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  const json j = json::parse(in, nullptr, false);
+  return j.is_object() && j.contains("generator") && j["generator"].is_string() &&
+         j["generator"].get<std::string>().rfind("breccia", 0) == 0;
+}
+
+// Refuses an output path that is empty, a folder, an input of the experiment, or a file that is
+// not a sample: `generate` never writes over what it did not write.
+void check_sample_output(const ExperimentSpec& s, const std::string& path,
+                         const std::string& option) {
+  const std::string where = "breccia generate";
+  if (path.empty())
+    throw InputError(where, option, "''",
+                     "the sample file to write (breccia-geometry), e.g. samples/berea.geom");
+  const fs::path p(path);
+  const fs::path name = p.filename();
+  std::error_code ec;
+  if (name.empty() || name == "." || name == ".." || fs::is_directory(p, ec))
+    throw InputError(
+        where, option, path,
+        fmt::format("a file to write, not a folder (e.g. {})",
+                    ((p.has_filename() ? p : p.parent_path()) / "sample.geom").string()));
+  const fs::path report = path + ".json";
+  for (const auto& [input, what] : files_read(s))
+    for (const fs::path& out : {p, report})
+      if (same_file(out, input))
+        throw InputError(where, option, path,
+                         fmt::format("writing {} would replace {} ({}): choose another name",
+                                     out.string(), what, input.string()));
+  if (fs::exists(p, ec) && !is_sample_file(p))
+    throw InputError(where, option, path,
+                     "the file exists and is not a breccia-geometry sample: generate replaces "
+                     "only a sample (choose another name, or remove the file)");
+  if (fs::exists(report, ec) && !is_sample_report(report))
+    throw InputError(where, option, path,
+                     fmt::format("{} exists and is not a sample's report, and generate writes "
+                                 "the report there: choose another name, or remove the file",
+                                 report.string()));
 }
 
 }  // namespace
@@ -193,6 +270,33 @@ GeneratedSample generate_sample(const ExperimentSpec& s, const std::string& path
     const fs::path p(path);
     if (p.has_parent_path()) fs::create_directories(p.parent_path());
     write_cached_sample(p, out);
+  }
+  return out;
+}
+
+GeneratedSample write_sample(const ExperimentSpec& s, const std::string& path,
+                             const std::string& option,
+                             const std::function<void(const std::string&)>& log) {
+  check_sample_output(s, path, option);
+  GeneratedSample out;
+  if (s.sample_source == "generate") {
+    out = generate_sample(s, std::string(), log);
+  } else {
+    // A lattice, or a sample read (and so converted to breccia-geometry): written as a run
+    // would take it, its own report kept where it has one.
+    SampleInfo info;
+    out.geometry = load_sample(s, out.report, info, log);
+    out.report["source"] = s.sample_source;
+    out.report["generator"] = fmt::format("breccia {}", kVersion);
+    if (!out.report.contains("settings")) out.report["settings"] = to_toml(s);
+  }
+  const fs::path p(path);
+  try {
+    if (p.has_parent_path()) fs::create_directories(p.parent_path());
+    write_cached_sample(p, out);
+  } catch (const std::system_error& e) {
+    throw InputError("breccia generate", option, path,
+                     "cannot write the sample there: " + e.code().message());
   }
   return out;
 }

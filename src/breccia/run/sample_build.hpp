@@ -29,6 +29,15 @@ ContactModel contact_model(const ExperimentSpec& spec);
 GeneratedSample generate_sample(const ExperimentSpec& spec, const std::string& path,
                                 const std::function<void(const std::string&)>& log);
 
+// `breccia generate`: the experiment's sample (packed, a lattice, or read from its file) written
+// to `path` with its report beside it (`path`.json). Refused, naming `option` (how the caller
+// calls the path) and the value, before any work: an empty path, a folder, a path of a file the
+// experiment reads, and a file that is not a sample (or not a sample's report). A failed write
+// leaves no temporary behind.
+GeneratedSample write_sample(const ExperimentSpec& spec, const std::string& path,
+                             const std::string& option,
+                             const std::function<void(const std::string&)>& log);
+
 // The sample of an experiment: generated (and cached in output.directory/samples), read from a
 // geometry file, or a lattice; `report` describes it and `info` tells the test its shape.
 GeometryData load_sample(const ExperimentSpec& spec, nlohmann::json& report, SampleInfo& info,
