@@ -230,15 +230,15 @@ Command add_resume(CLI::App& app, const std::string& command_line) {
   c->add_option("--stop-at-step", o->stop_at_step,
                 "stop again, with a checkpoint, at this step (a sweep: each run)")
       ->check(CLI::Range(std::int64_t{1}, std::numeric_limits<std::int64_t>::max()));
-  c->add_option("--jobs", o->jobs,
-                "a sweep: runs at once, as separate processes (0: as many as the cores allow, "
-                "1: one after another)")
-      ->check(CLI::Range(0, 1024));
-  c->add_option("--ranks-per-run", o->ranks_per_run,
-                "a sweep under mpirun: split each run over this many ranks (default 1: each "
-                "rank runs whole runs)")
-      ->check(CLI::Range(1, 1 << 20));
-  return {c, [o, command_line] {
+  auto* jobs = c->add_option("--jobs", o->jobs,
+                             "a sweep: runs at once, as separate processes (0: as many as the "
+                             "cores allow, 1: one after another)")
+                   ->check(CLI::Range(0, 1024));
+  auto* ranks_per_run = c->add_option("--ranks-per-run", o->ranks_per_run,
+                                      "a sweep under mpirun: split each run over this many ranks "
+                                      "(default 1: each rank runs whole runs)")
+                            ->check(CLI::Range(1, 1 << 20));
+  return {c, [o, command_line, jobs, ranks_per_run] {
             catch_signals();
             breccia::RunOptions opt;
             opt.command_line = command_line;
@@ -259,6 +259,13 @@ Command add_resume(CLI::App& app, const std::string& command_line) {
               return finish_sweep(breccia::resume_sweep(o->folder, opt));
             }
             // A run resumes split over the ranks, whatever split (or none) it stopped in.
+            for (const CLI::Option* sweep_only : {jobs, ranks_per_run})
+              if (sweep_only->count() > 0)
+                throw breccia::InputError(
+                    "resume " + o->folder, sweep_only->get_name(), sweep_only->as<std::string>(),
+                    "a sweep's option, and this is a run folder (no sweep-plan.json): a run "
+                    "resumes in one process, or split over every rank of `mpirun -np N breccia "
+                    "resume FOLDER`");
             opt.split_over_ranks = breccia::ranks::size() > 1;
             if (!breccia::ranks::root()) {
               opt.log = nullptr;

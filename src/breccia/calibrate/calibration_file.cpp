@@ -377,14 +377,27 @@ void read_settings(CalibrationSpec& c, const toml::table& tbl, const std::string
   }
 }
 
-// A setting of the tensile test the calibration does not run is refused, so that nobody takes
-// it for one that shaped the result.
-void check_tensile_settings(const CalibrationSpec& c, const toml::table& tbl,
-                            const std::string& source) {
+// A setting of a test the calibration does not run is refused, so that nobody takes it for one
+// that shaped the result.
+void check_settings_in_use(const CalibrationSpec& c, const toml::table& tbl,
+                           const std::string& source) {
+  if (const toml::node* v = tbl.get("confining_stresses"); v && !c.needs_envelope())
+    throw InputError(where_of(source, *v), "calibration.confining_stresses", show(*v),
+                     "the triaxial tests at these stresses run only for a targets.cohesion or "
+                     "targets.friction_angle_deg, and neither is given");
+  if (const toml::node* v = tbl.get("verify_set"); v && c.verify_seeds.empty())
+    throw InputError(where_of(source, *v), "calibration.verify_set", show(*v),
+                     "a setting of the verification tests, and calibration.verify_seeds = [] "
+                     "runs none");
   const bool direct = c.tensile_test == "direct_tension";
-  for (const std::string item :
-       {"brazilian_diameter", "brazilian_thickness", "brazilian_platen_speed", "grip_speed"}) {
+  for (const std::string item : {"tensile_test", "brazilian_diameter", "brazilian_thickness",
+                                 "brazilian_platen_speed", "grip_speed"}) {
     const toml::node* v = tbl.get(item);
+    if (v && !c.needs_tensile())
+      throw InputError(where_of(source, *v), "calibration." + item, show(*v),
+                       "a setting of the tensile test, which runs only for a "
+                       "targets.tensile_strength, and none is given");
+    if (item == "tensile_test") continue;
     const bool for_direct = item == "grip_speed";
     if (v && for_direct != direct)
       throw InputError(where_of(source, *v), "calibration." + item, show(*v),
@@ -532,7 +545,6 @@ CalibrationSpec parse_calibration(const std::string& text, const std::string& so
   }
   if (const auto* t = root["calibration"].as_table()) {
     read_settings(c, *t, source);
-    check_tensile_settings(c, *t, source);
   }
   if (const auto* t = root["targets"].as_table())
     for (const auto& [k, v] : *t) c.targets.push_back(read_target(std::string(k.str()), v, source));
@@ -540,6 +552,7 @@ CalibrationSpec parse_calibration(const std::string& text, const std::string& so
     for (const auto& [k, v] : *t) c.free.push_back(read_free(std::string(k.str()), v, source));
   if (const auto* t = root["tied"].as_table())
     for (const auto& [k, v] : *t) c.tied.push_back(read_tied(std::string(k.str()), v, source));
+  if (const auto* t = root["calibration"].as_table()) check_settings_in_use(c, *t, source);
   check_coverage(c, root, source);
   check_experiment_table(root, source);
   c.base = parse_experiment_table(text, source, "experiment", {});

@@ -90,7 +90,8 @@ std::string check_memory(const ExperimentSpec& s, std::size_t particles, std::si
     throw InputError(
         s.source, "sample", fmt::format("{} grains", particles),
         fmt::format("the run needs about {:.1f} GiB ({}) and this machine has {:.1f} GiB "
-                    "available: use fewer grains (larger sample.radii or a smaller sample) or a "
+                    "available: use fewer grains (larger sample.radius_min and radius_max, or a "
+                    "smaller sample) or a "
                     "machine with more memory",
                     e.total() / gib, parts, available / gib));
   return fmt::format("memory: about {:.2f} GiB estimated ({}); {} available", e.total() / gib,

@@ -359,6 +359,17 @@ GeometryData load_sample(const ExperimentSpec& s, json& report, SampleInfo& info
   if (g.dimension != want)
     throw InputError(s.source, "engine.dimension", std::to_string(s.dimension),
                      std::string("the sample is ") + (g.dimension == Dimension::Two ? "2D" : "3D"));
+  // A read sample that lists no bonds is bonded by the gap tolerance: bounded by its grains.
+  if (g.bonds.empty() && !g.particles.empty() &&
+      (s.sample_source == "file" || s.sample_source == "table" || s.sample_source == "gengeo")) {
+    double smallest = g.particles.front().radius;
+    for (const ParticleSpec& p : g.particles) smallest = std::min(smallest, p.radius);
+    if (s.bond_gap_tolerance > smallest)
+      throw InputError(s.source, "sample.bond_gap_tolerance", num(s.bond_gap_tolerance),
+                       fmt::format("at most the smallest grain radius of {} ({} m): a wider gap "
+                                   "bonds grains that another grain could sit between",
+                                   resolve(s, s.geometry_file), num(smallest)));
+  }
   return g;
 }
 

@@ -175,9 +175,9 @@ PackedState pack_by_expansion(const PackingSettings& s, const Log& log) {
   st.report.converged = converged && !e.out_of_steps();
   if (!st.report.converged)
     st.report.warnings.push_back(fmt::format(
-        "packing did not reach the installation stress within {} steps (sample.max_steps); the "
-        "locked-in stress reported is what it reached",
-        s.max_steps));
+        "packing did not reach the installation stress ({} MPa, sample.isotropic_stress) within "
+        "the packing's limit of {} steps; the locked-in stress reported is what it reached",
+        s.isotropic_stress * 1e-6, s.max_steps));
   st.report.steps = sim.step_count();
   st.particles = sim.particles().pos_rad;
   return st;

@@ -298,8 +298,8 @@ PackedState pack_by_preconsolidation(const PackingSettings& s, const Log& log) {
                                       servo.sxx * 1e-6, syy * 1e-6, x_right - x_left)));
   if (!servo.held)
     st.report.warnings.push_back(fmt::format(
-        "preconsolidation did not hold {} MPa within {} steps (sample.max_steps); reached {:.4g} "
-        "MPa",
+        "preconsolidation did not hold {} MPa (sample.preconsolidation_stress) within the "
+        "packing's limit of {} steps; reached {:.4g} MPa",
         s.preconsolidation_stress * 1e-6, s.max_steps, servo.sxx * 1e-6));
   // Floaters may grow 20 % beyond the size they have now (rows are neighbours, not candidates).
   std::vector<double> nominal;

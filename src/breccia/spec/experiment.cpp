@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 
@@ -203,6 +204,30 @@ void apply_overrides(toml::table& root, const std::vector<std::string>& override
   }
 }
 
+// Pairs up to sample.bond_gap_tolerance apart are bonded: beyond the smallest grain's radius a
+// bond would join grains that another grain could sit between, which is no longer a bonded
+// contact. A sample read from a file is checked against its grains when it is read.
+void check_bond_gap(const ExperimentSpec& s, const std::string& source) {
+  double smallest = 0.0;
+  std::string which;
+  if (s.sample_source == "generate") {
+    smallest = s.radius_min;
+    which = "sample.radius_min";
+    if (s.distribution == "classes" && !s.class_radii.empty()) {
+      smallest = *std::min_element(s.class_radii.begin(), s.class_radii.end());
+      which = "the smallest of sample.class_radii";
+    }
+  } else if (s.sample_source == "lattice") {
+    smallest = s.radius;
+    which = "sample.radius";
+  }
+  if (smallest > 0.0 && s.bond_gap_tolerance > smallest)
+    throw InputError(source, "sample.bond_gap_tolerance", num(s.bond_gap_tolerance),
+                     fmt::format("at most the smallest grain radius ({} = {} m): a wider gap "
+                                 "bonds grains that another grain could sit between",
+                                 which, num(smallest)));
+}
+
 void check_consistency(const ExperimentSpec& s, const std::string& source) {
   if ((s.sample_source == "file" || s.sample_source == "table" || s.sample_source == "gengeo") &&
       s.geometry_file.empty())
@@ -245,6 +270,7 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
                        std::to_string(s.class_radii.size()) + " radii",
                        "classes need one sample.class_mass_fractions entry per radius");
   }
+  check_bond_gap(s, source);
   if (s.sample_source == "lattice") {
     const double n = s.dimension == 2
                          ? static_cast<double>(s.cells[0]) * static_cast<double>(s.cells[1])
@@ -560,6 +586,43 @@ void resolve_planar_body(ExperimentSpec& s, bool thickness_given, const std::str
   }
 }
 
+// The dimension a library preset was calibrated in (its record's), 0 for none.
+int preset_dimension(const EmbeddedMaterial& m) {
+  const nlohmann::json r = nlohmann::json::parse(m.record, nullptr, false);
+  return r.is_object() && r.contains("dimension") && r["dimension"].is_number_integer()
+             ? r["dimension"].get<int>()
+             : 0;
+}
+
+// A preset named in the file holds the micro-parameters of a 2D model or of a 3D one, which do
+// not carry over to the other: on a sample of the other dimension it is refused, with the
+// preset of the same rock calibrated in that dimension where the library has one.
+void check_preset_dimension(const ExperimentSpec& s, const toml::table& root,
+                            const std::string& source) {
+  if (!root.at_path("material.preset").is_string()) return;
+  const auto& all = embedded_materials();
+  const auto m =
+      std::find_if(all.begin(), all.end(), [&](const auto& e) { return e.name == s.preset; });
+  if (m == all.end()) return;
+  const int calibrated = preset_dimension(*m);
+  if (calibrated == 0 || calibrated == s.dimension) return;
+  auto rock = [](std::string_view name) {
+    std::string n(name);
+    if (const auto at = n.find("_2d"); at != std::string::npos) n.erase(at, 3);
+    return n;
+  };
+  std::string other;
+  for (const auto& e : all)
+    if (preset_dimension(e) == s.dimension && rock(e.name) == rock(m->name))
+      other = fmt::format("material.preset = \"{}\" (the same rock, calibrated in {}D), ", e.name,
+                          s.dimension);
+  throw InputError(source, "material.preset", "\"" + s.preset + "\"",
+                   fmt::format("calibrated in {}D, and engine.dimension = {}: its micro-parameters "
+                               "are those of a {}D model and do not carry over; use {}"
+                               "engine.dimension = {}, or \"custom\" with laws of your own",
+                               calibrated, s.dimension, calibrated, other, calibrated));
+}
+
 ExperimentSpec spec_from_table(toml::table root, const std::string& source,
                                const std::vector<std::string>& overrides) {
   apply_overrides(root, overrides);
@@ -567,6 +630,7 @@ ExperimentSpec spec_from_table(toml::table root, const std::string& source,
   spec.source = source;
   apply_table(spec, root, source);
   check_consistency(spec, source);
+  check_preset_dimension(spec, root, source);
   resolve_planar_body(spec, root.at_path("sample.thickness").node() != nullptr, source);
   return spec;
 }

@@ -427,7 +427,9 @@ std::vector<SpecField> sample_source_fields() {
        0, kText},
       {"sample", "bond_gap_tolerance", "m", at<&S::bond_gap_tolerance>,
        "pairs with a gap up to this get a bond (generated samples, and files that list no "
-       "bonds); a calibration parameter (docs/physics.md §7.6)",
+       "bonds); a calibration parameter (docs/physics.md §7.6); at most the smallest grain "
+       "radius (sample.radius_min, the lattice's radius, or the file's smallest grain): a wider "
+       "gap bonds grains that another could sit between",
        0, kInf},
   };
 }
