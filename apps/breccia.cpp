@@ -28,9 +28,20 @@
 #include "breccia/run/run.hpp"
 #include "breccia/run/sample_build.hpp"
 #include "breccia/spec/experiment.hpp"
+#include "breccia/spec/spec_field.hpp"
 #include "breccia/version.hpp"
 
 namespace {
+
+// An output path given empty (a shell variable that was never set) is refused, not read as
+// "the default": nothing is written where the user did not ask.
+const CLI::Validator kNonEmptyPath(
+    [](const std::string& v) {
+      return v.empty() ? std::string("'' is no path: give the folder or file to write to")
+                       : std::string();
+    },
+    "PATH");
+
 extern "C" void on_signal(int number) {
   breccia::interrupt_signal().store(number);
   breccia::interrupt_flag().store(true);
@@ -158,7 +169,8 @@ Command add_run(CLI::App& app, const std::string& command_line) {
   auto* c = app.add_subcommand("run", "run an experiment (the built-in default without a file)");
   c->add_option("experiment", o->file, "experiment file (TOML); omit for the built-in default");
   c->add_option("--set", o->overrides, "override a key: section.key=value")->take_all();
-  c->add_option("--output", o->output, "folder that receives the run folder (output.directory)");
+  c->add_option("--output", o->output, "folder that receives the run folder (output.directory)")
+      ->check(kNonEmptyPath);
   c->add_option("--threads", o->threads, "OpenMP threads (engine.threads; 0 = all cores)")
       ->check(CLI::Range(0, 1024));
   c->add_flag("--quiet", o->quiet, "no progress bar or messages; only the run folder is printed");
@@ -168,7 +180,7 @@ Command add_run(CLI::App& app, const std::string& command_line) {
       ->check(CLI::Range(std::int64_t{1}, std::numeric_limits<std::int64_t>::max()));
   return {c, [o, command_line] {
             if (!o->output.empty())
-              o->overrides.push_back("output.directory=\"" + o->output + "\"");
+              o->overrides.push_back("output.directory=" + breccia::toml_quoted(o->output));
             if (o->threads >= 0)
               o->overrides.push_back("engine.threads=" + std::to_string(o->threads));
             const breccia::ExperimentSpec spec = load_spec(o->file, o->overrides);
@@ -331,7 +343,8 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
   confining->excludes(rates);
   over->excludes(confining);
   over->excludes(rates);
-  c->add_option("--output", o->output, "folder that receives the sweep folder");
+  c->add_option("--output", o->output, "folder that receives the sweep folder")
+      ->check(kNonEmptyPath);
   c->add_option("--jobs", o->jobs,
                 "runs at once, as separate processes sharing the cores (0: as many as the cores "
                 "allow, 1: one after another)")
@@ -346,7 +359,7 @@ Command add_sweep(CLI::App& app, const std::string& command_line) {
       ->check(CLI::Range(std::int64_t{1}, std::numeric_limits<std::int64_t>::max()));
   return {c, [o, command_line] {
             if (!o->output.empty())
-              o->overrides.push_back("output.directory=\"" + o->output + "\"");
+              o->overrides.push_back("output.directory=" + breccia::toml_quoted(o->output));
             const breccia::ExperimentSpec spec = load_spec(o->file, o->overrides);
             catch_signals();
             breccia::RunOptions opt;
@@ -461,7 +474,8 @@ Command add_docs(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   auto* c = app.add_subcommand("docs", "write the experiment-file reference (Markdown)");
-  c->add_option("--output", o->output, "file to write (default: standard output)");
+  c->add_option("--output", o->output, "file to write (default: standard output)")
+      ->check(kNonEmptyPath);
   c->add_flag("--calibration", o->calibration,
               "the calibration-file reference instead (docs/calibration.md)");
   return {c, [o] {
@@ -482,7 +496,8 @@ Command add_calibrate(CLI::App& app, const std::string& command_line) {
       "calibrate", "fit micro-parameters to lab targets (a calibration file); resumable");
   c->add_option("calibration", o->file, "calibration file (TOML)")->required();
   c->add_option("--output", o->output, "folder that receives <output>/<name>/")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kNonEmptyPath);
   c->add_flag("--check", o->check, "only validate the calibration file");
   c->add_option("--ranks-per-run", o->ranks_per_run,
                 "under mpirun: split each test over this many ranks, the tests shared out over "
@@ -497,7 +512,8 @@ Command add_materials(CLI::App& app) {
   auto output = std::make_shared<std::string>();
   auto* c = app.add_subcommand(
       "materials", "write the material library's table and calibration records (Markdown)");
-  c->add_option("--output", *output, "file to write (default: standard output)");
+  c->add_option("--output", *output, "file to write (default: standard output)")
+      ->check(kNonEmptyPath);
   return {c, [output] { return write_text(breccia::materials_docs(), *output); }};
 }
 

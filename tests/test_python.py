@@ -118,8 +118,10 @@ def test_bad_arguments_raise_the_command_lines_messages():
         breccia.Experiment(engine={"threads": -3})
     with pytest.raises(ValueError, match="cannot open"):
         breccia.Experiment("/no/such/experiment.toml")
-    with pytest.raises(TypeError, match="not a TOML value"):
+    with pytest.raises(TypeError, match="'sample.radius' = .*not a TOML value"):
         breccia.Experiment(sample={"radius": object()})
+    with pytest.raises(TypeError, match="'bond.tensile_strength' = .*not a TOML value"):
+        breccia.Experiment(overrides={"bond.tensile_strength": {1j}})
     with pytest.raises(FileNotFoundError, match="not a Breccia run"):
         breccia.read(SOURCE)
 

@@ -37,7 +37,10 @@ def _flatten(prefix, tables, out):
         if isinstance(value, dict):
             _flatten(dotted, value, out)
         else:
-            out.append(f"{dotted}={toml_value(value)}")
+            try:
+                out.append(f"{dotted}={toml_value(value)}")
+            except TypeError as e:
+                raise TypeError(f"'{dotted}' = {e}") from None
 
 
 def overrides_of(overrides=None, sections=None):

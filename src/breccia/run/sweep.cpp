@@ -602,7 +602,12 @@ void check_confining(const std::vector<double>& confining, const ExperimentSpec&
       set_confining_stress(probe, c, o.where);
       (void)parse_experiment(to_toml(probe), spec.source, {});  // the key's own range
     } catch (const InputError& e) {
-      throw InputError(o.where, o.key, shown(o, c), e.allowed());
+      // The key of the experiment that refuses it (the test in use, a range) stays named.
+      throw InputError(
+          o.where, o.key, shown(o, c),
+          e.key().empty() || e.key() == "confining_stress"
+              ? e.allowed()
+              : fmt::format("the experiment's {} = {}: {}", e.key(), e.value(), e.allowed()));
     }
   }
 }
