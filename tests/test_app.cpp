@@ -684,7 +684,7 @@ TEST(MemoryBudget, ASampleLargerThanTheMemoryIsRefusedWithTheEstimate) {
     ADD_FAILURE() << "no error for a run twice the memory available";
   } catch (const InputError& err) {
     const std::string m = err.what();
-    for (const char* f : {"exp.toml", "sample", "1000000 grains", "GiB", "sample.radii"})
+    for (const char* f : {"exp.toml", "sample", "1000000 grains", "GiB", "sample.radius_min"})
       EXPECT_NE(m.find(f), std::string::npos) << m << " lacks " << f;
   }
   EXPECT_NE(check_memory(spec, 1000000, 3000000, 2.0 * e.total()).find("GiB available"),

@@ -328,6 +328,7 @@ std::string with_experiment(const std::string& head) {
 std::vector<BadCalibration> bad_calibrations() {
   const std::string e_target = "[targets]\nyoungs_modulus = 8e9\n";
   const std::string free_e = "[free]\n\"bond.modulus\" = [1e9, 50e9]\n";
+  const std::string tensile_target = "[targets]\nyoungs_modulus = 8e9\ntensile_strength = 5e6\n";
   return {
       {"UnknownTarget",
        with_experiment("[targets]\nyoungs = 8e9\n" + free_e),
@@ -398,14 +399,21 @@ std::vector<BadCalibration> bad_calibrations() {
        with_experiment(e_target + free_e + "[calibration]\ntensile_test = \"pull\"\n"),
        {"bad.toml:6", "calibration.tensile_test", "pull", "direct_tension"}},
       {"GripSpeedOfATestThatDoesNotRun",
-       with_experiment(e_target + free_e + "[calibration]\ngrip_speed = 0.01\n"),
-       {"bad.toml:6", "calibration.grip_speed", "0.01", "direct tension test, which does not run",
+       with_experiment(tensile_target + free_e + "[calibration]\ngrip_speed = 0.01\n"),
+       {"bad.toml:7", "calibration.grip_speed", "0.01", "direct tension test, which does not run",
         "\"brazilian\""}},
       {"DiscOfATestThatDoesNotRun",
-       with_experiment(e_target + free_e +
+       with_experiment(tensile_target + free_e +
                        "[calibration]\ntensile_test = \"direct_tension\"\nbrazilian_diameter = "
                        "0.01\n"),
-       {"bad.toml:7", "calibration.brazilian_diameter", "Brazilian test, which does not run"}},
+       {"bad.toml:8", "calibration.brazilian_diameter", "Brazilian test, which does not run"}},
+      {"TensileTestWithoutATensileTarget",
+       with_experiment(e_target + free_e +
+                       "[calibration]\ntensile_test = \"direct_tension\"\ngrip_speed = 0.01\n"),
+       {"bad.toml:6", "calibration.tensile_test", "runs only for a targets.tensile_strength"}},
+      {"ConfinementWithoutAnEnvelopeTarget",
+       with_experiment(e_target + free_e + "[calibration]\nconfining_stresses = [5e6]\n"),
+       {"bad.toml:6", "calibration.confining_stresses", "targets.friction_angle_deg"}},
       {"GripsNotMoving",
        with_experiment(e_target + free_e +
                        "[calibration]\ntensile_test = \"direct_tension\"\ngrip_speed = 0\n"),

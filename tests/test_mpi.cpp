@@ -489,7 +489,7 @@ TEST(Mpi, ASignalDuringTheLoadingLeavesACheckpointThatResumesAtAnotherRankCount)
     const char* signal;
     int resume_ranks;  // 1: one process, without mpirun
   };
-  for (const Case& c : {Case{2, "TERM", 3}, Case{3, "USR1", 1}, Case{3, "INT", 2}}) {
+  for (const Case& c : {Case{2, "TERM", 1}, Case{3, "USR1", 2}, Case{3, "INT", 1}}) {
     const std::string how = std::string("SIG") + c.signal + " on " + std::to_string(c.ranks) +
                             " ranks, resumed on " + std::to_string(c.resume_ranks);
     const fs::path dir = out / c.signal;
@@ -501,7 +501,10 @@ TEST(Mpi, ASignalDuringTheLoadingLeavesACheckpointThatResumesAtAnotherRankCount)
     ASSERT_TRUE(fs::exists(b / "checkpoint.bin")) << how << "\n" << r.out;
     const auto m = nlohmann::json::parse(read(b / "manifest.json"));
     EXPECT_EQ(m["status"], "interrupted") << how;
-    EXPECT_EQ(m["stop_reason"], "interrupted by a signal") << how;
+    // The run's last word, or (mpirun's SIGKILL a second after SIGINT or SIGTERM came before it)
+    // the one written with the checkpoint.
+    EXPECT_EQ(m["stop_reason"].get<std::string>().rfind("interrupted by a signal", 0), 0u)
+        << how << ": " << m["stop_reason"];
     EXPECT_TRUE(m["checkpoint"]["step"].is_number()) << how << ": " << m.dump();
     EXPECT_TRUE(temporaries(dir).empty()) << how;
     const Result resumed = c.resume_ranks == 1 ? run("resume --quiet " + b.string())

@@ -597,15 +597,21 @@ int preset_dimension(const EmbeddedMaterial& m) {
 // A preset named in the file holds the micro-parameters of a 2D model or of a 3D one, which do
 // not carry over to the other: on a sample of the other dimension it is refused, with the
 // preset of the same rock calibrated in that dimension where the library has one.
-void check_preset_dimension(const ExperimentSpec& s, const toml::table& root,
-                            const std::string& source) {
-  if (!root.at_path("material.preset").is_string()) return;
+//
+// The built-in default's preset, calibrated in 3D, on a 2D experiment that names none keeps its
+// values for the keys the file leaves out, but not its name: the run does not claim a
+// calibration it lacks, and its resolved file (every key written) reads back as it ran.
+void check_preset_dimension(ExperimentSpec& s, const toml::table& root, const std::string& source) {
   const auto& all = embedded_materials();
   const auto m =
       std::find_if(all.begin(), all.end(), [&](const auto& e) { return e.name == s.preset; });
   if (m == all.end()) return;
   const int calibrated = preset_dimension(*m);
   if (calibrated == 0 || calibrated == s.dimension) return;
+  if (!root.at_path("material.preset").is_string()) {
+    s.preset = "custom";
+    return;
+  }
   auto rock = [](std::string_view name) {
     std::string n(name);
     if (const auto at = n.find("_2d"); at != std::string::npos) n.erase(at, 3);
