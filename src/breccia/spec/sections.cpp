@@ -252,7 +252,11 @@ std::vector<SpecField> engine_fields() {
 
 std::vector<SpecField> material_fields() {
   static const std::string doc = [] {
-    std::string d = "micro-parameter set applied before the other keys, which override it: ";
+    std::string d =
+        "micro-parameter set applied before the other keys, which override it. A preset is "
+        "calibrated in 2D or in 3D and is refused on a sample of the other dimension; a 2D "
+        "experiment that names none keeps the 3D default's values for the keys it leaves out "
+        "and is recorded as `custom`: ";
     for (const auto& [n, text] : material_presets()) d += "`" + n + "`: " + text + " ";
     return d;
   }();
