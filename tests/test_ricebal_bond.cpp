@@ -142,6 +142,15 @@ TEST(RicebalBond, ShearStrengthFallsInTensionAndGrowsWithTheContactsCompression)
   EXPECT_TRUE(breaks(0.0, fs_c * (1 - 1e-9) - 2.0, {}).broken);
   EXPECT_FALSE(breaks(0.0, C * A * (1 - 1e-9), {}).broken);
   EXPECT_TRUE(breaks(0.0, C * A * (1 + 1e-9), {}).broken);
+  // Judged on the bond's own loads, the contact changes nothing: the same bond load breaks it
+  // with the contact pressing as without, at C A (1 + 1e-9), and holds at C A (1 - 1e-9).
+  p.interface_totals = false;
+  EXPECT_TRUE(breaks(0.0, fs_c * (1 - 1e-9) - 2.0, contact).broken);
+  EXPECT_FALSE(breaks(0.0, C * A * (1 - 1e-9), contact).broken);
+  const BondFailure own = breaks(0.0, C * A * (1 + 1e-9), contact);
+  EXPECT_TRUE(own.broken);
+  EXPECT_EQ(own.mode, CrackMode::Shear);
+  EXPECT_NEAR(own.Fn, 0.0, 1e-12);
 }
 
 namespace {

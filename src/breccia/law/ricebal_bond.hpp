@@ -34,12 +34,16 @@ struct RicebalBond {
     double friction = 0.5;           // mu of the compressive branch C_b A_b + mu f_n
     // Derived by prepare(), not input: the G_b the kernel uses.
     double shear_modulus_used = 0.0;
+    // The envelope judges the interface totals (bond plus Hertz contact, docs/physics.md §4.4);
+    // false: the bond's own loads, the alternative reading of the seed's lost equations.
+    bool interface_totals = true;
+    std::uint8_t unused[7]{};  // named, not padding (core/archive.hpp)
   };
   static void prepare(Params& p) noexcept {
     p.shear_modulus_used =
         p.shear_modulus > 0.0 ? p.shear_modulus : p.modulus / (2.0 * (1.0 + p.poisson_ratio));
   }
-  static constexpr std::array<ParamField<Params>, 6> fields() {
+  static constexpr std::array<ParamField<Params>, 7> fields() {
     return {{
         {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
          "bond Young's modulus E_b: K_n = E_b A_b / d0, K_M = E_b I_b / d0"},
@@ -53,6 +57,10 @@ struct RicebalBond {
          "C_b: shear strength C_b A_b at f_n = 0, falling linearly to 0 at f_n = -T_b A_b"},
         {"friction", "-", &Params::friction, 0, kInf, true, true,
          "mu of the compressive shear strength C_b A_b + mu f_n (usually the grains' friction)"},
+        {"interface_totals", "-", &Params::interface_totals, 0, 0, true, true,
+         "true: the envelope judges the interface totals, the bond's loads plus the overlapping "
+         "grains' Hertz contact (whose normal force then adds mu f_n^c to the shear strength); "
+         "false: the bond's own loads"},
     }};
   }
   static Params example_params() {
@@ -132,8 +140,9 @@ struct RicebalBond {
   static void judge(const Params& p, const State& s, const PairGeometry& g,
                     const Vec3& contact_force, BondFailure& fail) noexcept {
     const Vec3 t{-g.n.y, g.n.x, 0.0};
-    const BondFailure judged = envelope(p, s, s.normal_force + dot(contact_force, g.n),
-                                        s.shear_force + dot(contact_force, t));
+    const double with = p.interface_totals ? 1.0 : 0.0;
+    const BondFailure judged = envelope(p, s, s.normal_force + with * dot(contact_force, g.n),
+                                        s.shear_force + with * dot(contact_force, t));
     if (!judged.broken) return;
     fail = judged;
     fail.energy = energy(p, s, radii_of(g));
