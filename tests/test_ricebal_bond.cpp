@@ -105,6 +105,19 @@ TEST(RicebalBond, TensileCheckAddsTheMomentsPeakStress) {
       EXPECT_NEAR(f.Mb, 0.5 * T * I / kR * factor, 1e-9 * T * I / kR);
     }
   }
+  // Without the bending term the same loads hold (sigma_t = T / 2), and only f_n = -T A breaks
+  // the bond in tension, whatever the moment.
+  RicebalBond::Params no_bending = p;
+  no_bending.bending_in_tension = false;
+  for (const double fn_factor : {0.5, 1 - 1e-9, 1 + 1e-9}) {
+    RicebalBond::State st = s.state;
+    st.normal_force = -fn_factor * T * A;
+    st.moment = -0.5 * T * I / kR * (1 + 1e-9);
+    BondFailure f;
+    RicebalBond::judge(no_bending, st, make_geometry(s.a, s.b, true, 1.0, true), {}, f);
+    EXPECT_EQ(f.broken, fn_factor > 1) << fn_factor;
+    if (f.broken) EXPECT_EQ(f.mode, CrackMode::Tensile);
+  }
 }
 
 TEST(RicebalBond, ShearStrengthFallsInTensionAndGrowsWithTheContactsCompression) {

@@ -37,13 +37,16 @@ struct RicebalBond {
     // The envelope judges the interface totals (bond plus Hertz contact, docs/physics.md §4.4);
     // false: the bond's own loads, the alternative reading of the seed's lost equations.
     bool interface_totals = true;
-    std::uint8_t unused[7]{};  // named, not padding (core/archive.hpp)
+    // The tensile check adds the bending moment's peak stress |M| r_b / I_b (docs/physics.md
+    // §4.4); false: the normal force alone, the other reading of the seed's "normal stress".
+    bool bending_in_tension = true;
+    std::uint8_t unused[6]{};  // named, not padding (core/archive.hpp)
   };
   static void prepare(Params& p) noexcept {
     p.shear_modulus_used =
         p.shear_modulus > 0.0 ? p.shear_modulus : p.modulus / (2.0 * (1.0 + p.poisson_ratio));
   }
-  static constexpr std::array<ParamField<Params>, 7> fields() {
+  static constexpr std::array<ParamField<Params>, 8> fields() {
     return {{
         {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
          "bond Young's modulus E_b: K_n = E_b A_b / d0, K_M = E_b I_b / d0"},
@@ -61,6 +64,9 @@ struct RicebalBond {
          "true: the envelope judges the interface totals, the bond's loads plus the overlapping "
          "grains' Hertz contact (whose normal force then adds mu f_n^c to the shear strength); "
          "false: the bond's own loads"},
+        {"bending_in_tension", "-", &Params::bending_in_tension, 0, 0, true, true,
+         "true: the tensile check adds the moment's peak stress |M| r_b / I_b to -f_n / A_b; "
+         "false: the normal force alone"},
     }};
   }
   static Params example_params() {
@@ -158,7 +164,9 @@ struct RicebalBond {
   // the interface's normal (compression-positive) and shear forces.
   static BondFailure envelope(const Params& p, const State& s, double fn, double fs) noexcept {
     BondFailure f;
-    const double sigma_t = -fn / s.area + std::abs(s.moment) * s.bond_radius / s.inertia;
+    const double bending =
+        p.bending_in_tension ? std::abs(s.moment) * s.bond_radius / s.inertia : 0.0;
+    const double sigma_t = -fn / s.area + bending;
     const double fn_min = -p.tensile_strength * s.area;
     const double fs_max = fn < 0.0 ? p.cohesion * s.area * (1.0 - fn / fn_min)
                                    : p.cohesion * s.area + p.friction * fn;
