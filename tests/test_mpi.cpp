@@ -506,11 +506,18 @@ TEST(Mpi, ASignalDuringTheLoadingLeavesACheckpointThatResumesAtAnotherRankCount)
     EXPECT_EQ(m["stop_reason"].get<std::string>().rfind("interrupted by a signal", 0), 0u)
         << how << ": " << m["stop_reason"];
     EXPECT_TRUE(m["checkpoint"]["step"].is_number()) << how << ": " << m.dump();
-    EXPECT_TRUE(temporaries(dir).empty()) << how;
+    // mpirun's SIGKILL, a second after SIGINT or SIGTERM, may cut a write short: its temporary
+    // is left until the resume clears it (one stands in here whatever the timing). SIGUSR1 kills
+    // nothing.
+    if (std::string(c.signal) == "USR1") {
+      EXPECT_TRUE(temporaries(dir).empty()) << how;
+    }
+    std::ofstream(b / "events.csv.tmp") << "a write cut short";
     const Result resumed = c.resume_ranks == 1 ? run("resume --quiet " + b.string())
                                                : run_with_prefix(mpirun(c.resume_ranks),
                                                                  "resume --quiet " + b.string());
     ASSERT_EQ(resumed.code, 0) << how << "\n" << resumed.out;
+    EXPECT_TRUE(temporaries(dir).empty()) << how;
     expect_same_run_files(last_line(one.out), b, how);
   }
   fs::remove_all(out);

@@ -888,9 +888,17 @@ namespace {
 fs::path resume_folder_of_rank(const fs::path& folder, ScratchFolder& scratch) {
   const fs::path& mine = scratch.make();
   for (const auto& e : fs::directory_iterator(folder))
-    if (e.is_regular_file() && e.path().filename() != kCheckpointFile)
+    if (e.is_regular_file() && e.path().filename() != kCheckpointFile &&
+        e.path().extension() != ".tmp")
       fs::copy_file(e.path(), mine / e.path().filename());
   return mine;
+}
+
+// The temporaries of writes a killed run never finished (a launcher's SIGKILL during a table's
+// or the checkpoint's atomic write leaves `name.tmp` beside `name`): litter, never data.
+void remove_unfinished_writes(const fs::path& folder) {
+  for (const auto& e : fs::recursive_directory_iterator(folder))
+    if (e.is_regular_file() && e.path().extension() == ".tmp") fs::remove(e.path());
 }
 
 }  // namespace
@@ -919,6 +927,7 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
   const fs::path folder = other_rank ? resume_folder_of_rank(source, scratch) : source;
   // Root cuts its tables back to the checkpoint's length below: not while another rank copies.
   if (opt.split_over_ranks) ranks::barrier();
+  if (!other_rank) remove_unfinished_writes(source);
   a.string();  // magic, format and version: checked with the hash
   a.get<std::uint32_t>();
   a.string();
