@@ -116,7 +116,9 @@ TEST(RicebalBond, TensileCheckAddsTheMomentsPeakStress) {
     BondFailure f;
     RicebalBond::judge(no_bending, st, make_geometry(s.a, s.b, true, 1.0, true), {}, f);
     EXPECT_EQ(f.broken, fn_factor > 1) << fn_factor;
-    if (f.broken) EXPECT_EQ(f.mode, CrackMode::Tensile);
+    if (f.broken) {
+      EXPECT_EQ(f.mode, CrackMode::Tensile);
+    }
   }
 }
 

@@ -146,9 +146,9 @@ struct RicebalBond {
   static void judge(const Params& p, const State& s, const PairGeometry& g,
                     const Vec3& contact_force, BondFailure& fail) noexcept {
     const Vec3 t{-g.n.y, g.n.x, 0.0};
-    const double with = p.interface_totals ? 1.0 : 0.0;
-    const BondFailure judged = envelope(p, s, s.normal_force + with * dot(contact_force, g.n),
-                                        s.shear_force + with * dot(contact_force, t));
+    const Vec3 contact = p.interface_totals ? contact_force : Vec3{};
+    const BondFailure judged =
+        envelope(p, s, s.normal_force + dot(contact, g.n), s.shear_force + dot(contact, t));
     if (!judged.broken) return;
     fail = judged;
     fail.energy = energy(p, s, radii_of(g));

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
@@ -586,12 +587,21 @@ void resolve_planar_body(ExperimentSpec& s, bool thickness_given, const std::str
   }
 }
 
-// The dimension a library preset was calibrated in (its record's), 0 for none.
+// The dimension a library preset was calibrated in (its record's), 0 for none; the records are
+// read once, not at every parse of an experiment.
 int preset_dimension(const EmbeddedMaterial& m) {
-  const nlohmann::json r = nlohmann::json::parse(m.record, nullptr, false);
-  return r.is_object() && r.contains("dimension") && r["dimension"].is_number_integer()
-             ? r["dimension"].get<int>()
-             : 0;
+  static const std::map<std::string_view, int> dimensions = [] {
+    std::map<std::string_view, int> out;
+    for (const EmbeddedMaterial& e : embedded_materials()) {
+      const nlohmann::json r = nlohmann::json::parse(e.record, nullptr, false);
+      out[e.name] = r.is_object() && r.contains("dimension") && r["dimension"].is_number_integer()
+                        ? r["dimension"].get<int>()
+                        : 0;
+    }
+    return out;
+  }();
+  const auto it = dimensions.find(m.name);
+  return it == dimensions.end() ? 0 : it->second;
 }
 
 // A preset named in the file holds the micro-parameters of a 2D model or of a 3D one, which do
@@ -601,7 +611,8 @@ int preset_dimension(const EmbeddedMaterial& m) {
 // The built-in default's preset, calibrated in 3D, on a 2D experiment that names none keeps its
 // values for the keys the file leaves out, but not its name: the run does not claim a
 // calibration it lacks, and its resolved file (every key written) reads back as it ran.
-void check_preset_dimension(ExperimentSpec& s, const toml::table& root, const std::string& source) {
+void resolve_preset_dimension(ExperimentSpec& s, const toml::table& root,
+                              const std::string& source) {
   const auto& all = embedded_materials();
   const auto m =
       std::find_if(all.begin(), all.end(), [&](const auto& e) { return e.name == s.preset; });
@@ -636,7 +647,7 @@ ExperimentSpec spec_from_table(toml::table root, const std::string& source,
   spec.source = source;
   apply_table(spec, root, source);
   check_consistency(spec, source);
-  check_preset_dimension(spec, root, source);
+  resolve_preset_dimension(spec, root, source);
   resolve_planar_body(spec, root.at_path("sample.thickness").node() != nullptr, source);
   return spec;
 }
