@@ -67,6 +67,39 @@ TEST(RicebalBond, DisksTakeTheSlabOfTheirThickness) {
   EXPECT_NEAR(s.state.kn, 10e9 * 1.2e-7 / 0.8e-3, 1e-3);
 }
 
+TEST(RicebalBond, ANormalSpringInTensionOnlyRestsAtTouching) {
+  // Installed with the grains overlapping by 1e-7 m (d0 = 2R - 1e-7): the spring rests at
+  // touching, so it pushes nothing while they overlap and pulls K_n (d - 2R) once apart; the
+  // stiffness is still E_b A_b / d0. The default spring pulls from d0 at once.
+  PairStepper<RicebalBond> s;
+  s.params.normal_spring_in_compression = false;
+  s.b.x = {2 * kR - 1e-7, 0, 0};
+  s.install();
+  const double kn = 10e9 * kPi * kR * kR / (2 * kR - 1e-7);
+  EXPECT_NEAR(s.state.kn, kn, 1e-9 * kn);
+  for (const double d : {2 * kR - 2e-7, 2 * kR - 0.5e-7, 2 * kR}) {
+    s.b.x.x = d;
+    s.evaluate();
+    EXPECT_EQ(s.state.normal_force, 0.0) << d;
+  }
+  s.b.x.x = 2 * kR + 1e-8;
+  s.evaluate();
+  EXPECT_NEAR(s.state.normal_force, -kn * 1e-8, 1e-6 * kn * 1e-8);
+  // Installed across a gap of 1e-8 m, it rests at the gap.
+  auto gapped = touching_pair(1e-8);
+  gapped.params.normal_spring_in_compression = false;
+  gapped.install();
+  gapped.evaluate();
+  EXPECT_EQ(gapped.state.normal_force, 0.0);
+  // The default (both ways) pushes back from d0 as soon as the overlapped pair is pressed.
+  PairStepper<RicebalBond> both;
+  both.b.x = {2 * kR - 1e-7, 0, 0};
+  both.install();
+  both.b.x.x = 2 * kR - 2e-7;
+  both.evaluate();
+  EXPECT_NEAR(both.state.normal_force, kn * 1e-7, 1e-6 * kn * 1e-7);
+}
+
 TEST(RicebalBond, ShearAndBendingSpringsFollowTheRelativeMotion) {
   // Grain 2 slides along +y by v dt per step and turns by w dt: after n steps (the first adds
   // nothing: the bond is new), f_s = -K_s (n - 1) v dt along y and M = -K_M (n - 1) w dt.
@@ -105,10 +138,25 @@ TEST(RicebalBond, TensileCheckAddsTheMomentsPeakStress) {
       EXPECT_NEAR(f.Mb, 0.5 * T * I / kR * factor, 1e-9 * T * I / kR);
     }
   }
-  // Without the bending term the same loads hold (sigma_t = T / 2), and only f_n = -T A breaks
-  // the bond in tension, whatever the moment.
+  // A moment factor beta takes beta of the bending stress: at beta = 0.5 the moment must double
+  // to break the bond with the same f_n (sigma_t = T / 2 + 0.5 * 2 M r / I).
+  RicebalBond::Params half = p;
+  half.moment_factor = 0.5;
+  for (const double factor : {1 - 1e-9, 1 + 1e-9}) {
+    RicebalBond::State st = s.state;
+    st.normal_force = -0.5 * T * A;
+    st.moment = -T * I / kR * factor;
+    BondFailure f;
+    RicebalBond::judge(half, st, make_geometry(s.a, s.b, true, 1.0, true), {}, f);
+    EXPECT_EQ(f.broken, factor > 1) << factor;
+    if (f.broken) {
+      EXPECT_NEAR(f.sigma, T * factor, 1e-6 * T);
+    }
+  }
+  // Without the bending term (beta = 0) only f_n = -T A breaks the bond in tension, whatever
+  // the moment.
   RicebalBond::Params no_bending = p;
-  no_bending.bending_in_tension = false;
+  no_bending.moment_factor = 0.0;
   for (const double fn_factor : {0.5, 1 - 1e-9, 1 + 1e-9}) {
     RicebalBond::State st = s.state;
     st.normal_force = -fn_factor * T * A;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Isolates candidate causes of the shear-crack share against confinement in the RICEBAL envelope:
 # the default; the bond's own loads instead of the interface totals (bond.interface_totals =
-# false); and the tensile check without the bending term (bond.bending_in_tension = false). The
+# false); and the tensile check without the bending term (bond.moment_factor = 0). The
 # small Berea sample at 0, 15 and 50 MPa each way, then the shear share, the strength and the
 # energy shares side by side. Run by hand (about 15 min on 2 cores), not by CI.
 #   validation/ricebal-biaxial/envelope.sh [output folder]
@@ -9,7 +9,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 out="${1:-/tmp/breccia-ricebal-envelope}"
 mkdir -p "$out"
-for v in default bond.interface_totals=false bond.bending_in_tension=false; do
+for v in default bond.interface_totals=false bond.moment_factor=0; do
   set_variant=()
   [ "$v" = default ] || set_variant=(--set "$v")
   "$root/build/breccia" sweep "$root/validation/ricebal-biaxial/berea-2d-small.toml" \
@@ -20,7 +20,7 @@ done
 import glob, json, os, sys
 print("| variant | sigma_3 (MPa) | peak q (MPa) | cracks | shear (%) | friction / W_ext (%) | damping / W_ext (%) | strain energy / W_ext (%) |")
 print("|---|---|---|---|---|---|---|---|")
-for v in ("default", "bond.interface_totals=false", "bond.bending_in_tension=false"):
+for v in ("default", "bond.interface_totals=false", "bond.moment_factor=0"):
     for f in sorted(glob.glob(os.path.join(sys.argv[1], v, "*", "*", "summary.json")),
                     key=lambda p: json.load(open(p)).get("confining_stress_pa") or 0):
         s = json.load(open(f))

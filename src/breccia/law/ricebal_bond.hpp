@@ -4,8 +4,8 @@
 // spring K_n = E_b A_b / d0, an incremental shear spring K_s = G_b A_b / d0 and a bending spring
 // K_M = E_b I_b / d0. Overlapping grains also press through their Hertz-Mindlin contact, and the
 // failure envelope reads the interface totals (bond plus contact): tensile when
-// -f_n / A_b + |M| r_b / I_b >= T_b, else shear when |f_s| >= C_b A_b (1 - f_n / f_n,min) in
-// tension or C_b A_b + mu f_n in compression.
+// -f_n / A_b + beta |M| r_b / I_b >= T_b, else shear when |f_s| >= C_b A_b (1 - f_n / f_n,min)
+// in tension or C_b A_b + mu f_n in compression. The normal spring may act in tension only.
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -32,21 +32,23 @@ struct RicebalBond {
     double tensile_strength = 20e6;  // T_b
     double cohesion = 40e6;          // C_b, the shear strength at f_n = 0
     double friction = 0.5;           // mu of the compressive branch C_b A_b + mu f_n
+    double moment_factor = 1.0;      // beta: the share of |M| r_b / I_b in the tensile check
     // Derived by prepare(), not input: the G_b the kernel uses.
     double shear_modulus_used = 0.0;
     // The envelope judges the interface totals (bond plus Hertz contact, docs/physics.md §4.4);
     // false: the bond's own loads, the alternative reading of the seed's lost equations.
     bool interface_totals = true;
-    // The tensile check adds the bending moment's peak stress |M| r_b / I_b (docs/physics.md
-    // §4.4); false: the normal force alone, the other reading of the seed's "normal stress".
-    bool bending_in_tension = true;
+    // The bond's normal spring acts in compression too (docs/physics.md §4.4); false: only once
+    // the grains separate past touching (or past their installed gap), so that compression is
+    // the Hertz contact's alone, the seeds' force-displacement figure (seed 000, Fig. S1b).
+    bool normal_spring_in_compression = true;
     std::uint8_t unused[6]{};  // named, not padding (core/archive.hpp)
   };
   static void prepare(Params& p) noexcept {
     p.shear_modulus_used =
         p.shear_modulus > 0.0 ? p.shear_modulus : p.modulus / (2.0 * (1.0 + p.poisson_ratio));
   }
-  static constexpr std::array<ParamField<Params>, 8> fields() {
+  static constexpr std::array<ParamField<Params>, 9> fields() {
     return {{
         {"modulus", "Pa", &Params::modulus, 0, kInf, false, true,
          "bond Young's modulus E_b: K_n = E_b A_b / d0, K_M = E_b I_b / d0"},
@@ -60,13 +62,18 @@ struct RicebalBond {
          "C_b: shear strength C_b A_b at f_n = 0, falling linearly to 0 at f_n = -T_b A_b"},
         {"friction", "-", &Params::friction, 0, kInf, true, true,
          "mu of the compressive shear strength C_b A_b + mu f_n (usually the grains' friction)"},
+        {"moment_factor", "-", &Params::moment_factor, 0, 1, true, true,
+         "beta: the tensile check is -f_n / A_b + beta |M| r_b / I_b >= T_b (1: the full "
+         "bending stress, seed 000; 0: the normal force alone, the seed 002 text's reading)"},
         {"interface_totals", "-", &Params::interface_totals, 0, 0, true, true,
          "true: the envelope judges the interface totals, the bond's loads plus the overlapping "
          "grains' Hertz contact (whose normal force then adds mu f_n^c to the shear strength); "
          "false: the bond's own loads"},
-        {"bending_in_tension", "-", &Params::bending_in_tension, 0, 0, true, true,
-         "true: the tensile check adds the moment's peak stress |M| r_b / I_b to -f_n / A_b; "
-         "false: the normal force alone"},
+        {"normal_spring_in_compression", "-", &Params::normal_spring_in_compression, 0, 0, true,
+         true,
+         "true: the bond's normal spring acts from the installed distance in both directions; "
+         "false: only in tension past touching (or past an installed gap), compression being the "
+         "Hertz contact's alone"},
     }};
   }
   static Params example_params() {
@@ -86,11 +93,12 @@ struct RicebalBond {
     double normal_force = 0.0;  // f_n^b, compression-positive
     double shear_force = 0.0;   // f_s^b along t = z x n (force on particle 2)
     double moment = 0.0;        // M^b about z (couple on particle 2)
-    double d0 = 0.0;            // centre distance at installation
+    double d0 = 0.0;            // the normal spring's rest length
     double kn = 0.0, ks = 0.0, km = 0.0;
     double area = 0.0, inertia = 0.0, bond_radius = 0.0;
-    bool started = false;      // the first step after installation adds no increment
-    std::uint8_t unused[7]{};  // named, not padding (core/archive.hpp)
+    bool started = false;       // the first step after installation adds no increment
+    bool tension_only = false;  // the normal spring pulls but never pushes
+    std::uint8_t unused[6]{};   // named, not padding (core/archive.hpp)
   };
 
   // A stress-free bond over the smaller grain's section: the circle of radius r_b for planar
@@ -108,7 +116,9 @@ struct RicebalBond {
       s.area = 2.0 * rb * g.thickness;
       s.inertia = 2.0 / 3.0 * rb * rb * rb * g.thickness;
     }
-    s.d0 = g.d;
+    // A spring that acts only in tension rests at touching, or at the installed gap if wider.
+    s.tension_only = !p.normal_spring_in_compression;
+    s.d0 = s.tension_only ? std::max(g.d, g.R1 + g.R2) : g.d;
     Params q = p;
     prepare(q);
     s.kn = p.modulus * s.area / g.d;
@@ -136,6 +146,7 @@ struct RicebalBond {
     s.started = true;
     const Vec3 t{-g.n.y, g.n.x, 0.0};  // z x n
     s.normal_force = -s.kn * (g.d - s.d0);
+    if (s.tension_only) s.normal_force = std::min(s.normal_force, 0.0);
     s.shear_force -= s.ks * dot(g.vc, t) * dt;
     s.moment -= s.km * (g.w2.z - g.w1.z) * dt;
     return {g.n * s.normal_force + t * s.shear_force, Vec3{0.0, 0.0, s.moment}};
@@ -159,13 +170,12 @@ struct RicebalBond {
     return envelope(p, s, s.normal_force, s.shear_force);
   }
 
-  // Tensile when -f_n / A_b + |M| r_b / I_b >= T_b (checked first), else shear when |f_s| reaches
-  // C_b A_b (1 - f_n / f_n,min) in tension or C_b A_b + mu f_n in compression; f_n and f_s are
-  // the interface's normal (compression-positive) and shear forces.
+  // Tensile when -f_n / A_b + beta |M| r_b / I_b >= T_b (checked first), else shear when |f_s|
+  // reaches C_b A_b (1 - f_n / f_n,min) in tension or C_b A_b + mu f_n in compression; f_n and f_s
+  // are the interface's normal (compression-positive) and shear forces.
   static BondFailure envelope(const Params& p, const State& s, double fn, double fs) noexcept {
     BondFailure f;
-    const double bending =
-        p.bending_in_tension ? std::abs(s.moment) * s.bond_radius / s.inertia : 0.0;
+    const double bending = p.moment_factor * std::abs(s.moment) * s.bond_radius / s.inertia;
     const double sigma_t = -fn / s.area + bending;
     const double fn_min = -p.tensile_strength * s.area;
     const double fs_max = fn < 0.0 ? p.cohesion * s.area * (1.0 - fn / fn_min)
