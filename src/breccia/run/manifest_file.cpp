@@ -27,8 +27,18 @@ void write_in_place(const fs::path& path, const std::string& text) noexcept {
   }
 }
 
-// Through a temporary of this process's own (another process may write the same manifest).
-void write_own_temporary(const fs::path& path, const std::string& text) noexcept {
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Through a temporary of this process's own (another process may write the same manifest), and
+// only while the file still holds `expected`: the process that owns it may have written its own
+// last word since, which this one must not replace.
+void write_own_temporary(const fs::path& path, const std::string& text,
+                         const std::string& expected) noexcept {
   const fs::path tmp = path.string() + fmt::format(".{}.tmp", static_cast<long>(::getpid()));
   std::error_code ec;
   {
@@ -39,6 +49,15 @@ void write_own_temporary(const fs::path& path, const std::string& text) noexcept
       fs::remove(tmp, ec);
       return;
     }
+  }
+  try {
+    if (read_text(path) != expected) {
+      fs::remove(tmp, ec);
+      return;
+    }
+  } catch (const std::exception&) {
+    fs::remove(tmp, ec);
+    return;
   }
   fs::rename(tmp, path, ec);
   if (ec) fs::remove(tmp, ec);
@@ -96,13 +115,11 @@ void ManifestFile::mark_signal(int signal) noexcept {
       return;
     }
     // Another rank of a split sample: root's manifest as it is on disk.
-    std::ifstream in(path_);
-    std::stringstream text;
-    text << in.rdbuf();
-    json m = json::parse(text.str(), nullptr, false);
+    const std::string text = read_text(path_);
+    json m = json::parse(text, nullptr, false);
     if (!m.is_object() || m.value("status", "") != "running") return;
     mark(m, signal, path_);
-    write_own_temporary(path_, m.dump(2) + "\n");
+    write_own_temporary(path_, m.dump(2) + "\n", text);
   } catch (const std::exception&) {
     // Nothing more can be said: the run's own stop writes the manifest if it can.
   }
