@@ -57,7 +57,7 @@ struct RicebalBond {
         {"poisson_ratio", "-", &Params::poisson_ratio, -1, 0.5, false, false,
          "nu_b, which sets G_b when shear_modulus = 0"},
         {"tensile_strength", "Pa", &Params::tensile_strength, 0, kInf, false, true,
-         "T_b: tensile crack when -f_n / A_b + |M| r_b / I_b >= T_b"},
+         "T_b: tensile crack when -f_n / A_b + beta |M| r_b / I_b >= T_b"},
         {"cohesion", "Pa", &Params::cohesion, 0, kInf, false, true,
          "C_b: shear strength C_b A_b at f_n = 0, falling linearly to 0 at f_n = -T_b A_b"},
         {"friction", "-", &Params::friction, 0, kInf, true, true,
