@@ -27,12 +27,29 @@ struct Outcome {
   double wall_force = 0.0, work = 0.0, residual = 0.0;
 };
 
-Outcome run_with_threads(int threads) {
+// Dynamic damping over two grain diameters for a window of 20 us (hundreds of steps).
+void with_dynamic_damping(Simulation& sim) {
+  sim.set_dynamic_damping(0.0, 2e-3, 2e-5);
+}
+
+// How many grains dynamic damping has reached so far.
+std::size_t grains_damped_less(const Simulation& sim) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < sim.particles().size(); ++i)
+    n += std::isfinite(sim.dynamically_damped_until(i)) ? 1 : 0;
+  return n;
+}
+
+Outcome run_with_threads(int threads, bool dynamic_damping = false) {
   set_threads(threads);
   // 5 x 5 x 20 FCC cells = 2000 particles, weak bonds so that some break under compression.
-  Simulation sim = test::compressed_block(5, 5, 20, 2.0, 3e6);
+  Simulation sim = test::compressed_block(5, 5, 20, 2.0, 3e6, 0.7,
+                                          dynamic_damping ? with_dynamic_damping : nullptr);
   EXPECT_EQ(sim.particles().size(), 2000u);
   sim.run(2500);
+  if (dynamic_damping) {
+    EXPECT_GT(grains_damped_less(sim), 100u);
+  }
   Outcome o;
   o.pos = sim.particles().pos_rad;
   o.vel = sim.particles().vel;
@@ -46,9 +63,11 @@ Outcome run_with_threads(int threads) {
 }
 }  // namespace
 
-TEST(Determinism, OneAndTwoThreadsGiveBitwiseEqualTrajectories) {
-  const Outcome a = run_with_threads(1);
-  const Outcome b = run_with_threads(2);
+class ThreadCounts : public ::testing::TestWithParam<bool> {};
+
+TEST_P(ThreadCounts, OneAndTwoThreadsGiveBitwiseEqualTrajectories) {
+  const Outcome a = run_with_threads(1, GetParam());
+  const Outcome b = run_with_threads(2, GetParam());
   ASSERT_FALSE(a.crack_bonds.empty()) << "the test must exercise bond breakage";
   EXPECT_EQ(a.crack_bonds, b.crack_bonds);
   ASSERT_EQ(a.pos.size(), b.pos.size());
@@ -60,6 +79,10 @@ TEST(Determinism, OneAndTwoThreadsGiveBitwiseEqualTrajectories) {
   EXPECT_EQ(a.residual, b.residual);
   EXPECT_NE(a.wall_force, 0.0);
 }
+
+// Without and with dynamic damping: its marks are a maximum over the step's cracks, taken in
+// any order.
+INSTANTIATE_TEST_SUITE_P(LocalAndDynamicDamping, ThreadCounts, ::testing::Bool());
 
 // The pair pass sums each pair's loads straight into its particles' totals, block by block, with
 // cross slots for pairs that leave a block (state/pair_list.hpp). Against the plain reference, the
@@ -135,9 +158,15 @@ TEST(PairPass, ParticleTotalsAreTheSumsOfTheirPairs) {
 // A checkpoint taken between two steps, restored into a new simulation, continues bit for bit as
 // the original: positions, velocities, wall forces and work, the crack catalogue and the energy
 // ledger after further steps that break bonds and rebuild the neighbour lists.
-TEST(Checkpoint, RestoredSimulationContinuesBitwiseEqual) {
-  Simulation a = test::compressed_block(4, 4, 12, 2.0, 3e6);
+class CheckpointedRun : public ::testing::TestWithParam<bool> {};
+
+TEST_P(CheckpointedRun, RestoredSimulationContinuesBitwiseEqual) {
+  Simulation a =
+      test::compressed_block(4, 4, 12, 2.0, 3e6, 0.7, GetParam() ? with_dynamic_damping : nullptr);
   a.run(1237);  // mid-ramp, between energy samples and rebuilds
+  if (GetParam()) {
+    ASSERT_GT(grains_damped_less(a), 0u) << "the checkpoint must hold dynamic damping's marks";
+  }
   std::stringstream buf;
   ArchiveWriter w(buf);
   a.save_state(w);
@@ -170,6 +199,9 @@ TEST(Checkpoint, RestoredSimulationContinuesBitwiseEqual) {
   EXPECT_EQ(a.ledger().friction, b.ledger().friction);
   EXPECT_EQ(a.intact_bonds(), b.intact_bonds());
 }
+
+// Dynamic damping's marks are saved and carried on.
+INSTANTIATE_TEST_SUITE_P(LocalAndDynamicDamping, CheckpointedRun, ::testing::Bool());
 
 TEST(Checkpoint, TruncatedOrForeignDataIsRefusedWithAClearError) {
   Simulation a = test::compressed_block(2, 2, 2, 2.0, 3e6);

@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <utility>
 
+#include "breccia/core/error.hpp"
 #include "breccia/core/rng.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/sample/lattice.hpp"
@@ -235,6 +237,64 @@ TEST(Integrator, LocalDampingRemovesEnergyAndBooksIt) {
   // The loss is booked as the damping force's work with the ledger's trapezoidal rule, so the
   // balance closes to the geometric non-linearity of the bonds (as without damping).
   EXPECT_LT(std::abs(L.residual), 1e-6 * e0) << "relative residual " << L.residual / e0;
+}
+
+// Dynamic damping (docs/physics.md §2.1). Grains A and B share a weak bond, pulled apart by
+// constant loads F; C, beyond the radius, is pulled the same way. Each load points along its
+// grain's velocity, so a step adds (1 - alpha) F dt / m to the speed. From the step the bond
+// breaks, A and B (at R from the crack's contact point, inside the radius 3R) are damped with
+// alpha_near for the window of 24.5 steps (25 steps), then with alpha again; C (at about 20R)
+// keeps alpha throughout. Once broken, the loads are the grains' only forces.
+TEST(Integrator, DynamicDampingLowersTheDampingNearAFreshCrackForItsWindow) {
+  const double R = 0.5e-3, F = 1e-3, dt = 1e-7, alpha = 0.7, alpha_near = 0.1;
+  ParticleStore ps(Dimension::Three, 1.0);
+  ps.add({.tag = 1, .position = {0, 0, 0}, .radius = R, .density = 2650});
+  ps.add({.tag = 2, .position = {2 * R, 0, 0}, .radius = R, .density = 2650});
+  ps.add({.tag = 3, .position = {R, 20 * R, 0}, .radius = R, .density = 2650});
+  EngineConfig cfg;
+  cfg.time_step = dt;
+  cfg.local_damping = alpha;
+  cfg.energy_interval = 0;
+  cfg.dynamic_damping_alpha = alpha_near;
+  cfg.dynamic_damping_radius = 3 * R;
+  cfg.dynamic_damping_time = 24.5 * dt;
+  Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>({}, {}));
+  ParallelBond::Params bp;
+  bp.tensile_strength = 1e3;  // breaks within a few steps of pulling
+  bp.cohesion = 1e9;
+  sim.set_bond_params<ParallelBond>(bp);
+  sim.bond_touching_pairs<ParallelBond>(1e-9);
+  sim.initialise();
+  const Vec3 load[3] = {{-F, 0, 0}, {F, 0, 0}, {F, 0, 0}};
+  auto step = [&] {
+    for (std::size_t i = 0; i < 3; ++i) sim.external_force()[i] = load[i];
+    sim.step();
+  };
+  const double m = sim.particles().mass[0];
+  const double damped = (1 - alpha) * F * dt / m, near = (1 - alpha_near) * F * dt / m;
+  while (sim.cracks().empty() && sim.step_count() < 10000) {
+    const double vc = sim.particles().vel[2].x;
+    step();
+    EXPECT_NEAR(sim.particles().vel[2].x - vc, damped, 1e-9 * damped);
+  }
+  ASSERT_EQ(sim.cracks().size(), 1u) << "the bond must break";
+  const double t_break = sim.cracks().front().time;
+  EXPECT_EQ(sim.dynamically_damped_until(0), t_break + 24.5 * dt);
+  EXPECT_EQ(sim.dynamically_damped_until(1), t_break + 24.5 * dt);
+  EXPECT_EQ(sim.dynamically_damped_until(2), -std::numeric_limits<double>::infinity());
+  // The breaking step was the window's first; 24 more, then alpha again.
+  for (int k = 1; k < 40; ++k) {
+    const double va = sim.particles().vel[0].x, vb = sim.particles().vel[1].x,
+                 vc = sim.particles().vel[2].x;
+    step();
+    const double expected = k < 25 ? near : damped;
+    EXPECT_NEAR(va - sim.particles().vel[0].x, expected, 1e-9 * damped) << "step " << k;
+    EXPECT_NEAR(sim.particles().vel[1].x - vb, expected, 1e-9 * damped) << "step " << k;
+    EXPECT_NEAR(sim.particles().vel[2].x - vc, damped, 1e-9 * damped) << "step " << k;
+  }
+  EXPECT_EQ(sim.cracks().size(), 1u);
+  EXPECT_THROW(sim.set_dynamic_damping(1.0, R, dt), InputError);
+  EXPECT_THROW(sim.set_dynamic_damping(0.0, -R, dt), InputError);
 }
 
 TEST(Integrator, GravityWorkIsBooked) {

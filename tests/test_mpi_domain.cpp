@@ -586,6 +586,31 @@ TEST(MpiDomain, AGatheredSplitIsOneProcessToTheBit) {
       << "rank " << ranks::rank();
 }
 
+// Dynamic damping over ranks: each rank marks its own grains from every rank's cracks of the
+// step, so a split made in mid-run, with marks already set, steps as one process through the
+// next rebuild, and the gathered marks are one process's (the checkpoints hold them).
+TEST(MpiDomain, DynamicDampingOverRanksIsThatOfOneProcess) {
+  set_threads(1);
+  const auto dynamic = [](Simulation& sim) { sim.set_dynamic_damping(0.0, 2e-3, 2e-5); };
+  Simulation reference = test::compressed_block(5, 5, 20, 8.0, 3e6, 0.7, dynamic);
+  Simulation split = test::compressed_block(5, 5, 20, 8.0, 3e6, 0.7, dynamic);
+  step_both(reference, split, 500);
+  ASSERT_GT(split.cracks().size(), 0u) << "the split must come after bonds broke";
+  split.split_over_ranks();
+  step_both(reference, split, 600);
+  ASSERT_GT(split.neighbour_rebuilds(), 1u) << "the test must rebuild the lists";
+  std::size_t marked = 0;
+  for (std::size_t i = 0; i < split.particles().size(); ++i)
+    marked += std::isfinite(split.dynamically_damped_until(i)) ? 1 : 0;
+  EXPECT_GT(marked, 100u) << "rank " << ranks::rank();
+  expect_same_state(split, reference);
+  split.unsplit();
+  EXPECT_EQ(first_difference(checkpoint_of(split),
+                             from_root(ranks::root() ? checkpoint_of(reference) : std::string())),
+            "")
+      << "rank " << ranks::rank();
+}
+
 namespace {
 
 // Runs a law block split over the ranks beside a one-process copy and compares them: spheres

@@ -126,6 +126,9 @@ void transfer_engine_config(Archive& a, EngineConfig& c) {
   a.value(c.safety_factor);
   a.value(c.hertz_rayleigh_factor);
   a.value(c.local_damping);
+  a.value(c.dynamic_damping_alpha);
+  a.value(c.dynamic_damping_radius);
+  a.value(c.dynamic_damping_time);
   a.value(c.bond_normal_damping_ratio);
   a.value(c.bond_shear_damping_ratio);
   a.value(c.gravity);
@@ -133,7 +136,7 @@ void transfer_engine_config(Archive& a, EngineConfig& c) {
   a.value(c.seed);
   a.value(c.energy_interval);
   a.value(c.keep_pair_forces);
-  static_assert(sizeof(EngineConfig) == 104, "EngineConfig changed: save its new fields above");
+  static_assert(sizeof(EngineConfig) == 128, "EngineConfig changed: save its new fields above");
 }
 
 template <class Variant, std::size_t... I>
@@ -202,6 +205,7 @@ template <class Archive>
 void Simulation::transfer_cracks(Archive& a) {
   a.label("cracks");
   cracks_.transfer(a);
+  a.vector(damped_less_until_);
   a.sized(warnings_, 8);
   for (std::string& w : warnings_) a.string(w);
 }
@@ -214,7 +218,7 @@ void Simulation::transfer(Archive& a) {
   // are saved by law, so a new law needs nothing here.
   static_assert(sizeof(Simulation) - sizeof(ContactModel) - sizeof(wall_contacts_) -
                         sizeof(BondSets) - sizeof(JointSets) ==
-                    1784,
+                    1960,
                 "Simulation changed: update engine/checkpoint.cpp");
   a.label("simulation");
   if constexpr (Archive::reading)
@@ -297,6 +301,7 @@ Simulation Simulation::restore(ArchiveReader& a) {
   if (s.walls_.size() != std::visit([](const auto& v) { return v.size(); }, s.wall_contacts_))
     fail("walls");
   if (s.x_at_build_.size() != n ||
+      (!s.damped_less_until_.empty() && s.damped_less_until_.size() != n) ||
       (!s.drive_force_prev_.empty() && s.drive_force_prev_.size() != 2 * n))
     fail("per-particle arrays");
   std::visit(

@@ -1,6 +1,7 @@
 // The integrator (docs/physics.md §1.3-§1.4, §2.1): each particle's pair and wall loads (summed by
 // the pair and wall passes) with its cross slots added in a fixed order, external loads and
-// gravity, local damping, then the leapfrog kick and drift and the rotation update.
+// gravity, local damping (lowered near fresh cracks by dynamic damping), then the leapfrog kick and
+// drift and the rotation update.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -129,7 +130,11 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
   // A particle fixed or driven after the start: its driver force starts from zero.
   if (p_.has_drives() && drive_force_prev_.size() != 2 * n) drive_force_prev_.resize(2 * n);
   const double dt = dt_;
-  const double alpha = cfg_.local_damping;
+  const double alpha = cfg_.local_damping, alpha_near_crack = cfg_.dynamic_damping_alpha;
+  // Dynamic damping: the grains a recent crack reached, until their marks expire.
+  const double* const damped_less_until =
+      damped_less_until_.empty() ? nullptr : damped_less_until_.data();
+  const double now = time_;
   const Vec3 gravity = cfg_.gravity;
   const bool planar = p_.planar();
   const bool turning = !central_forces_only(c);
@@ -150,7 +155,9 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
       if (!turning) t = {};  // the walls' torques too are rounding then
       Kick k{p_.vel[i], p_.angvel[i], {}, {}};
       if (p_.motion[i] == Motion::Free)
-        kick_free(f, t, m, inertia, dt, alpha, sample, k, acc);
+        kick_free(f, t, m, inertia, dt,
+                  damped_less_until && now < damped_less_until[i] ? alpha_near_crack : alpha,
+                  sample, k, acc);
       else
         kick_driven(p_.motion[i] == Motion::Fixed, p_.drive_vel[i], p_.drive_angvel[i], planar, f,
                     t, m, inertia, dt, drive_force_prev_[2 * i], drive_force_prev_[2 * i + 1], k,

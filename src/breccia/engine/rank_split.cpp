@@ -587,6 +587,7 @@ void Simulation::unsplit() {
   const std::vector<IndexRange> ranges = split_->ranges;
   gather_particles();
   complete_particle_values(x_at_build_, ranges);
+  if (!damped_less_until_.empty()) complete_particle_values(damped_less_until_, ranges);
   if (!drive_force_prev_.empty()) {
     // Two entries a grain.
     std::vector<IndexRange> twice(ranges.size());

@@ -37,6 +37,8 @@ Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactMode
         std::pair{"bond_shear_damping_ratio", cfg_.bond_shear_damping_ratio}})
     if (!(value >= 0.0 && value <= 1.0))
       throw InputError(where, key, num(value), "allowed: 0 <= value <= 1");
+  set_dynamic_damping(cfg_.dynamic_damping_alpha, cfg_.dynamic_damping_radius,
+                      cfg_.dynamic_damping_time);
   if (!(cfg_.skin >= 0.0) || !std::isfinite(cfg_.skin))
     throw InputError(where, "skin", num(cfg_.skin), "must be >= 0 m (0 = automatic)");
   std::visit(
@@ -209,8 +211,10 @@ void Simulation::step() {
     refresh_ghosts();
   const bool sample =
       sample_requested_ || (cfg_.energy_interval > 0 && step_ % cfg_.energy_interval == 0);
+  const std::size_t cracks_before = cracks_.size();
   compute_pairs();
-  compute_walls();
+  compute_walls();  // on a split sample, with every rank's cracks of the step
+  mark_dynamic_damping(cracks_before);
   integrate(sample);
   if (sample) {
     sample_stored_energy();

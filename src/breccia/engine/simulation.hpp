@@ -33,6 +33,12 @@ struct EngineConfig {
   double safety_factor = 0.3;          // S of §1.5
   double hertz_rayleigh_factor = 0.2;  // fraction of the Rayleigh time step for Hertz contacts
   double local_damping = 0.0;          // Cundall alpha (§2.1)
+  // Dynamic damping (§2.1): for dynamic_damping_time after a crack, the free grains within
+  // dynamic_damping_radius of it are damped with dynamic_damping_alpha instead of local_damping,
+  // so that the crack's stored energy leaves as waves. Off while either is 0.
+  double dynamic_damping_alpha = 0.0;
+  double dynamic_damping_radius = 0.0;  // m
+  double dynamic_damping_time = 0.0;    // s
   // Dashpots in parallel with every intact bond, as critical-damping ratios of its normal and
   // shear stiffness (§2.2); 0 = none.
   double bond_normal_damping_ratio = 0.0;
@@ -264,6 +270,12 @@ class Simulation {
   // Changes the local damping coefficient between two steps (scripted stages); throws
   // InputError outside 0 <= alpha < 1.
   void set_local_damping(double alpha);
+  // Turns dynamic damping on (radius and time > 0) or off (both 0) between two steps; throws
+  // InputError outside 0 <= alpha < 1 or for a negative radius or time.
+  void set_dynamic_damping(double alpha, double radius, double time);
+  // Until when grain i is damped with the dynamic-damping coefficient (-inf: not since the last
+  // crack near it, or dynamic damping off).
+  double dynamically_damped_until(std::size_t i) const noexcept;
 
   // The engine's own arrays per particle besides the store (run/memory_budget.cpp): positions at
   // the last rebuild and the pair list's two offsets (driver loads only with driven grains).
@@ -483,6 +495,11 @@ class Simulation {
   void compute_pairs();
   void compute_walls();
   void integrate(bool sample);
+  // Dynamic damping (engine/dynamic_damping.cpp): the rank's own grains within the radius of the
+  // cracks [first_crack, end) of the catalogue are damped less until each crack's time plus the
+  // window; called once the step's cracks of every rank are in the catalogue.
+  void mark_dynamic_damping(std::size_t first_crack);
+  void build_dynamic_damping_grid();
   void sample_stored_energy();
   void advance_walls();
   template <class CL>
@@ -655,6 +672,18 @@ class Simulation {
   double radius_growth_ = 0.0;  // largest radius increase since the last neighbour rebuild
 
   CrackCatalogue cracks_;
+  // Per grain: until when dynamic damping applies (empty while it is off or before any crack).
+  std::vector<double> damped_less_until_;
+  // The own grains binned by their positions at the last rebuild, for the dynamic-damping
+  // regions (rebuilt after each neighbour rebuild; not saved: it follows from x_at_build_).
+  struct RegionGrid {
+    Vec3 lo;
+    double inv_h = 0.0;
+    std::int64_t nx = 1, ny = 1, nz = 1;
+    std::vector<std::uint32_t> start, items;
+    std::uint64_t built_at = ~std::uint64_t{0};  // rebuilds_ when built
+    std::size_t own_begin = 0, own_end = 0;
+  } region_grid_;
   std::vector<std::string> warnings_;
   EnergyLedger ledger_;
   std::optional<EnergyLedger> baseline_;

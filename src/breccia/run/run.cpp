@@ -714,6 +714,14 @@ class ScratchFolder {
   fs::path path_;
 };
 
+// Dynamic damping as the engine applies it (null when off).
+json dynamic_damping_json(const EngineConfig& c) {
+  if (!(c.dynamic_damping_radius > 0.0 && c.dynamic_damping_time > 0.0)) return nullptr;
+  return {{"alpha", c.dynamic_damping_alpha},
+          {"radius_m", c.dynamic_damping_radius},
+          {"time_s", c.dynamic_damping_time}};
+}
+
 // manifest.json as a run starts: what made it, on what, from which experiment, "running".
 json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptions& opt) {
   json m = {{"program", "breccia"},
@@ -730,6 +738,7 @@ json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptio
             {"grain_density_kg_m3", spec.density},
             {"simulated_density_kg_m3", spec.density * spec.density_scaling},
             {"bar_wave_speed_m_s", b.bar_wave_speed},
+            {"dynamic_damping", dynamic_damping_json(b.sim.config())},
             {"sample", b.sample_report},
             {"material", material_provenance(spec)},
             {"resolved_experiment", to_toml(spec)}};

@@ -10,6 +10,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "breccia/analysis/ae_clustering.hpp"
 #include "breccia/core/checksum.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/core/format.hpp"
@@ -478,6 +479,27 @@ void add_joints(const ExperimentSpec& s, Simulation& sim) {
 
 namespace {
 
+// Dynamic damping's region and window (docs/physics.md §2.1), each unless given: the AE source
+// radius, 3 x the largest rock grain's diameter (or ae.source_radius), and the AE event duration
+// 4 r / v_S (docs/analysis.md §4.1) with v_S = sqrt(G / rho) from the bond modulus, nu = 0.25
+// and the (scaled) bulk density (or ae.shear_wave_speed). The AE monitor fits v_S on the test's
+// own modulus at the first crack; the engine needs its window before any crack.
+void resolve_dynamic_damping(const ExperimentSpec& s, Simulation& sim, std::size_t rock,
+                             double bulk_density) {
+  if (!s.dynamic_damping) return;
+  double r_max = 0.0;
+  for (std::size_t i = 0; i < rock; ++i) r_max = std::max(r_max, sim.particles().pos_rad[i].r);
+  const double radius = s.engine.dynamic_damping_radius > 0.0 ? s.engine.dynamic_damping_radius
+                        : s.ae_source_radius > 0.0            ? s.ae_source_radius
+                                                              : 3.0 * (2.0 * r_max);
+  const double v_s = s.ae_shear_wave_speed > 0.0
+                         ? s.ae_shear_wave_speed
+                         : analysis::shear_wave_speed(bond_moduli(s).young, 0.25, bulk_density);
+  const double time = s.engine.dynamic_damping_time > 0.0 ? s.engine.dynamic_damping_time
+                                                          : analysis::event_duration(radius, v_s);
+  sim.set_dynamic_damping(s.engine.dynamic_damping_alpha, radius, time);
+}
+
 // Everything of `build` but the consolidation: the sample, its bonds and joints, the test and
 // the checks of the run's size.
 Built assemble(const ExperimentSpec& s, const std::function<void(const std::string&)>& log) {
@@ -531,6 +553,7 @@ Built assemble(const ExperimentSpec& s, const std::function<void(const std::stri
   const double volume = (hi - lo) * (footprint_hi[0] - footprint_lo[0]) *
                         (s.dimension == 2 ? s.thickness : footprint_hi[1] - footprint_lo[1]);
   const double v_bar = std::sqrt(bond_moduli(s).young / (mass / volume));
+  resolve_dynamic_damping(s, sim, rock, mass / volume);
   check_run_budget(s, sim, hi - lo, v_bar);
   return Built{std::move(sim), std::move(protocol), v_bar, report, 0};
 }

@@ -35,6 +35,9 @@ struct ExperimentSpec {
   double gravity = 0.0;          // m/s^2 along -z (3D) or -y (2D)
   EngineConfig engine;           // gravity is filled from `gravity` when the simulation is built
   double density_scaling = 1.0;  // mass and inertia factor for quasi-static runs (>= 1)
+  // Dynamic damping (engine.dynamic_damping_*; radius and time 0 = resolved when the sample is
+  // built: the AE source radius and its event duration).
+  bool dynamic_damping = false;
   // [material]
   std::string preset = "custom";
   // [sample]

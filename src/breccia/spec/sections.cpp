@@ -227,6 +227,22 @@ std::vector<SpecField> engine_fields() {
        "fraction of the critical time step used", 0, 1, false, true},
       {"engine", "local_damping", "", engine_at<&EngineConfig::local_damping>,
        "Cundall local damping coefficient alpha (§2.1); 0.7 is quasi-static", 0, 1, true, false},
+      {"engine", "dynamic_damping", "", at<&S::dynamic_damping>,
+       "lower the local damping of the grains around each fresh crack while its waves leave the "
+       "source (Hazzard et al. 2000's dynamic damping; docs/physics.md §2.1)"},
+      {"engine", "dynamic_damping_alpha", "", engine_at<&EngineConfig::dynamic_damping_alpha>,
+       "local damping coefficient of the grains near a fresh crack (with dynamic_damping)", 0, 1,
+       true, false},
+      {"engine", "dynamic_damping_radius", "m", engine_at<&EngineConfig::dynamic_damping_radius>,
+       "the grains whose centres lie within this distance of a crack's contact point are damped "
+       "less (with dynamic_damping); 0 = the AE source radius, 3 x the largest grain diameter "
+       "(or ae.source_radius)",
+       0, kInf},
+      {"engine", "dynamic_damping_time", "s", engine_at<&EngineConfig::dynamic_damping_time>,
+       "how long after its crack a grain is damped less (with dynamic_damping); 0 = the AE event "
+       "duration 4 r / v_S, with r the radius above and v_S = sqrt(G / rho) from the bond "
+       "modulus, Poisson's ratio 0.25 and the (scaled) bulk density (or ae.shear_wave_speed)",
+       0, kInf},
       {"engine", "bond_normal_damping_ratio", "",
        engine_at<&EngineConfig::bond_normal_damping_ratio>,
        "critical-damping ratio of a dashpot along every intact bond's normal, on its normal "
