@@ -479,24 +479,25 @@ void add_joints(const ExperimentSpec& s, Simulation& sim) {
 
 namespace {
 
-// Dynamic damping's region and window (docs/physics.md §2.1), each unless given: the AE source
-// radius, 3 x the largest rock grain's diameter (or ae.source_radius), and the AE event duration
-// 4 r / v_S (docs/analysis.md §4.1) with v_S = sqrt(G / rho) from the bond modulus, nu = 0.25
-// and the (scaled) bulk density (or ae.shear_wave_speed). The AE monitor fits v_S on the test's
-// own modulus at the first crack; the engine needs its window before any crack.
+// Dynamic damping's region and window (docs/physics.md §2.3), each unless given: the largest
+// rock grain's diameter (the broken bond's grains and those touching them), and the time a
+// rupture at half the shear-wave speed takes to reach the region's edge, 2 r / v_S (seed 003's
+// event duration: "twice the time for a shear wave to propagate to the edge of the source
+// area"), with v_S = sqrt(G / rho) from the bond modulus, nu = 0.25 and the (scaled) bulk density
+// (or ae.shear_wave_speed). The AE monitor fits v_S on the test's own modulus at the first
+// crack; the engine needs its window before any crack.
 void resolve_dynamic_damping(const ExperimentSpec& s, Simulation& sim, std::size_t rock,
                              double bulk_density) {
   if (!s.dynamic_damping) return;
   double r_max = 0.0;
   for (std::size_t i = 0; i < rock; ++i) r_max = std::max(r_max, sim.particles().pos_rad[i].r);
-  const double radius = s.engine.dynamic_damping_radius > 0.0 ? s.engine.dynamic_damping_radius
-                        : s.ae_source_radius > 0.0            ? s.ae_source_radius
-                                                              : 3.0 * (2.0 * r_max);
+  const double radius =
+      s.engine.dynamic_damping_radius > 0.0 ? s.engine.dynamic_damping_radius : 2.0 * r_max;
   const double v_s = s.ae_shear_wave_speed > 0.0
                          ? s.ae_shear_wave_speed
                          : analysis::shear_wave_speed(bond_moduli(s).young, 0.25, bulk_density);
-  const double time = s.engine.dynamic_damping_time > 0.0 ? s.engine.dynamic_damping_time
-                                                          : analysis::event_duration(radius, v_s);
+  const double time =
+      s.engine.dynamic_damping_time > 0.0 ? s.engine.dynamic_damping_time : 2.0 * radius / v_s;
   sim.set_dynamic_damping(s.engine.dynamic_damping_alpha, radius, time);
 }
 

@@ -235,13 +235,14 @@ std::vector<SpecField> engine_fields() {
        true, false},
       {"engine", "dynamic_damping_radius", "m", engine_at<&EngineConfig::dynamic_damping_radius>,
        "the grains whose centres lie within this distance of a crack's contact point are damped "
-       "less (with dynamic_damping); 0 = the AE source radius, 3 x the largest grain diameter "
-       "(or ae.source_radius)",
+       "less (with dynamic_damping); 0 = the largest grain diameter (the crack's grains and "
+       "those touching them)",
        0, kInf},
       {"engine", "dynamic_damping_time", "s", engine_at<&EngineConfig::dynamic_damping_time>,
-       "how long after its crack a grain is damped less (with dynamic_damping); 0 = the AE event "
-       "duration 4 r / v_S, with r the radius above and v_S = sqrt(G / rho) from the bond "
-       "modulus, Poisson's ratio 0.25 and the (scaled) bulk density (or ae.shear_wave_speed)",
+       "how long after its crack a grain is damped less (with dynamic_damping); 0 = 2 r / v_S, "
+       "a rupture at half the shear-wave speed reaching the radius above, with v_S = sqrt(G / "
+       "rho) from the bond modulus, Poisson's ratio 0.25 and the (scaled) bulk density (or "
+       "ae.shear_wave_speed)",
        0, kInf},
       {"engine", "bond_normal_damping_ratio", "",
        engine_at<&EngineConfig::bond_normal_damping_ratio>,
