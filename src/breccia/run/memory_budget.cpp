@@ -33,6 +33,8 @@ MemoryEstimate estimate_memory(const ExperimentSpec& s, std::size_t particles, s
   const double bond_count = bonds > 0 ? static_cast<double>(bonds) : n * (planar ? 2.0 : 3.0);
   e.particle_bytes = n * static_cast<double>(ParticleStore::kBytesPerParticle +
                                              Simulation::kScratchBytesPerParticle);
+  // Dynamic damping's mark per grain (and its grid of the grains, a few bytes more).
+  if (s.dynamic_damping) e.particle_bytes += n * static_cast<double>(sizeof(double) + 8);
   // The pair pass keeps an array of pair forces unless the laws' states give them back
   // (Simulation::pair_force): dashpots on the bonds or contacts, or a law without state forces.
   bool forces_kept = s.engine.bond_normal_damping_ratio > 0.0 ||
