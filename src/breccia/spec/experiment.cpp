@@ -229,6 +229,21 @@ void check_bond_gap(const ExperimentSpec& s, const std::string& source) {
                                  which, num(smallest)));
 }
 
+// The [engine] keys that depend on others.
+void check_engine(const ExperimentSpec& s, const std::string& source) {
+  if (!s.dynamic_damping)
+    for (const auto& [key, value] :
+         {std::pair{"engine.dynamic_damping_alpha", s.engine.dynamic_damping_alpha},
+          std::pair{"engine.dynamic_damping_radius", s.engine.dynamic_damping_radius},
+          std::pair{"engine.dynamic_damping_time", s.engine.dynamic_damping_time}})
+      if (value != 0.0)
+        throw InputError(source, key, num(value),
+                         "applies with engine.dynamic_damping = true only (it is false)");
+  if (s.density_scaling > 1.0 && s.gravity > 0.0)
+    throw InputError(source, "engine.density_scaling", num(s.density_scaling),
+                     "must be 1 when gravity is on: scaled masses would scale the weight");
+}
+
 void check_consistency(const ExperimentSpec& s, const std::string& source) {
   if ((s.sample_source == "file" || s.sample_source == "table" || s.sample_source == "gengeo") &&
       s.geometry_file.empty())
@@ -302,17 +317,7 @@ void check_consistency(const ExperimentSpec& s, const std::string& source) {
   }
   visit_lab_test(
       s.test, [&]<class T>(const typename T::Params& p) { T::check(p, sample_info(s), source); });
-  if (!s.dynamic_damping)
-    for (const auto& [key, value] :
-         {std::pair{"engine.dynamic_damping_alpha", s.engine.dynamic_damping_alpha},
-          std::pair{"engine.dynamic_damping_radius", s.engine.dynamic_damping_radius},
-          std::pair{"engine.dynamic_damping_time", s.engine.dynamic_damping_time}})
-      if (value != 0.0)
-        throw InputError(source, key, num(value),
-                         "applies with engine.dynamic_damping = true only (it is false)");
-  if (s.density_scaling > 1.0 && s.gravity > 0.0)
-    throw InputError(source, "engine.density_scaling", num(s.density_scaling),
-                     "must be 1 when gravity is on: scaled masses would scale the weight");
+  check_engine(s, source);
 }
 
 }  // namespace
