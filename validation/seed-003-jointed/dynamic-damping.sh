@@ -6,7 +6,7 @@
 #   /usr/bin/python3 validation/seed-003-jointed/tables.py OUT/*ucs*
 # where each RUN is `local` (no dynamic damping), `dynamic` (the defaults: r_d the largest grain
 # diameter, T_d = 2 r_d / v_S), or RADIUS:TIME in metres and seconds (the README's scan, whose
-# windows 4 r_d / v_S are given in seconds). Two runs at a time, one thread each: 8-13 min per run
+# windows 4 r_d / v_S are given in seconds). Two runs at a time, one thread each: 7-9 min per run
 # on 2 cores (AMD EPYC). LARGE=1 runs them on large.sh's 21,580 grains (0.165-0.27 mm), one at a
 # time on two threads, 16-17 min each.
 set -euo pipefail
