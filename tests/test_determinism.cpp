@@ -84,6 +84,37 @@ TEST_P(ThreadCounts, OneAndTwoThreadsGiveBitwiseEqualTrajectories) {
 // any order.
 INSTANTIATE_TEST_SUITE_P(LocalAndDynamicDamping, ThreadCounts, ::testing::Bool());
 
+// Dynamic damping's grid search against the plain reference: each step's cracks mark exactly the
+// grains whose centres lay within the radius of their contact points at the step's start (the
+// marks come before the step's integration), with the crack's time plus the window, through
+// bond breaks and neighbour rebuilds.
+TEST(DynamicDamping, MarksAreThoseOfASearchOverEveryGrain) {
+  Simulation sim = test::compressed_block(5, 5, 20, 8.0, 3e6, 0.7, with_dynamic_damping);
+  const double radius = sim.config().dynamic_damping_radius;
+  const double window = sim.config().dynamic_damping_time;
+  const std::size_t n = sim.particles().size();
+  std::vector<double> expected(n, -std::numeric_limits<double>::infinity());
+  std::vector<Vec3> x(n);
+  std::size_t checked_cracks = 0;
+  while (sim.step_count() < 1100) {
+    for (std::size_t i = 0; i < n; ++i) x[i] = sim.particles().pos_rad[i].x;
+    const std::size_t before = sim.cracks().size();
+    sim.step();
+    for (std::size_t k = before; k < sim.cracks().size(); ++k) {
+      const CrackRecord c = sim.cracks()[k];
+      for (std::size_t i = 0; i < n; ++i)
+        if (norm2(x[i] - c.position) <= radius * radius)
+          expected[i] = std::max(expected[i], c.time + window);
+      ++checked_cracks;
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      ASSERT_EQ(sim.dynamically_damped_until(i), expected[i])
+          << "grain " << i << " at step " << sim.step_count();
+  }
+  EXPECT_GT(checked_cracks, 500u) << "the test must break bonds";
+  EXPECT_GT(sim.neighbour_rebuilds(), 1u) << "the test must rebuild the lists";
+}
+
 // The pair pass sums each pair's loads straight into its particles' totals, block by block, with
 // cross slots for pairs that leave a block (state/pair_list.hpp). Against the plain reference, the
 // pair forces summed per particle in another order: they agree to rounding. Each particle sums
