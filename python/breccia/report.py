@@ -437,7 +437,10 @@ def energy_budget(summary, hist, outdir, figures):
     e = col(hist, "axial_strain", 100)
     bond = sum(col(hist, f"bond_{c}_j") for c in
                ("tension", "compression", "shear", "bending", "twisting"))
-    series = [("external work", col(hist, "boundary_work_j"), "k", "-"),
+    # Work of the walls and platens, and of the loads on grains (membranes) where recorded.
+    loads = col(hist, "external_load_work_j")
+    work = col(hist, "boundary_work_j") + np.where(np.isfinite(loads), loads, 0.0)
+    series = [("external work", work, "k", "-"),
               ("bond strain energy", bond, "tab:blue", "-"),
               ("contact strain energy", col(hist, "contact_strain_j"), "tab:cyan", "-"),
               ("kinetic", col(hist, "kinetic_j"), "tab:olive", "-"),

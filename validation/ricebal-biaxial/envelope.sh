@@ -25,7 +25,7 @@ for v in ("default", "bond.interface_totals=false", "bond.moment_factor=0"):
                     key=lambda p: json.load(open(p)).get("confining_stress_pa") or 0):
         s = json.load(open(f))
         e = s["energy"]
-        w = e["boundary_work_j"]
+        w = e["boundary_work_j"] + e.get("external_load_work_j", 0.0)  # platens + membranes
         strain = e["contact_strain_j"] + sum(e["bond_strain_j"].values())
         print(f"| {v} | {(s.get('confining_stress_pa') or 0) / 1e6:.0f} | "
               f"{s['peak_deviatoric_stress_mpa']:.1f} | {s['bonds_broken']} | "

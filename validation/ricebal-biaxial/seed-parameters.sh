@@ -37,7 +37,7 @@ for v in sys.argv[2:]:
     runs = [json.load(open(f)) for f in glob.glob(os.path.join(sys.argv[1], v, "*", "*", "summary.json"))]
     for s in sorted(runs, key=lambda s: s.get("confining_stress_pa") or 0):
         e = s["energy"]
-        w = e["boundary_work_j"]
+        w = e["boundary_work_j"] + e.get("external_load_work_j", 0.0)  # platens + membranes
         strain = e["contact_strain_j"] + sum(e["bond_strain_j"].values())
         p = round((s.get("confining_stress_pa") or 0) / 1e6)
         q, sh, fr, se = seed[p]

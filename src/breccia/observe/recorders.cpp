@@ -84,6 +84,7 @@ std::vector<std::string> history_header(const std::vector<std::string>& extra) {
                              "bond_twisting_j",
                              "contact_strain_j",
                              "boundary_work_j",
+                             "external_load_work_j",
                              "friction_j",
                              "local_damping_j",
                              "viscous_damping_j",
@@ -134,13 +135,13 @@ void HistoryRecorder::record(const Simulation& sim, const AxialState& a,
       "{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
       "{},{},{},{},{},"
       "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
-      "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g}",
+      "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g}",
       sim.step_count(), sim.time(), a.strain, a.stress, a.stress_nominal, a.deviatoric,
       a.confining_stress, a.lateral_strain, a.volumetric_strain, a.gauge_strain,
       a.gauge_lateral_strain, a.force_bottom, a.force_top, sim.cracks().size(), tensile,
       sim.cracks().size() - tensile, counts.intact_bonds, counts.active_contacts, L.kinetic(),
       L.bond.tension, L.bond.compression, L.bond.shear, L.bond.bending, L.bond.twisting, L.contact,
-      L.boundary_work, L.friction, L.local_damping, L.viscous_damping, L.deleted,
+      L.boundary_work, L.external_work, L.friction, L.local_damping, L.viscous_damping, L.deleted,
       L.released.total(), L.residual, L.residual_relative);
   for (double v : extra) line += fmt::format(",{:.9g}", v);
   csv_.write_line(line);

@@ -58,7 +58,17 @@ struct Table {
     return static_cast<std::size_t>(it - columns.begin());
   }
   double at(std::size_t row, const std::string& name) const { return rows[row][col(name)]; }
+  bool has(const std::string& name) const {
+    return std::find(columns.begin(), columns.end(), name) != columns.end();
+  }
 };
+
+// The work done on the sample up to a row: walls and driven grains, and the loads applied to
+// grains (membranes), which a run recorded before that column existed did not write.
+double work_in(const Table& hist, std::size_t row) {
+  return hist.at(row, "boundary_work_j") +
+         (hist.has("external_load_work_j") ? hist.at(row, "external_load_work_j") : 0.0);
+}
 
 Table read_table(const fs::path& p) {
   Table t;
@@ -576,7 +586,7 @@ json ledger_row(const Table& hist, std::size_t r) {
                       v("bond_bending_j") + v("bond_twisting_j");
   return json{{"axial_strain", v("axial_strain")},
               {"deviatoric_stress_pa", v("deviatoric_stress_pa")},
-              {"external_work_j", v("boundary_work_j")},
+              {"external_work_j", work_in(hist, r)},
               {"bond_strain_j",
                {{"tension", v("bond_tension_j")},
                 {"compression", v("bond_compression_j")},
@@ -611,7 +621,7 @@ json continuum_estimates(const FailureInputs& in, const Table& hist, std::size_t
               k_lat * 0.5 * (s3a + s3b) * (s.lateral_strain[r] - s.lateral_strain[r - 1]);
   }
   w_cont *= in.volume0;
-  const double w_engine = hist.at(last, "boundary_work_j") - hist.at(0, "boundary_work_j");
+  const double w_engine = work_in(hist, last) - work_in(hist, 0);
   const double E = an.e_t50.valid ? an.e_t50.slope : kNaN, nu = an.poisson;
   const double s3 = confining_stress(in.spec), s1 = an.sigma1_at_peak, q = an.peak_deviatoric;
   const double ue = analysis::elastic_energy_density(s1, s3, E, nu);
@@ -661,9 +671,9 @@ json energy_budget_summary(const fs::path& folder, const FailureInputs& in) {
                           {"at_crack_damage", ledger_row(hist, icd)},
                           {"at_peak", ledger_row(hist, ip)}});
   double rel_max = 0.0;
-  const double w_final = hist.at(last, "boundary_work_j");
+  const double w_final = work_in(hist, last);
   for (std::size_t r = 0; r <= last; ++r)
-    if (std::abs(hist.at(r, "boundary_work_j")) > 0.01 * std::abs(w_final))
+    if (std::abs(work_in(hist, r)) > 0.01 * std::abs(w_final))
       rel_max = std::max(rel_max, std::abs(hist.at(r, "energy_residual_relative")));
   json out = {{"convention",
                "cumulative from the engine's first step (consolidation included); residual = "

@@ -54,6 +54,7 @@ json ledger_json(const EnergyLedger& L) {
                 {"twisting", L.bond.twisting}}},
               {"contact_strain_j", L.contact},
               {"boundary_work_j", L.boundary_work},
+              {"external_load_work_j", L.external_work},
               {"body_force_work_j", L.body_force_work},
               {"friction_j", L.friction},
               {"joint_slip_j", L.joint_slip},
