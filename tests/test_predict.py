@@ -112,6 +112,59 @@ def test_the_networks_forward_pass_is_scikit_learns_and_survives_saving():
     assert again.predict(X) == pytest.approx(net.predict(X), rel=0, abs=0)
 
 
+def test_gradient_boosting_recovers_the_planted_relation_under_the_same_folds():
+    data = planted()
+    target = "stress_to_failure_mpa"
+    folds, pooled = predict.leave_one_test_out(data, predict.INPUTS, target,
+                                               learner="gradient_boosting")
+    net_folds, _ = predict.leave_one_test_out(data, predict.INPUTS, target, networks=1)
+    assert (folds["learner"] == "gradient_boosting").all()
+    assert folds[["held_out", "validation"]].equals(net_folds[["held_out", "validation"]])
+    # Trees approximate the smooth 40 (d2 - 0.8)^2 by steps; the noise is 0.5 MPa on a target
+    # spanning 0-78 MPa, so held-out R^2 > 0.95 as for the network.
+    assert predict.r2(pooled["y"], pooled["predicted"]) > 0.95
+    train, val = data[data["test"] != "t2"], data[data["test"] == "t2"]
+    trees = predict.Boosting.fit(train[predict.INPUTS], train[target], val[predict.INPUTS],
+                                 val[target], predict.INPUTS, target)
+    # The planted input carries nearly all the squared-error reduction.
+    assert int(np.argmax(trees.importance())) == predict.INPUTS.index("d2")
+    assert trees.importance()[predict.INPUTS.index("d2")] > 0.9
+    # The number of trees is the validation test's best over a full fit's stages.
+    from sklearn.ensemble import GradientBoostingRegressor
+    full = GradientBoostingRegressor(n_estimators=300, learning_rate=0.05, max_depth=3,
+                                     random_state=0).fit(train[predict.INPUTS], train[target])
+    errors = [predict.rmse(val[target], p) for p in full.staged_predict(val[predict.INPUTS])]
+    chosen = predict.Boosting.fit(train[predict.INPUTS], train[target], val[predict.INPUTS],
+                                  val[target], predict.INPUTS, target, max_trees=300)
+    assert chosen.trees == int(np.argmin(errors)) + 1 < 300
+    assert chosen.predict(val[predict.INPUTS]) == pytest.approx(
+        list(full.staged_predict(val[predict.INPUTS]))[chosen.trees - 1], rel=1e-12)
+
+
+def test_training_scores_both_learners_and_refuses_an_unknown_one(monkeypatch):
+    data = planted(tests=4, per_test=40)
+    per_test = data.groupby("test").agg(confining_mpa=("confining_mpa", "first"),
+                                        windows=("d2", "size")).reset_index()
+    per_test["dropped_missing_input"] = 0
+    monkeypatch.setattr(predict, "dataset", lambda paths, inputs, log: (data, per_test))
+    target_only = planted(tests=4, per_test=40)  # the strain target: planted on D2 as well
+    data["strain_to_failure"] = target_only["stress_to_failure_mpa"] / 1000.0
+    with tempfile.TemporaryDirectory() as out:
+        model = predict.train(["x"], os.path.join(out, "m"), predict.INPUTS, networks=1,
+                              log=lambda *a: None)
+        for name in ("stress", "strain"):
+            gb = model["targets"][name]["gradient_boosting"]
+            assert gb["loto_r2_pooled"] > 0.9 and gb["trees_final"] >= 1
+            assert max(gb["importance"], key=gb["importance"].get) == "d2"
+        folds = pd.read_csv(os.path.join(out, "m", "validation.csv"))
+        assert sorted(folds["learner"].unique()) == ["gradient_boosting", "network"]
+        assert len(folds) == 2 * 2 * 4  # two learners, two targets, four folds
+        imp = pd.read_csv(os.path.join(out, "m", "importance.csv"))
+        assert imp["gradient_boosting"].notna().all()
+        with pytest.raises(predict.PredictError, match="learners = trees"):
+            predict.train(["x"], os.path.join(out, "n"), predict.INPUTS, learners=["trees"])
+
+
 def small_run(out, extra=()):
     cmd = [CLI, "run", "--quiet", "--output", out, "--set", 'sample.source="file"',
            "--set", f'sample.file="{SOURCE}/tests/data/ucs-small.geom"',

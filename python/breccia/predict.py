@@ -13,8 +13,11 @@ in kind. Ten networks with different seeds are trained and the one with the lowe
 validation test is kept. Validation is leave-one-test-out (§10.4): each fold holds one test out
 for testing and one other for validation. Input importance is Garson's (§10.6) with Olden's
 signed connection weights beside it. A trained model is a JSON file of its weights and scalers.
+Gradient-boosted trees, scored under the same folds, stand beside the network as a second
+learner (what the seed did not have).
 
     breccia predict train SWEEP_OR_RUN... --output MODEL [--inputs ...] [--networks 10]
+                          [--learners network,gradient_boosting]
     breccia predict apply RUN --model MODEL
     (or python3 -m breccia.predict train|apply ...)
 """
@@ -247,6 +250,57 @@ def best_of(X, y, Xv, yv, inputs, target, networks, seed0=0):
     return nets[int(np.argmin(errors))], nets
 
 
+class Boosting:
+    """Gradient-boosted regression trees (scikit-learn's GradientBoostingRegressor: squared
+    error, depth-3 trees, learning rate 0.05) on the raw inputs (trees need no scaling and are
+    blind to the log of MCvar and AEvar). The number of trees is the one with the lowest RMSE on
+    the validation test, the role the validation test plays in choosing among the networks."""
+
+    LEARNING_RATE, DEPTH, MAX_TREES = 0.05, 3, 1000
+
+    def __init__(self, inputs, target, model):
+        self.inputs, self.target, self.model = list(inputs), target, model
+
+    @classmethod
+    def fit(cls, X, y, Xv, yv, inputs, target, seed=0, max_trees=MAX_TREES):
+        from sklearn.ensemble import GradientBoostingRegressor
+
+        def regressor(trees):
+            return GradientBoostingRegressor(
+                n_estimators=trees, learning_rate=cls.LEARNING_RATE, max_depth=cls.DEPTH,
+                subsample=1.0, random_state=seed)
+        X, y = np.asarray(X, float), np.asarray(y, float)
+        full = regressor(max_trees).fit(X, y)
+        errors = [rmse(yv, p) for p in full.staged_predict(np.asarray(Xv, float))]
+        trees = int(np.argmin(errors)) + 1
+        # A refit to that many trees repeats the first trees of the full fit (no subsampling).
+        return cls(inputs, target, full if trees == max_trees else regressor(trees).fit(X, y))
+
+    @property
+    def trees(self):
+        return int(self.model.n_estimators)
+
+    def predict(self, X):
+        return self.model.predict(np.asarray(X, float))
+
+    def importance(self):
+        """Impurity-based importances (each input's share of the squared-error reduction)."""
+        return np.asarray(self.model.feature_importances_, float)
+
+
+LEARNERS = ("network", "gradient_boosting")
+
+
+def fit_learner(learner, train_rows, val_rows, inputs, target, networks):
+    """The chosen learner fitted on the training tests, with the validation test choosing among
+    networks or the number of trees."""
+    X, y = train_rows[inputs], train_rows[target]
+    Xv, yv = val_rows[inputs], val_rows[target]
+    if learner == "gradient_boosting":
+        return Boosting.fit(X, y, Xv, yv, inputs, target)
+    return best_of(X, y, Xv, yv, inputs, target, networks)[0]
+
+
 def validation_test(tests_by_pc, held_out):
     """The validation test of a fold: the remaining test nearest in confining pressure to the
     held-out one (so the training tests keep the ends of the range whenever they can)."""
@@ -255,8 +309,9 @@ def validation_test(tests_by_pc, held_out):
     return min(others, key=lambda t: (abs(pc[t] - pc[held_out]), t))
 
 
-def leave_one_test_out(data, inputs, target, networks=10):
-    """Per-fold metrics and the pooled held-out predictions (docs/analysis.md §10.4)."""
+def leave_one_test_out(data, inputs, target, networks=10, learner="network"):
+    """Per-fold metrics and the pooled held-out predictions (docs/analysis.md §10.4), for the
+    seed's network or gradient boosting, under the same folds."""
     tests = data.groupby("test")["confining_mpa"].first().sort_values()
     if len(tests) < 3:
         raise PredictError(f"{len(tests)} tests with usable windows: leave-one-test-out needs "
@@ -266,10 +321,9 @@ def leave_one_test_out(data, inputs, target, networks=10):
         val = validation_test(tests.items(), held)
         train = data[~data["test"].isin([held, val])]
         v, t = data[data["test"] == val], data[data["test"] == held]
-        net, _ = best_of(train[inputs], train[target], v[inputs], v[target], inputs, target,
-                         networks)
-        p = net.predict(t[inputs])
-        folds.append({"target": target, "held_out": held, "confining_mpa": tests[held],
+        p = fit_learner(learner, train, v, inputs, target, networks).predict(t[inputs])
+        folds.append({"learner": learner, "target": target, "held_out": held,
+                      "confining_mpa": tests[held],
                       "validation": val, "train_windows": len(train), "test_windows": len(t),
                       "rmse": rmse(t[target], p), "r2": r2(t[target], p)})
         pooled.append(pd.DataFrame({"test": held, "y": t[target].to_numpy(), "predicted": p}))
@@ -280,11 +334,17 @@ def leave_one_test_out(data, inputs, target, networks=10):
 # train / apply
 # ---------------------------------------------------------------------------------------------
 
-def train(paths, output, inputs=INPUTS, networks=10, log=print):
+def train(paths, output, inputs=INPUTS, networks=10, log=print, learners=LEARNERS):
     """Builds the data set, validates leave-one-test-out, trains the final networks (all tests
     but one kept for validation), and writes model.json, dataset.csv, windows.csv,
-    validation.csv and importance.csv to `output`. Returns the model dict."""
+    validation.csv and importance.csv to `output`. With gradient boosting among `learners` its
+    leave-one-test-out scores and importances stand beside the network's (the network is the
+    model `apply` uses). Returns the model dict."""
     check_output(output)
+    unknown = [x for x in learners if x not in LEARNERS]
+    if unknown or "network" not in learners:
+        raise PredictError(f"learners = {','.join(learners)}: allowed: network, or "
+                           "network,gradient_boosting (the network is the model applied)")
     data, per_test = dataset(paths, inputs, log)
     if len(data) == 0:
         raise PredictError("no pre-peak window has every input "
@@ -298,6 +358,7 @@ def train(paths, output, inputs=INPUTS, networks=10, log=print):
     model = {"program": "breccia.predict", "inputs": list(inputs), "networks_per_fit": networks,
              "training": "scikit-learn MLPRegressor, 6 tanh hidden units, L-BFGS, "
                          "min-max [-1, 1], log10 of MCvar and AEvar",
+             "learners": list(learners),
              "sources": [os.path.abspath(os.fspath(p)) for p in paths],
              "windows": len(data), "tests": per_test.to_dict("records"), "targets": {}}
     folds, importance = [], []
@@ -305,22 +366,42 @@ def train(paths, output, inputs=INPUTS, networks=10, log=print):
     for name, column in TARGETS.items():
         fold_table, pooled = leave_one_test_out(data, list(inputs), column, networks)
         folds.append(fold_table)
+        boosting = None
+        if "gradient_boosting" in learners:
+            boosting = leave_one_test_out(data, list(inputs), column, networks,
+                                          "gradient_boosting")
+            folds.append(boosting[0])
         # The final model: every test but the one nearest the median confining pressure.
         val = tests.index[len(tests) // 2]
         train_rows, v = data[data["test"] != val], data[data["test"] == val]
         net, nets = best_of(train_rows[inputs], train_rows[column], v[inputs], v[column],
                             list(inputs), column, networks)
         ri = np.array([n.garson() for n in nets])
-        importance.append(pd.DataFrame({
+        table = pd.DataFrame({
             "target": column, "input": list(inputs), "garson": net.garson(),
             "garson_mean_of_networks": ri.mean(axis=0), "garson_sd_of_networks": ri.std(axis=0),
-            "olden": net.olden()}))
+            "olden": net.olden()})
+        if boosting is not None:
+            trees = Boosting.fit(train_rows[inputs], train_rows[column], v[inputs], v[column],
+                                 list(inputs), column)
+            table["gradient_boosting"] = trees.importance()
+        importance.append(table)
         model["targets"][name] = {
             "network": net.to_dict(), "validation_test": val,
             "loto_rmse_pooled": rmse(pooled["y"], pooled["predicted"]),
             "loto_r2_pooled": r2(pooled["y"], pooled["predicted"]),
             "loto_rmse_mean_of_folds": float(fold_table["rmse"].mean()),
             "garson": dict(zip(inputs, net.garson().tolist()))}
+        if boosting is not None:
+            folds_gb, pooled_gb = boosting
+            model["targets"][name]["gradient_boosting"] = {
+                "loto_rmse_pooled": rmse(pooled_gb["y"], pooled_gb["predicted"]),
+                "loto_r2_pooled": r2(pooled_gb["y"], pooled_gb["predicted"]),
+                "loto_rmse_mean_of_folds": float(folds_gb["rmse"].mean()),
+                "trees_final": trees.trees,
+                "importance": dict(zip(inputs, trees.importance().tolist()))}
+            log(f"predict: {column}: gradient boosting: leave-one-test-out R^2 "
+                f"{model['targets'][name]['gradient_boosting']['loto_r2_pooled']:.3f}")
         log(f"predict: {column}: leave-one-test-out RMSE {model['targets'][name]['loto_rmse_pooled']:.4g}, "
             f"R^2 {model['targets'][name]['loto_r2_pooled']:.3f} over {len(tests)} folds")
     data.to_csv(os.path.join(output, "windows.csv"), index=False)
@@ -451,6 +532,9 @@ def main(argv=None):
     t.add_argument("--inputs", default=",".join(INPUTS),
                    help=f"comma-separated inputs (default: the seed's: {','.join(INPUTS)})")
     t.add_argument("--networks", type=int, default=10, help="networks per fit (best kept)")
+    t.add_argument("--learners", default=",".join(LEARNERS),
+                   help="network, or network,gradient_boosting (default): gradient boosting's "
+                        "leave-one-test-out scores beside the network's")
     a = sub.add_parser("apply", help="predict failure along a run")
     a.add_argument("run")
     a.add_argument("--model", required=True)
@@ -460,7 +544,7 @@ def main(argv=None):
             if args.networks < 1:
                 raise PredictError(f"--networks = {args.networks}: allowed: >= 1")
             train(args.folders, args.output, [i for i in args.inputs.split(",") if i],
-                  args.networks)
+                  args.networks, learners=[x for x in args.learners.split(",") if x])
         else:
             apply(args.run, args.model)
             redraw_report(args.run)

@@ -35,17 +35,30 @@ def main(model_dir):
     print("\n| held-out test sigma_3 (MPa) | stress to failure: RMSE (MPa) | R^2 | "
           "strain to failure: RMSE (%) | R^2 |")
     print("|---|---|---|---|---|")
-    s = folds[folds["target"] == "stress_to_failure_mpa"].set_index("confining_mpa")
-    e = folds[folds["target"] == "strain_to_failure"].set_index("confining_mpa")
-    for pc in s.index:
-        print(f"| {pc:g} | {s.loc[pc, 'rmse']:.1f} | {s.loc[pc, 'r2']:.2f} | "
-              f"{100 * e.loc[pc, 'rmse']:.3f} | {e.loc[pc, 'r2']:.2f} |")
-    ts, te = model["targets"]["stress"], model["targets"]["strain"]
-    print(f"| pooled | {ts['loto_rmse_pooled']:.1f} | {ts['loto_r2_pooled']:.2f} | "
-          f"{100 * te['loto_rmse_pooled']:.3f} | {te['loto_r2_pooled']:.2f} |")
+    if "learner" not in folds:
+        folds["learner"] = "network"
+    learners = [x for x in ("network", "gradient_boosting") if (folds["learner"] == x).any()]
+    for learner in learners:
+        f = folds[folds["learner"] == learner]
+        s = f[f["target"] == "stress_to_failure_mpa"].set_index("confining_mpa")
+        e = f[f["target"] == "strain_to_failure"].set_index("confining_mpa")
+        if learner != "network":
+            print(f"\n{learner}:\n\n| held-out test sigma_3 (MPa) | stress to failure: RMSE (MPa) "
+                  "| R^2 | strain to failure: RMSE (%) | R^2 |")
+            print("|---|---|---|---|---|")
+        for pc in s.index:
+            print(f"| {pc:g} | {s.loc[pc, 'rmse']:.1f} | {s.loc[pc, 'r2']:.2f} | "
+                  f"{100 * e.loc[pc, 'rmse']:.3f} | {e.loc[pc, 'r2']:.2f} |")
+        ts, te = model["targets"]["stress"], model["targets"]["strain"]
+        if learner != "network":
+            ts, te = ts[learner], te[learner]
+        print(f"| pooled | {ts['loto_rmse_pooled']:.1f} | {ts['loto_r2_pooled']:.2f} | "
+              f"{100 * te['loto_rmse_pooled']:.3f} | {te['loto_r2_pooled']:.2f} |")
+    boosting = "gradient_boosting" in imp
     print("\n| input | stress to failure: Garson (%) | mean +/- s.d. of 10 networks | "
-          "seed 000 (S1) | strain to failure: Garson (%) | mean +/- s.d. | seed 000 (S2) |")
-    print("|---|---|---|---|---|---|---|")
+          "seed 000 (S1) | strain to failure: Garson (%) | mean +/- s.d. | seed 000 (S2) |"
+          + (" gradient boosting, stress / strain (%) |" if boosting else ""))
+    print("|---|---|---|---|---|---|---|" + ("---|" if boosting else ""))
     for name in model["inputs"]:
         cells = [name]
         for target in ("stress_to_failure_mpa", "strain_to_failure"):
@@ -53,6 +66,10 @@ def main(model_dir):
             cells += [f"{100 * r['garson']:.1f}",
                       f"{100 * r['garson_mean_of_networks']:.1f} +/- "
                       f"{100 * r['garson_sd_of_networks']:.1f}", f"{SEED[target][name]:.1f}"]
+        if boosting:
+            gb = [100 * imp[(imp["target"] == t) & (imp["input"] == name)].iloc[0]
+                  ["gradient_boosting"] for t in ("stress_to_failure_mpa", "strain_to_failure")]
+            cells.append(f"{gb[0]:.1f} / {gb[1]:.1f}")
         print("| " + " | ".join(cells) + " |")
 
 
