@@ -11,6 +11,8 @@ import os
 import subprocess
 import sys
 
+import budget
+
 # Seed 002 (Berea sandstone model; text of sections 4.2-4.4 and figure captions 6 and 9).
 SEED = {
     "berea": {
@@ -90,6 +92,43 @@ def main(folder, rock):
                   f"{fmt(ends[1], '{:.2f}')} % (II, the peak) and {fmt(ends[2], '{:.2f}')} % (III); "
                   "IV runs to 10.3 %.")
     stage_table(folder, sweep)
+    seed_budget_table(folder, sweep, seed)
+
+
+def seed_budget_table(folder, sweep, seed):
+    """The work budget read with seed 002's estimators (its section 3.3-3.5 and Eq. 31) beside
+    the engine's ledger, over the loading only (from the first history row, as the seed's W_ext
+    is the area under its stress-strain curves): W_int the continuum elastic energy of the bulk
+    E_t50 and nu at the peak (docs/analysis.md §2.3, deviatoric part), W_frac the energy released
+    by bond breaks, and the seed's W_fric the remainder W_ext - W_int - W_frac, which in the
+    ledger holds friction, damping, kinetic energy and the grains' stored energy together."""
+    print("\n| sigma_3 (MPa) | W_ext since loading (J) | W_int, continuum at the peak / W_ext (%) "
+          "| seed | W_frac / W_ext (%) | seed | remainder (seed's W_fric) / W_ext (%) | seed | "
+          "ledger since loading: friction / damping / kinetic / stored (%) |")
+    print("|" + "---|" * 9)
+    for run in sorted(sweep["runs"], key=lambda r: r["confining_stress_pa"]):
+        path = os.path.join(folder, run["folder"])
+        summary = json.load(open(os.path.join(path, "summary.json")))
+        cont = summary.get("energy_budget", {}).get("continuum_estimates")
+        hist = list(csv.DictReader(open(os.path.join(path, "history.csv"))))
+        if not cont or len(hist) < 2:
+            continue
+        g = budget.gains(hist[0], hist[-1])
+        gain = lambda *keys: sum(g[k] for k in keys)
+        w = g["work_j"]  # platens and membranes
+        w_int = cont["deviatoric_elastic_energy_at_peak_j"] or float("nan")
+        w_frac = gain("released_by_breaks_j")
+        stored = gain("bond_tension_j", "bond_compression_j", "bond_shear_j", "bond_bending_j",
+                      "bond_twisting_j", "contact_strain_j")
+        damping = gain("local_damping_j", "viscous_damping_j")
+        s3 = round(run["confining_stress_pa"] * 1e-6)
+        print(f"| {s3} | {w:.3g} | " + " | ".join([
+            fmt(100 * w_int / w), fmt(seed["strain_energy_percent"].get(s3)),
+            fmt(100 * w_frac / w), fmt(seed["fracture_percent"].get(s3)),
+            fmt(100 * (w - w_int - w_frac) / w, "{:.0f}"),
+            fmt(seed["friction_percent"].get(s3), "{:.0f}"),
+            " / ".join(f"{100 * v / w:.0f}" for v in (gain("friction_j"), damping,
+                                                       gain("kinetic_j"), stored))]) + " |")
 
 
 def stage_table(folder, sweep):

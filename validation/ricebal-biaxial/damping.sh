@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Does the local damping take what seed 002 books as friction? Seed 000's stated parameters in
+# their mu_b-0 reading (seed-parameters.sh) at 0, 15 and 50 MPa with the local damping lowered
+# from 0.7 to 0.1 and 0.02 at the seed-parameters loading (10 /s), and at 0.1 with the platens
+# ten times slower (0 and 50 MPa). Prints the peak, the quasi-static checks and the work budget,
+# the membranes' work included. Run by hand (about 2 h on 2 cores, the slow tests most of it).
+#   validation/ricebal-biaxial/damping.sh [output folder]
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+out="${1:-/tmp/breccia-ricebal-damping}"
+mkdir -p "$out"
+reading=(--set bond.normal_spring_in_compression=false --set bond.moment_factor=0.3
+  --set bond.shear_modulus=29e9 --set bond.friction=0)
+# name:confining stresses:the --set overrides
+variants=(
+  "alpha-0.7:0 15 50:engine.local_damping=0.7"
+  "alpha-0.1:0 15 50:engine.local_damping=0.1"
+  "alpha-0.02:0 15 50:engine.local_damping=0.02"
+  "alpha-0.1-slow:0 50:engine.local_damping=0.1 test.platen_speed=0.0015"
+)
+for v in "${variants[@]}"; do
+  IFS=: read -r name pcs overrides <<<"$v"
+  [ -d "$out/$name" ] && continue
+  sets=()
+  for s in $overrides; do sets+=(--set "$s"); done
+  # shellcheck disable=SC2086
+  "$root/build/breccia" sweep "$root/validation/ricebal-biaxial/seed-parameters.toml" \
+    --confining-mpa $pcs --jobs 2 "${reading[@]}" "${sets[@]}" --output "$out/$name" \
+    > "$out/$name.log" 2>&1
+done
+names=()
+for v in "${variants[@]}"; do names+=("${v%%:*}"); done
+/usr/bin/python3 "$root/validation/ricebal-biaxial/budget.py" "$out" "${names[@]}"
