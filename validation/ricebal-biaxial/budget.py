@@ -36,11 +36,12 @@ def gains(first, last):
 
 
 def damage_index_at_peak(path, peak_strain):
+    """The last indicator window ending at or before the peak, as the report's trends read it."""
     rows = list(csv.DictReader(open(os.path.join(path, "indicators.csv"))))
-    if not rows:
+    rows = [r for r in rows if float(r["axial_strain"]) <= peak_strain + 1e-12]
+    if not rows or rows[-1]["damage_index"] in ("", "nan"):
         return float("nan")
-    best = min(rows, key=lambda r: abs(float(r["axial_strain"]) - peak_strain))
-    return float(best["damage_index"]) if best["damage_index"] not in ("", "nan") else float("nan")
+    return float(rows[-1]["damage_index"])
 
 
 def row(name, path):
