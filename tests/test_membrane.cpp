@@ -93,6 +93,34 @@ TEST(Membrane2D, KinkedSideLoadsMatchTheHandNumbers) {
   EXPECT_NEAR(m.width(sim.particles()), (10.5 - left) * mm, 1e-12);
 }
 
+TEST(Membrane2D, ASmallGrainUnderThePlatenIsNotAChainGrain) {
+  // Columns of R = 0.5 mm disks at x = 0 and 10 mm, rows at y = 0.5 ... 5.5 mm, platens at 0 and
+  // 6.3 mm, and a disk of 0.1 mm touching the top platen mid-sample at (5, 6.2) mm. The mean
+  // diameter, 12/13 mm, cuts 6 whole cells and 0.72 of a seventh; the seventh would hold the
+  // small disk alone, which would then be both chains' top grain, a spike into the sample. The
+  // last cell takes the remainder: every surface lies on the sides, the width is 11 mm, and the
+  // small disk carries no membrane load.
+  ParticleStore ps(Dimension::Two, 1e-3);
+  const double mm = 1e-3;
+  std::uint64_t tag = 1;
+  for (int row = 0; row < 6; ++row)
+    for (const double x : {0.0, 10.0})
+      ps.add({.tag = tag++,
+              .position = {x * mm, (row + 0.5) * mm, 0},
+              .radius = 0.5 * mm,
+              .density = 2650});
+  ps.add({.tag = tag, .position = {5 * mm, 6.2 * mm, 0}, .radius = 0.1 * mm, .density = 2650});
+  Simulation sim = planar_sim(std::move(ps));
+  Membrane2D m;
+  m.apply(sim, 1e6, 0.0, 6.3 * mm);
+  EXPECT_EQ(m.chains()[0].size(), 6u);
+  EXPECT_EQ(m.chains()[1].size(), 6u);
+  EXPECT_NEAR(m.width(sim.particles()), 11 * mm, 1e-12);
+  const Vec3 small = sim.external_force()[12];
+  EXPECT_EQ(small.x, 0.0);
+  EXPECT_EQ(small.y, 0.0);
+}
+
 namespace {
 
 // Columns of equal grains (radius r) around the z axis at radius rho, one grain per cell: with

@@ -52,8 +52,10 @@ void Membrane2D::find_chains(const ParticleStore& p, double y_bottom, double y_t
   double r_sum = 0.0;
   for (const PosRad& q : p.pos_rad) r_sum += q.r;
   const double bin = 2.0 * r_sum / static_cast<double>(std::max<std::size_t>(p.size(), 1));
+  // Whole cells only, the last taking the remainder: a sliver of a cell under a platen may hold
+  // the centre of a single small grain well inside the sample, which would become a chain grain.
   const double height = y_top - y_bottom;
-  const auto bins = static_cast<std::size_t>(std::max(1.0, std::ceil(height / bin)));
+  const auto bins = static_cast<std::size_t>(std::max(1.0, std::floor(height / bin)));
   for (int side = 0; side < 2; ++side) best_[side].assign(bins, -1);
   for (std::size_t i = from; i < to; ++i) {
     const PosRad& q = p.pos_rad[i];
