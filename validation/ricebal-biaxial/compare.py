@@ -118,8 +118,7 @@ def seed_budget_table(folder, sweep, seed):
         w = g["work_j"]  # platens and membranes
         w_int = cont["deviatoric_elastic_energy_at_peak_j"] or float("nan")
         w_frac = gain("released_by_breaks_j")
-        stored = gain("bond_tension_j", "bond_compression_j", "bond_shear_j", "bond_bending_j",
-                      "bond_twisting_j", "contact_strain_j")
+        stored = gain(*budget.STORED)
         damping = gain("local_damping_j", "viscous_damping_j")
         s3 = round(run["confining_stress_pa"] * 1e-6)
         print(f"| {s3} | {w:.3g} | " + " | ".join([

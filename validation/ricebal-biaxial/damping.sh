@@ -5,7 +5,8 @@
 # with the local damping lowered to 0.1 and 0.02 at the seed-parameters loading (10 /s), and at
 # 0.1 with the platens ten times slower (0 and 50 MPa).
 # Prints the peak, the damage index, the quasi-static checks and the work budget, the membranes'
-# work included. Run by hand: about 25 min on 2 cores, and 25 min more for the slow variant.
+# work included. Run by hand: 26 min on 2 cores for the first two variants (measured), about 15
+# more for 0.1 and 0.02 and 25 more for the slow variant.
 #   validation/ricebal-biaxial/damping.sh [output folder] [variant names: all when none]
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
