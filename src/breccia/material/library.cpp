@@ -421,7 +421,13 @@ std::string provenance_notes() {
          "about 12 min each; the record's wall time counts the part after the resume only. The "
          "three packings scatter by more than the tolerances (UCS 216.4, 199.7 and 217.3 MPa; "
          "sigma_1 at 10 MPa 261, 270 and 337 MPa), and their means miss the UCS by 5.6 % and "
-         "the angle by 2.2 degrees.\n";
+         "the angle by 2.2 degrees. `berea_2d_seed002` is seed 002's own 2D Berea model, not the "
+         "lab rock: seed 000's stated particles (G_p 29 GPa, nu_p 0.33, mu_p 0.4) and C_b / T_b "
+         "= 10, the bond's normal spring in tension only, the bending term at a third "
+         "(moment_factor 0.3), G_b = G_p and a compressive branch without friction; "
+         "examples/calibrate-berea-2d-seed002.toml fitted T_b alone to the seed model's UCS of "
+         "85 MPa, with dynamic damping, on the 3,444-grain sample it is run on "
+         "(validation/ricebal-biaxial).\n";
 }
 
 // Why E and Poisson's ratio are read on the sample's gauges, with the numbers.
