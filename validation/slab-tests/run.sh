@@ -5,6 +5,11 @@
 # vibration at 5 and 10 mm about 35 and 75 min per rock, abrasion at 2, 30 and 60 MPa about 6
 # min per rock. A sweep that stops (Ctrl-C, a time limit) is finished by `breccia resume FOLDER`.
 # Usage: validation/slab-tests/run.sh [OUT [TEST...]]   (TEST: impact cantilever vibration abrasion)
+# GRAINS=seed gives each rock the grain size of seed 001's own model of it: the presets' 0.22-0.36
+# mm radii (and bonding gap) scaled so that the seed's cylinder would hold the seed's grain count
+# (validation/tumlin-full-size: Brenna x 1.802, Radkow x 1.473, Mucharz x 1.123, Tumlin x 0.746);
+# a preset's E and UCS carry over to a packing scaled as a whole. Tumlin's runs then take about
+# 3.2 times as long (2.4 times the grains, a time step 0.746 times as long), Brenna's a tenth.
 # then:  /usr/bin/python3 validation/slab-tests/table.py OUT
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -15,12 +20,21 @@ tests=("${@:-impact cantilever vibration abrasion}")
 breccia="${BRECCIA:-$root/build/breccia}"
 mkdir -p "$out"
 
+grain_scale() {  # rock: the factor on the presets' radii under GRAINS=seed, else 1
+  [ "${GRAINS:-preset}" = seed ] || { echo 1; return; }
+  case $1 in brenna) echo 1.802 ;; radkow) echo 1.473 ;; mucharz) echo 1.123 ;; tumlin) echo 0.746 ;; esac
+}
+
 sweep() {  # test rock key values...
-  local test=$1 rock=$2 key=$3
+  local test=$1 rock=$2 key=$3 f grains=()
   shift 3
+  f=$(grain_scale "$rock")
+  [ "$f" = 1 ] || grains=(--set "sample.radius_min=$(/usr/bin/python3 -c "print(0.22e-3 * $f)")"
+    --set "sample.radius_max=$(/usr/bin/python3 -c "print(0.36e-3 * $f)")"
+    --set "sample.bond_gap_tolerance=$(/usr/bin/python3 -c "print(5e-6 * $f)")")
   "$breccia" sweep "$root/examples/$test.toml" --set material.preset="\"$rock\"" \
     --set name="\"$test-$rock\"" --set engine.threads=1 --jobs 1 --output "$out/$test" \
-    --over "$key" "$@"
+    "${grains[@]}" --over "$key" "$@"
 }
 
 for test in ${tests[*]}; do
