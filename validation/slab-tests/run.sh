@@ -18,6 +18,10 @@ out="${1:-$root/build/validation-slab-tests}"
 shift || true
 tests=("${@:-impact cantilever vibration abrasion}")
 breccia="${BRECCIA:-$root/build/breccia}"
+case "${GRAINS:-preset}" in preset | seed) ;; *)
+  echo "GRAINS=$GRAINS: expected \"seed\" (each rock's own grain size) or \"preset\" (one size, the default)" >&2
+  exit 2 ;;
+esac
 mkdir -p "$out"
 
 grain_scale() {  # rock: the factor on the presets' radii under GRAINS=seed, else 1
