@@ -9,8 +9,9 @@
 #
 # SCALE shrinks the cylinder (0.25: 9.4 x 18.75 mm, about 18,000 grains; 0.5: 145,000; 1: the
 # seed's 1.16 million) with the same grains, so the steps a loading needs grow with SCALE.
-# LOADING is "calibrated" (the preset's: platens at 0.03 m/s, safety factor 0.3) or "fast"
-# (0.24 m/s until 0.1 % of the bonds have broken, then 0.06 m/s; safety factor 0.6).
+# LOADING is "calibrated" (the preset's: platens at a constant 0.03 m/s, safety factor 0.3), "fast"
+# (0.24 m/s until 0.1 % of the bonds have broken, then 0.06 m/s; safety factor 0.6) or "adaptive"
+# (the calibration's, with adaptive loading up to 8 times its speed: docs/physics.md §6.1).
 # ROCK (default tumlin; brenna, mucharz, radkow) picks the preset and the grains: each rock's
 # grains are the calibration's 0.22-0.36 mm scaled so that the full cylinder holds the seed's
 # count for that rock (Table 2: Brenna 82,266, Mucharz 339,324, Radków 150,653, Tumlin 1,155,851).
@@ -60,9 +61,10 @@ geometry() {  # the cylinder's size at a scale
 
 loading() {
   case "$1" in
-    calibrated) echo "--set test.platen_speed=0.03 --set engine.safety_factor=0.3" ;;
+    calibrated) echo "--set test.platen_speed=0.03 --set engine.safety_factor=0.3 --set test.adaptive_speed_ratio=1" ;;
     fast) echo "--set test.platen_speed=0.06 --set test.elastic_speed=0.24 --set test.slow_down_broken_fraction=1e-3 --set engine.safety_factor=0.6" ;;
-    *) echo "LOADING must be calibrated or fast, not '$1'" >&2; exit 2 ;;
+    adaptive) echo "--set test.platen_speed=0.03 --set engine.safety_factor=0.3 --set test.adaptive_speed_ratio=8" ;;
+    *) echo "LOADING must be calibrated, fast or adaptive, not '$1'" >&2; exit 2 ;;
   esac
 }
 

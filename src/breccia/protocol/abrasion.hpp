@@ -86,7 +86,9 @@ class AbrasionTest final : public Protocol {
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   void control(Simulation& sim) override;
   // The grit layer's servo reads the grit's forces (its grains come last: ascending).
-  GrainReads grains_read_by_control() const override { return {.all = false, .some = grit_}; }
+  GrainReads grains_read_by_control(const Simulation&) const override {
+    return {.all = false, .some = grit_};
+  }
   AxialState measure(const Simulation& sim) const override;
   // The grit layer's grains (a plate is a wall).
   GrainReads grains_read_by_measure() const override { return {.all = false, .some = grit_}; }

@@ -225,6 +225,53 @@ void PlatenCompression::drive_lateral(Simulation& sim) {
 void PlatenCompression::control(Simulation& sim) {
   if (confined()) drive_lateral(sim);
   if (!slowed_ && sim.cracks().size() - broken_at_start_ >= slow_down_cracks_) slow_down(sim);
+  if (adaptive_.on()) adapt_speed(sim);
+}
+
+GrainReads PlatenCompression::grains_read_by_control(const Simulation& sim) const {
+  if (adaptive_.due(sim.step_count(), sim.time())) return GrainReads::every();
+  return {};
+}
+
+void PlatenCompression::adapt_speed(Simulation& sim) {
+  const std::uint64_t step = sim.step_count();
+  // The step's speed (as Simulation::step sets it, at mid-step) over the floor; the start-up
+  // ramp counts as the floor, as a constant-speed run's rows would stand there.
+  const Wall& top = sim.walls()[top_];
+  const double v =
+      std::abs(top.target_velocity[axis_]) * top.ramp.factor(sim.time() + 0.5 * sim.time_step());
+  paced_steps_ += std::max(1.0, v / st_.platen_speed);
+  // The check reads the stored energy of the step before it, sampled for it.
+  if (adaptive_.due_next(step, sim.time())) sim.request_energy_sample();
+  if (!adaptive_.due(step, sim.time())) return;
+  auto& W = sim.walls();
+  LoadingReading r;
+  r.strain = (h0_ - height(sim)) / h0_;
+  r.cracks = static_cast<double>(sim.cracks().size() - broken_at_start_);
+  const double stored = sim.ledger().bond.total() + sim.ledger().contact;
+  if (stored > 0.0) r.kinetic_ratio = fluctuating_kinetic_energy(sim) / stored;
+  const double fb = dot(W[bottom_].force, W[bottom_].normal);
+  const double ft = dot(W[top_].force, W[top_].normal);
+  const double fbar = 0.5 * (fb + ft);  // the quasi-static check's own measure
+  if (fbar > 0.0) r.imbalance = std::abs(ft - fb) / fbar;
+  const double before = adaptive_.factor();
+  const double after = adaptive_.update(r, before);
+  if (after == before) return;
+  // The lateral servo keeps its cap at ten times the platens' speed, as at the floor.
+  servo_.max_speed = 10.0 * st_.platen_speed * std::max(before, after);
+  Vec3 up{};
+  up[axis_] = 1.0;
+  const double duration = static_cast<double>(adaptive_.check_steps()) * sim.time_step();
+  for (auto [w, sign] : {std::pair{bottom_, 1.0}, std::pair{top_, -1.0}}) {
+    W[w].target_velocity = up * (sign * st_.platen_speed * after);
+    W[w].ramp = {sim.time(), duration, before / after};
+    W[w].update_motion(sim.time());
+  }
+}
+
+void PlatenCompression::history_values(const Simulation& sim, std::vector<double>& out) const {
+  out.push_back(fluctuating_kinetic_energy(sim));
+  out.push_back(std::abs(sim.walls()[top_].velocity[axis_]));
 }
 
 void PlatenCompression::slow_down(Simulation& sim) {
@@ -257,6 +304,14 @@ double PlatenCompression::fluctuating_kinetic_energy(const Simulation& sim) cons
 
 void PlatenCompression::summarise_curve(const analysis::CompressionResult&,
                                         nlohmann::json& out) const {
+  if (adaptive_.on())
+    out["adaptive_loading"] = {
+        {"speed_ratio", st_.adaptive_speed_ratio},
+        {"crack_rate", st_.adaptive_crack_rate},
+        {"kinetic_ratio", st_.adaptive_kinetic_ratio},
+        {"target_platen_imbalance", AdaptiveLoading::kTargetImbalance},
+        {"check_interval_steps", adaptive_.check_steps()},
+        {"largest_speed_m_per_s", st_.platen_speed * adaptive_.max_factor()}};
   if (!(st_.elastic_speed > st_.platen_speed)) return;
   out["elastic_speed_m_per_s"] = st_.elastic_speed;
   out["slow_down_axial_strain"] =
@@ -332,6 +387,12 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
   slow_down_cracks_ = std::max<std::size_t>(
       1, static_cast<std::size_t>(std::ceil(st_.slow_down_broken_fraction *
                                             static_cast<double>(sim.intact_bond_sites()))));
+  if (st_.adaptive_speed_ratio > 1.0)
+    adaptive_ = AdaptiveLoading(
+        {st_.adaptive_speed_ratio, st_.adaptive_crack_rate, st_.adaptive_kinetic_ratio},
+        st_.platen_speed, bar_wave_speed, h0_, sim.time_step(),
+        static_cast<double>(sim.intact_bond_sites()), sim.time() + ramp);
+  paced_steps_ = static_cast<double>(sim.step_count());
   return sim.step_count() - step0;
 }
 
@@ -447,6 +508,8 @@ void PlatenCompression::transfer(Archive& a) {
   a.value(slow_down_cracks_);
   a.value(slowed_);
   a.value(slow_down_strain_);
+  a.value(adaptive_);
+  a.value(paced_steps_);
   a.value(k_min_);
   a.value(consolidated_);
   a.value(servo_);

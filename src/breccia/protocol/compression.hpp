@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "breccia/boundary/adaptive_loading.hpp"
 #include "breccia/boundary/servo.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/engine/simulation.hpp"
@@ -36,6 +37,11 @@ struct PlatenCompressionSettings {
   // slow to platen_speed through a cosine ramp of the same duration as the first.
   double elastic_speed = 0.0;              // m/s; 0 = platen_speed throughout
   double slow_down_broken_fraction = 0.0;  // of the intact bonds when axial loading starts
+  // > 1: adaptive loading (boundary/adaptive_loading.hpp) between platen_speed and this many
+  // times it, with the crack-rate budget and kinetic-energy target below.
+  double adaptive_speed_ratio = 1.0;
+  double adaptive_crack_rate = 2e-4;
+  double adaptive_kinetic_ratio = 2.5e-4;
   double max_strain = 0.02;
   double stop_fraction = 0.5;  // stop after the peak once stress < stop_fraction x peak
   double platen_friction = 0.0;
@@ -56,6 +62,8 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   // Servo update of the lateral walls; call before every step during loading.
   void control(Simulation& sim) override;
+  // Every grain on the steps where adaptive loading reads the kinetic energy, else none.
+  GrainReads grains_read_by_control(const Simulation& sim) const override;
 
   AxialState measure(const Simulation& sim) const override;
   // The gauges' layers and the lateral faces' grains, or a membrane's chains (a membrane finds
@@ -69,6 +77,9 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
 
   const char* kind() const noexcept override;
   std::string label() const override;
+  double paced_steps(const Simulation& sim) const override {
+    return adaptive_.on() ? paced_steps_ : static_cast<double>(sim.step_count());
+  }
   double progress(const AxialState& s, const Simulation&) const override {
     return s.strain / st_.max_strain;
   }
@@ -84,11 +95,12 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   // Translational kinetic energy relative to the velocity field of a homogeneous compression
   // (the axial velocity interpolated linearly between the platens), plus all rotational energy.
   double fluctuating_kinetic_energy(const Simulation& sim) const override;
-  // history.csv gains that energy beside the total (kinetic_j), for the quasi-static check.
-  std::vector<std::string> history_columns() const override { return {"kinetic_fluctuating_j"}; }
-  void history_values(const Simulation& sim, std::vector<double>& out) const override {
-    out.push_back(fluctuating_kinetic_energy(sim));
+  // history.csv gains that energy beside the total (kinetic_j), for the quasi-static check, and
+  // the platens' speed (each; it varies under two-speed and adaptive loading).
+  std::vector<std::string> history_columns() const override {
+    return {"kinetic_fluctuating_j", "platen_speed_m_per_s"};
   }
+  void history_values(const Simulation& sim, std::vector<double>& out) const override;
   // The elastic-phase speed and where the platens began to slow down, when the test used one.
   void summarise_curve(const analysis::CompressionResult&, nlohmann::json& out) const override;
   bool slowed_down() const noexcept { return slowed_; }
@@ -127,6 +139,9 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   void drive_lateral(Simulation& sim);
   // Two-speed loading: ramps the platens from elastic_speed down to platen_speed.
   void slow_down(Simulation& sim);
+  // Adaptive loading: at a check, the controller's new speed, reached through a cosine over the
+  // check's interval.
+  void adapt_speed(Simulation& sim);
   double lateral_stress(const Simulation& sim) const;
 
   PlatenCompressionSettings st_;
@@ -157,6 +172,8 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
   std::size_t slow_down_cracks_ = 0;
   bool slowed_ = true;
   double slow_down_strain_ = std::numeric_limits<double>::quiet_NaN();
+  AdaptiveLoading adaptive_;
+  double paced_steps_ = 0.0;  // adaptive loading: Protocol::paced_steps
   bool consolidated_ = true;
   StressServo servo_;
   // The integral terms of the 2D side walls' servo (StressServo::drive_pi), a velocity each.
@@ -183,9 +200,9 @@ class PlatenCompression final : public Protocol, public StressStrainTest {
 
 // Fields every compression test shares (platen speed, ramp, stop rules), then `extra`.
 template <class P, std::size_t N = 0>
-constexpr std::array<ParamField<P>, 6 + N> compression_fields(
+constexpr std::array<ParamField<P>, 9 + N> compression_fields(
     const std::array<ParamField<P>, N>& extra = {}) {
-  std::array<ParamField<P>, 6 + N> f{{
+  std::array<ParamField<P>, 9 + N> f{{
       {"platen_speed", "m/s", &P::platen_speed, 0, kInf, false, true,
        "speed of each platen toward the other"},
       {"ramp_time", "s", &P::ramp_time, 0, kInf, true, true,
@@ -201,8 +218,19 @@ constexpr std::array<ParamField<P>, 6 + N> compression_fields(
       {"slow_down_broken_fraction", "-", &P::slow_down_broken_fraction, 0, 1, true, false,
        "with elastic_speed: the platens slow down once this fraction of the bonds has broken "
        "during axial loading (0: at the first broken bond)"},
+      {"adaptive_speed_ratio", "-", &P::adaptive_speed_ratio, 1, 1000, true, true,
+       "adaptive loading (docs/physics.md §6.1): the platens' speed follows the sample's state "
+       "between platen_speed (the floor, near the peak) and this many times it, slowing as bonds "
+       "break, the kinetic energy rises or the platens' forces part; 1 = constant speed; "
+       "elastic_speed > 0 (two-speed loading) turns it off"},
+      {"adaptive_crack_rate", "-", &P::adaptive_crack_rate, 0, 1, false, true,
+       "adaptive loading: the bonds a bar-wave transit may break at above the floor speed, as a "
+       "fraction of those intact when loading began"},
+      {"adaptive_kinetic_ratio", "-", &P::adaptive_kinetic_ratio, 0, 1e-3, false, true,
+       "adaptive loading: the kinetic over strain energy it holds the loading to above the floor "
+       "speed (the quasi-static check's limit is 1e-3)"},
   }};
-  for (std::size_t k = 0; k < N; ++k) f[6 + k] = extra[k];
+  for (std::size_t k = 0; k < N; ++k) f[9 + k] = extra[k];
   return f;
 }
 
@@ -223,6 +251,7 @@ constexpr std::array<ParamField<P>, 2> confining_fields(std::string_view walls) 
 struct PlatenLoading {
   double platen_speed = 0.0, ramp_time = 0.0, max_strain = 0.0, stop_fraction = 0.0;
   double elastic_speed = 0.0, slow_down_broken_fraction = 0.0;
+  double adaptive_speed_ratio = 1.0, adaptive_crack_rate = 2e-4, adaptive_kinetic_ratio = 2.5e-4;
   double confining_stress = 0.0, servo_relaxation = 0.5;
 };
 
@@ -237,8 +266,9 @@ void check_platen_speeds(const P& p, const std::string& where) {
 
 template <class P>
 PlatenLoading platen_loading(const P& p) {
-  PlatenLoading l{p.platen_speed,  p.ramp_time,     p.max_strain,
-                  p.stop_fraction, p.elastic_speed, p.slow_down_broken_fraction};
+  PlatenLoading l{p.platen_speed,         p.ramp_time,           p.max_strain,
+                  p.stop_fraction,        p.elastic_speed,       p.slow_down_broken_fraction,
+                  p.adaptive_speed_ratio, p.adaptive_crack_rate, p.adaptive_kinetic_ratio};
   if constexpr (requires { p.confining_stress; }) {
     l.confining_stress = p.confining_stress;
     l.servo_relaxation = p.servo_relaxation;
@@ -255,6 +285,10 @@ inline PlatenCompressionSettings platen_settings(const PlatenLoading& l) {
   s.stop_fraction = l.stop_fraction;
   s.elastic_speed = l.elastic_speed;
   s.slow_down_broken_fraction = l.slow_down_broken_fraction;
+  // Two-speed loading, when asked for, replaces adaptive loading.
+  s.adaptive_speed_ratio = l.elastic_speed > 0.0 ? 1.0 : l.adaptive_speed_ratio;
+  s.adaptive_crack_rate = l.adaptive_crack_rate;
+  s.adaptive_kinetic_ratio = l.adaptive_kinetic_ratio;
   s.confining_stress = l.confining_stress;
   s.servo_relaxation = l.servo_relaxation;
   return s;
@@ -268,6 +302,9 @@ void set_platen_loading(P& p, const PlatenLoading& l) {
   p.stop_fraction = l.stop_fraction;
   p.elastic_speed = l.elastic_speed;
   p.slow_down_broken_fraction = l.slow_down_broken_fraction;
+  p.adaptive_speed_ratio = l.adaptive_speed_ratio;
+  p.adaptive_crack_rate = l.adaptive_crack_rate;
+  p.adaptive_kinetic_ratio = l.adaptive_kinetic_ratio;
   if constexpr (requires { p.confining_stress; }) {
     p.confining_stress = l.confining_stress;
     p.servo_relaxation = l.servo_relaxation;
@@ -283,8 +320,11 @@ struct UcsTest {
   struct Params {
     double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.03, stop_fraction = 0.6;
     double elastic_speed = 0.0, slow_down_broken_fraction = 0.0;
+    // Adaptive by default: on the default UCS it takes 2.3 times fewer steps for the peak, the
+    // modulus and the cracks at the peak within 1.3 % (validation/adaptive-loading).
+    double adaptive_speed_ratio = 8.0, adaptive_crack_rate = 2e-4, adaptive_kinetic_ratio = 2.5e-4;
   };
-  static constexpr std::array<ParamField<Params>, 6> fields() {
+  static constexpr std::array<ParamField<Params>, 9> fields() {
     return compression_fields<Params>();
   }
   static void check(const Params& p, const SampleInfo&, const std::string& where) {
@@ -322,6 +362,7 @@ struct ConfinedCompressionTest {
     double platen_speed = 0.02, ramp_time = 0.0;
     double max_strain = Dim == 2 ? 0.103 : 0.03, stop_fraction = Dim == 2 ? 0.0 : 0.6;
     double elastic_speed = 0.0, slow_down_broken_fraction = 0.0;
+    double adaptive_speed_ratio = 1.0, adaptive_crack_rate = 2e-4, adaptive_kinetic_ratio = 2.5e-4;
     double confining_stress = 5e6, servo_relaxation = 0.5;
     bool membrane = Dim == 2;  // flexible membranes (true) or servo walls
   };

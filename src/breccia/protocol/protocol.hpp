@@ -175,7 +175,7 @@ class Protocol {
   // The grains control() reads besides the walls (a grit layer's): on a sample split over ranks
   // the run brings them current first. A control that must search first (a membrane's chains)
   // gathers what it finds itself. At each row the run gathers the whole sample.
-  virtual GrainReads grains_read_by_control() const { return {}; }
+  virtual GrainReads grains_read_by_control(const Simulation&) const { return {}; }
   virtual AxialState measure(const Simulation& sim) const = 0;
   // The grains measure() reads besides the walls (a reader between rows, such as the AE
   // monitor, brings them current on a split sample); by default every grain.
@@ -183,6 +183,12 @@ class Protocol {
   // Updates the peak tracking; true when the test should stop.
   virtual bool finished(const AxialState& s, std::size_t broken_bonds) = 0;
   virtual const std::string& stop_reason() const noexcept = 0;
+  // The steps a loading at the test's own constant speed would have taken to bring the sample
+  // where it stands: the step count, or under adaptive loading the steps weighted by the speed
+  // over the floor, so that history rows keep the spacing in strain of a constant-speed run.
+  virtual double paced_steps(const Simulation& sim) const {
+    return static_cast<double>(sim.step_count());
+  }
   // How far the test has gone (0-1), for progress bars.
   virtual double progress(const AxialState& s, const Simulation& sim) const = 0;
   virtual TestFrame frame() const noexcept = 0;

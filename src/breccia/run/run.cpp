@@ -166,7 +166,7 @@ void check_finite_state(const Simulation& sim, const AxialState& a) {
 
 // Steps between history rows: output.history_interval, or the steps in which the platens, at
 // full speed, strain the sample by output.history_strain_interval; at most the steps of the
-// test's own row time.
+// test's own row time. Under adaptive loading these are paced steps (Protocol::paced_steps).
 std::uint64_t history_step_interval(const ExperimentSpec& spec, const Protocol& test,
                                     const Simulation& sim) {
   const double rate = strain_rate(test);
@@ -286,7 +286,8 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
     if (sim.step_count() % interval == 0) sim.request_energy_sample();
     // A split sample's ranks share the grains each reader declares (gather_grains is nothing
     // otherwise), and every grain at a row.
-    sim.gather_grains(test.grains_read_by_control());
+    const double paced_before = test.paced_steps(sim);
+    sim.gather_grains(test.grains_read_by_control(sim));
     test.control(sim);
     sim.request_stop(signalled);
     sim.step();
@@ -294,7 +295,12 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
       sim.gather_grains(r->grains_read_after_step(sim, test));
       r->after_step(sim, test);
     }
-    if ((sim.step_count() - 1) % interval != 0) continue;
+    // A row every `interval` paced steps (with the first step's): every interval steps at a
+    // constant speed.
+    const auto rows_by = [&](double paced) {
+      return std::floor((paced - 1.0) / static_cast<double>(interval));
+    };
+    if (rows_by(test.paced_steps(sim)) == rows_by(paced_before)) continue;
     sim.gather_particles();
     const AxialState a = test.measure(sim);
     check_finite_state(sim, a);

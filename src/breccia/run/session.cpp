@@ -32,7 +32,7 @@ constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // records and AE logs beyond the resident ones in the run folder; 23: pair forces kept only where
 // the laws' states do not give them back. A new law, lab test or recorder needs no new number:
 // laws and tests are found by name, and each recorder checks its own label.
-constexpr std::uint32_t kCheckpointFormat = 23;
+constexpr std::uint32_t kCheckpointFormat = 24;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of
