@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -211,5 +212,34 @@ TEST(AdaptiveLoading, AResumedRunOnAnotherThreadCountIsTheUninterruptedRun) {
   ASSERT_EQ(rest.code, 0) << rest.out;
   for (const char* f : {"history.csv", "cracks.csv", "events.csv"})
     EXPECT_EQ(read(whole / f), read(split / f)) << f;
+  fs::remove_all(out);
+}
+
+// The Brazilian test loads adaptively too: a 4 mm disc (1,067 grains) at 0.02 m/s up to 8 times
+// that, stopped in its elastic phase at 0.6 % of the diameter, gets there in well under the time a
+// constant speed needs (strain x D / 2 v after the ramp), at over five times the floor's speed.
+TEST(AdaptiveLoading, TheBrazilianTestSpeedsUpWhileItsDiscIsElastic) {
+  const fs::path out = fs::temp_directory_path() / "breccia_adaptive_brazilian";
+  fs::remove_all(out);
+  fs::create_directories(out);
+  std::ofstream(out / "disc.toml")
+      << "name = \"disc\"\n[material]\npreset = \"berea\"\n[sample]\nshape = \"cylinder\"\n"
+         "diameter = 0.004\nheight = 0.002\nradius_min = 0.12e-3\nradius_max = 0.18e-3\n"
+         "[test]\nkind = \"brazilian\"\nplaten_speed = 0.02\nadaptive_speed_ratio = 8\n"
+         "max_strain = 0.006\n[output]\nplot = false\n";
+  const Result r = run("run " + (out / "disc.toml").string() + " --quiet --threads 1 --output " +
+                       (out / "runs").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const fs::path folder = last_line(r.out);
+  const auto s = nlohmann::json::parse(read(folder / "summary.json"));
+  EXPECT_EQ(s["stop_reason"], "reached the maximum strain 0.006");
+  // The disc's kinetic energy (all of it counts in a Brazilian test) holds it below the ceiling.
+  const double fastest = s["adaptive_loading"]["largest_speed_m_per_s"].get<double>();
+  EXPECT_GT(fastest, 0.1);
+  EXPECT_LE(fastest, 0.16);
+  const std::vector<double> v = column(folder / "history.csv", "platen_speed_m_per_s");
+  EXPECT_GT(*std::max_element(v.begin(), v.end()), 0.1);
+  const double constant_time = 0.006 * 0.004 / (2 * 0.02);
+  EXPECT_LT(s["simulated_time_s"].get<double>(), 0.6 * constant_time);
   fs::remove_all(out);
 }

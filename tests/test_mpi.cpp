@@ -344,6 +344,12 @@ TEST(Mpi, OtherTestsSplitOverRanksWriteTheFilesOfOneProcess) {
        "height = 0.0055\nradius_min = 0.15e-3\nradius_max = 0.25e-3\n[test]\n"
        "kind = \"triaxial\"\nconfining_stress = 1e6\nmembrane = true\nplaten_speed = 0.8\n"
        "max_strain = 0.012\nstop_fraction = 0\n[output]\nsnapshot_strain_interval = 0.004\n"},
+      // Adaptive loading: its checks read every grain, gathered from the ranks.
+      {"ucs-adaptive",
+       "[material]\npreset = \"berea\"\n[sample]\nwidth = 0.003\ndepth = 0.003\n"
+       "height = 0.006\nradius_min = 0.13e-3\nradius_max = 0.2e-3\n[test]\nkind = \"ucs\"\n"
+       "platen_speed = 0.05\nadaptive_speed_ratio = 8\nmax_strain = 0.014\n"
+       "[output]\nsnapshot_strain_interval = 0.005\n"},
       {"brazilian",
        "[material]\npreset = \"berea\"\n[sample]\nshape = \"cylinder\"\ndiameter = 0.004\n"
        "height = 0.002\nradius_min = 0.12e-3\nradius_max = 0.18e-3\n[test]\n"
@@ -368,6 +374,10 @@ TEST(Mpi, OtherTestsSplitOverRanksWriteTheFilesOfOneProcess) {
     const auto summary = nlohmann::json::parse(read(a / "summary.json"));
     ASSERT_GT(summary["particles"].get<int>(), 1024) << kind << ": the second rank must own grains";
     ASSERT_GT(summary["bonds_broken"].get<int>(), 10) << kind << ": the test must break bonds";
+    if (kind == "ucs-adaptive") {
+      ASSERT_GT(summary["adaptive_loading"]["largest_speed_m_per_s"].get<double>(), 0.1)
+          << "the platens must speed up";
+    }
     expect_same_run_files(a, b, kind + " on 2 ranks");
   }
   fs::remove_all(out);

@@ -329,6 +329,10 @@ def summary_rows(folder, summary):
         elastic = (f"; {fmt(summary['elastic_speed_m_per_s'], '{:g}')} m/s before the first cracks, "
                    + (f"slowed down from {fmt(100 * where, '{:.3g}')} % axial strain"
                       if where is not None else "never slowed down"))
+    adaptive = summary.get("adaptive_loading")
+    if adaptive:
+        elastic = (f"; adaptive up to {fmt(adaptive['speed_ratio'], '{:g}')} times that, "
+                   f"fastest {fmt(adaptive['largest_speed_m_per_s'], '{:.3g}')} m/s")
     rows.append(("loading", f"platens at {fmt(summary.get('platen_speed_m_per_s'), '{:g}')} m/s "
                             f"(strain rate {fmt(summary.get('strain_rate_per_s'), '{:.3g}')} /s"
                             f"{elastic}), "

@@ -98,7 +98,36 @@ std::uint64_t BrazilianTest::start(Simulation& sim, double bar_wave_speed) {
     W[w].update_motion(sim.time());
   }
   peak_ = 0.0;
+  cracks_at_start_ = static_cast<double>(sim.cracks().size());
+  if (p_.adaptive_speed_ratio > 1.0)
+    adaptive_ = AdaptiveLoading(
+        {p_.adaptive_speed_ratio, p_.adaptive_crack_rate, p_.adaptive_kinetic_ratio},
+        p_.platen_speed, bar_wave_speed, d0_, sim.time_step(),
+        static_cast<double>(sim.intact_bond_sites()), sim.time() + ramp);
+  paced_steps_ = static_cast<double>(sim.step_count());
   return 0;
+}
+
+void BrazilianTest::control(Simulation& sim) {
+  if (!adaptive_.on()) return;
+  const std::uint64_t step = sim.step_count();
+  auto& W = sim.walls();
+  paced_steps_ += paced_step(W[top_], 1, p_.platen_speed, sim.time(), sim.time_step());
+  if (adaptive_.due_next(step, sim.time())) sim.request_energy_sample();
+  if (!adaptive_.due(step, sim.time())) return;
+  LoadingReading r;
+  r.strain = (d0_ - (W[top_].point.y - W[bottom_].point.y)) / d0_;
+  r.cracks = static_cast<double>(sim.cracks().size()) - cracks_at_start_;
+  const double stored = sim.ledger().bond.total() + sim.ledger().contact;
+  if (stored > 0.0) r.kinetic_ratio = fluctuating_kinetic_energy(sim) / stored;
+  const double fb = dot(W[bottom_].force, W[bottom_].normal);
+  const double ft = dot(W[top_].force, W[top_].normal);
+  if (fb + ft > 0.0) r.imbalance = std::abs(ft - fb) / (0.5 * (fb + ft));
+  steer_platens(adaptive_, r, W[bottom_], W[top_], 1, sim.time(), sim.time_step());
+}
+
+void BrazilianTest::history_values(const Simulation& sim, std::vector<double>& out) const {
+  out.push_back(std::abs(sim.walls()[top_].velocity.y));
 }
 
 GrainReads BrazilianTest::grains_read_by_measure() const {
@@ -153,6 +182,9 @@ void BrazilianTest::transfer(Archive& a) {
   a.value(w0_);
   a.value(y0_);
   a.value(peak_);
+  a.value(adaptive_);
+  a.value(paced_steps_);
+  a.value(cracks_at_start_);
   a.string(stop_reason_);
 }
 
@@ -192,6 +224,7 @@ void BrazilianTest::summarise_curve(const analysis::CompressionResult& an,
       {"name", "tensile strength"},
       {"formula", "2F/(pi D t)"},
       {"specimen", fmt::format("D = {:.4g} mm, t = {:.4g} mm", d0_ * 1e3, t_ * 1e3)}};
+  if (adaptive_.on()) out["adaptive_loading"] = adaptive_loading_summary(adaptive_);
   out["disc_diameter_m"] = d0_;
   out["disc_thickness_m"] = t_;
 }

@@ -5,7 +5,7 @@
 // stress at the centre of an elastic disc under two opposite line loads (Hertz 1883; Hondros
 // 1959). 3D: a cylinder with its axis along z (the disc's thickness), loaded along y; 2D: a disk
 // in the x-y plane of thickness t, loaded along y. The platens approach at a constant speed
-// reached through the cosine ramp of docs/physics.md §6.1.
+// reached through the cosine ramp of docs/physics.md §6.1, or adaptively (§6.1).
 //
 // Rows: strain = platen approach / D, stress = 2 F / (pi D t) with F the mean platen force,
 // lateral strain from the grains at the x extremes (the disc's horizontal diameter).
@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "breccia/law/param_table.hpp"
+#include "breccia/protocol/adaptive_platens.hpp"
 #include "breccia/protocol/protocol.hpp"
 
 namespace breccia {
@@ -28,9 +29,10 @@ class BrazilianTest final : public Protocol, public StressStrainTest {
       "between two rigid platens; sigma_t = 2 F / (pi D t) at the peak force F.";
   struct Params {
     double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.05, stop_fraction = 0.6;
+    double adaptive_speed_ratio = 1.0, adaptive_crack_rate = 2e-4, adaptive_kinetic_ratio = 2.5e-4;
   };
-  static constexpr std::array<ParamField<Params>, 4> fields() {
-    return {{
+  static constexpr std::array<ParamField<Params>, 7> fields() {
+    std::array<ParamField<Params>, 7> f{{
         {"platen_speed", "m/s", &Params::platen_speed, 0, kInf, false, true,
          "speed of each platen toward the other"},
         {"ramp_time", "s", &Params::ramp_time, 0, kInf, true, true,
@@ -40,6 +42,9 @@ class BrazilianTest final : public Protocol, public StressStrainTest {
         {"stop_fraction", "-", &Params::stop_fraction, 0, 1, true, false,
          "after the peak, stop once the stress is below this fraction of it"},
     }};
+    const auto adaptive = adaptive_loading_fields<Params>();
+    for (std::size_t k = 0; k < 3; ++k) f[4 + k] = adaptive[k];
+    return f;
   }
   // Shapes and proportions a Brazilian disc must have (from the experiment, before packing).
   static void check(const Params& p, const SampleInfo& s, const std::string& where);
@@ -52,7 +57,14 @@ class BrazilianTest final : public Protocol, public StressStrainTest {
   const char* kind() const noexcept override { return "brazilian"; }
   std::string label() const override { return "Brazilian (indirect tensile)"; }
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
-  void control(Simulation&) override {}
+  // Adaptive loading's checks (nothing at a constant speed).
+  void control(Simulation& sim) override;
+  double paced_steps(const Simulation& sim) const override {
+    return adaptive_.on() ? paced_steps_ : static_cast<double>(sim.step_count());
+  }
+  // history.csv gains the platens' speed (each).
+  std::vector<std::string> history_columns() const override { return {"platen_speed_m_per_s"}; }
+  void history_values(const Simulation& sim, std::vector<double>& out) const override;
   AxialState measure(const Simulation& sim) const override;
   // The grains at the ends of the horizontal diameter.
   GrainReads grains_read_by_measure() const override;
@@ -97,6 +109,9 @@ class BrazilianTest final : public Protocol, public StressStrainTest {
   mutable std::vector<std::uint32_t> measured_;  // both, ascending (made when asked)
   Vec3 centre_;
   double d0_ = 0.0, t_ = 0.0, w0_ = 0.0, y0_ = 0.0, peak_ = 0.0;
+  AdaptiveLoading adaptive_;
+  double paced_steps_ = 0.0;  // adaptive loading: Protocol::paced_steps
+  double cracks_at_start_ = 0.0;
   std::string stop_reason_;
 };
 

@@ -235,16 +235,12 @@ GrainReads PlatenCompression::grains_read_by_control(const Simulation& sim) cons
 
 void PlatenCompression::adapt_speed(Simulation& sim) {
   const std::uint64_t step = sim.step_count();
-  // The step's speed (as Simulation::step sets it, at mid-step) over the floor; the start-up
-  // ramp counts as the floor, as a constant-speed run's rows would stand there.
-  const Wall& top = sim.walls()[top_];
-  const double v =
-      std::abs(top.target_velocity[axis_]) * top.ramp.factor(sim.time() + 0.5 * sim.time_step());
-  paced_steps_ += std::max(1.0, v / st_.platen_speed);
+  auto& W = sim.walls();
+  // The start-up ramp counts as the floor, as a constant-speed run's rows would stand there.
+  paced_steps_ += paced_step(W[top_], axis_, st_.platen_speed, sim.time(), sim.time_step());
   // The check reads the stored energy of the step before it, sampled for it.
   if (adaptive_.due_next(step, sim.time())) sim.request_energy_sample();
   if (!adaptive_.due(step, sim.time())) return;
-  auto& W = sim.walls();
   LoadingReading r;
   r.strain = (h0_ - height(sim)) / h0_;
   r.cracks = static_cast<double>(sim.cracks().size() - broken_at_start_);
@@ -254,19 +250,10 @@ void PlatenCompression::adapt_speed(Simulation& sim) {
   const double ft = dot(W[top_].force, W[top_].normal);
   const double fbar = 0.5 * (fb + ft);  // the quasi-static check's own measure
   if (fbar > 0.0) r.imbalance = std::abs(ft - fb) / fbar;
-  const double before = adaptive_.factor();
-  const double after = adaptive_.update(r, before);
-  if (after == before) return;
+  const auto [before, after] =
+      steer_platens(adaptive_, r, W[bottom_], W[top_], axis_, sim.time(), sim.time_step());
   // The lateral servo keeps its cap at ten times the platens' speed, as at the floor.
-  servo_.max_speed = 10.0 * st_.platen_speed * std::max(before, after);
-  Vec3 up{};
-  up[axis_] = 1.0;
-  const double duration = static_cast<double>(adaptive_.check_steps()) * sim.time_step();
-  for (auto [w, sign] : {std::pair{bottom_, 1.0}, std::pair{top_, -1.0}}) {
-    W[w].target_velocity = up * (sign * st_.platen_speed * after);
-    W[w].ramp = {sim.time(), duration, before / after};
-    W[w].update_motion(sim.time());
-  }
+  if (after != before) servo_.max_speed = 10.0 * st_.platen_speed * std::max(before, after);
 }
 
 void PlatenCompression::history_values(const Simulation& sim, std::vector<double>& out) const {
@@ -304,14 +291,7 @@ double PlatenCompression::fluctuating_kinetic_energy(const Simulation& sim) cons
 
 void PlatenCompression::summarise_curve(const analysis::CompressionResult&,
                                         nlohmann::json& out) const {
-  if (adaptive_.on())
-    out["adaptive_loading"] = {
-        {"speed_ratio", st_.adaptive_speed_ratio},
-        {"crack_rate", st_.adaptive_crack_rate},
-        {"kinetic_ratio", st_.adaptive_kinetic_ratio},
-        {"target_platen_imbalance", AdaptiveLoading::kTargetImbalance},
-        {"check_interval_steps", adaptive_.check_steps()},
-        {"largest_speed_m_per_s", st_.platen_speed * adaptive_.max_factor()}};
+  if (adaptive_.on()) out["adaptive_loading"] = adaptive_loading_summary(adaptive_);
   if (!(st_.elastic_speed > st_.platen_speed)) return;
   out["elastic_speed_m_per_s"] = st_.elastic_speed;
   out["slow_down_axial_strain"] =

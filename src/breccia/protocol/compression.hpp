@@ -14,11 +14,11 @@
 #include <string>
 #include <vector>
 
-#include "breccia/boundary/adaptive_loading.hpp"
 #include "breccia/boundary/servo.hpp"
 #include "breccia/core/error.hpp"
 #include "breccia/engine/simulation.hpp"
 #include "breccia/law/param_table.hpp"
+#include "breccia/protocol/adaptive_platens.hpp"
 #include "breccia/protocol/membrane.hpp"
 #include "breccia/protocol/protocol.hpp"
 
@@ -218,18 +218,9 @@ constexpr std::array<ParamField<P>, 9 + N> compression_fields(
       {"slow_down_broken_fraction", "-", &P::slow_down_broken_fraction, 0, 1, true, false,
        "with elastic_speed: the platens slow down once this fraction of the bonds has broken "
        "during axial loading (0: at the first broken bond)"},
-      {"adaptive_speed_ratio", "-", &P::adaptive_speed_ratio, 1, 1000, true, true,
-       "adaptive loading (docs/physics.md §6.1): the platens' speed follows the sample's state "
-       "between platen_speed (the floor, near the peak) and this many times it, slowing as bonds "
-       "break, the kinetic energy rises or the platens' forces part; 1 = constant speed; "
-       "elastic_speed > 0 (two-speed loading) turns it off"},
-      {"adaptive_crack_rate", "-", &P::adaptive_crack_rate, 0, 1, false, true,
-       "adaptive loading: the bonds a bar-wave transit may break at above the floor speed, as a "
-       "fraction of those intact when loading began"},
-      {"adaptive_kinetic_ratio", "-", &P::adaptive_kinetic_ratio, 0, 1e-3, false, true,
-       "adaptive loading: the kinetic over strain energy it holds the loading to above the floor "
-       "speed (the quasi-static check's limit is 1e-3)"},
   }};
+  const auto adaptive = adaptive_loading_fields<P>();
+  for (std::size_t k = 0; k < 3; ++k) f[6 + k] = adaptive[k];
   for (std::size_t k = 0; k < N; ++k) f[9 + k] = extra[k];
   return f;
 }
