@@ -243,3 +243,24 @@ TEST(AdaptiveLoading, TheBrazilianTestSpeedsUpWhileItsDiscIsElastic) {
   EXPECT_LT(s["simulated_time_s"].get<double>(), 0.6 * constant_time);
   fs::remove_all(out);
 }
+
+// The direct tension test's grips load adaptively too: the tiny prism pulled at 0.02 m/s up to 8
+// times that breaks at the constant-speed run's strength (within the 2 % the loading must keep)
+// in fewer steps.
+TEST(AdaptiveLoading, TheDirectTensionTestKeepsItsStrengthInFewerSteps) {
+  const fs::path out = fs::temp_directory_path() / "breccia_adaptive_tension";
+  fs::remove_all(out);
+  const std::string tension = " --set engine.threads=1 --set test.kind=\"direct_tension\"";
+  const fs::path a = run_tiny(out / "constant", tension);
+  const fs::path b = run_tiny(out / "adaptive", tension + " --set test.adaptive_speed_ratio=8");
+  const auto sa = nlohmann::json::parse(read(a / "summary.json"));
+  const auto sb = nlohmann::json::parse(read(b / "summary.json"));
+  EXPECT_GT(sa["bonds_broken"].get<int>(), 10) << "the test must break bonds";
+  EXPECT_NEAR(sb["tensile_strength_pa"].get<double>() / sa["tensile_strength_pa"].get<double>(),
+              1.0, 0.02);
+  EXPECT_LT(sb["steps"].get<double>(), 0.8 * sa["steps"].get<double>());
+  EXPECT_GT(sb["adaptive_loading"]["largest_speed_m_per_s"].get<double>(), 0.04);
+  const std::vector<double> v = column(b / "history.csv", "grip_speed_m_per_s");
+  EXPECT_NEAR(v.back(), 0.02, 1e-12) << "at the floor once the sample breaks";
+  fs::remove_all(out);
+}

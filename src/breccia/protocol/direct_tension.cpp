@@ -100,13 +100,57 @@ std::uint64_t DirectTensionTest::start(Simulation& sim, double bar_wave_speed) {
   separation0_ = mean_position(sim, top_) - mean_position(sim, bottom_);
   w0_ = width_between(sim.particles(), left_, right_, across_);
   peak_ = 0.0;
+  cracks_at_start_ = static_cast<double>(sim.cracks().size());
+  if (p_.adaptive_speed_ratio > 1.0)
+    adaptive_ = AdaptiveLoading(
+        {p_.adaptive_speed_ratio, p_.adaptive_crack_rate, p_.adaptive_kinetic_ratio},
+        p_.platen_speed, bar_wave_speed, length_, sim.time_step(),
+        static_cast<double>(sim.intact_bond_sites()), t0_ + ramp_);
+  paced_steps_ = static_cast<double>(sim.step_count());
   return 0;
 }
 
+double DirectTensionTest::speed_factor(double time, double time_step) const {
+  // At the middle of the coming step, so that the grips travel the ramps' integral.
+  const double t = time + 0.5 * time_step;
+  if (adaptive_.on() && t >= t0_ + ramp_) return adaptive_.factor() * change_.factor(t);
+  return VelocityRamp{t0_, ramp_}.factor(t);
+}
+
+GrainReads DirectTensionTest::grains_read_by_control(const Simulation& sim) const {
+  if (adaptive_.due(sim.step_count(), sim.time())) return GrainReads::every();
+  return {};
+}
+
+// At a check: the state adaptive loading reads, and the cosine to its new speed over the check's
+// interval.
+void DirectTensionTest::adapt_speed(Simulation& sim) {
+  const std::uint64_t step = sim.step_count();
+  if (adaptive_.due_next(step, sim.time())) sim.request_energy_sample();
+  if (!adaptive_.due(step, sim.time())) return;
+  LoadingReading r;
+  r.strain = (mean_position(sim, top_) - mean_position(sim, bottom_) - separation0_) / free_length_;
+  r.cracks = static_cast<double>(sim.cracks().size()) - cracks_at_start_;
+  const double stored = sim.ledger().bond.total() + sim.ledger().contact;
+  if (stored > 0.0) r.kinetic_ratio = fluctuating_kinetic_energy(sim) / stored;
+  const double fb = grip_tension(sim, bottom_, -1.0), ft = grip_tension(sim, top_, 1.0);
+  if (fb + ft > 0.0) r.imbalance = std::abs(ft - fb) / (0.5 * (fb + ft));
+  const double before = adaptive_.factor();
+  const double after = adaptive_.update(r, before);
+  if (after != before)
+    change_ = {sim.time(), static_cast<double>(adaptive_.check_steps()) * sim.time_step(),
+               before / after};
+}
+
+void DirectTensionTest::history_values(const Simulation& sim, std::vector<double>& out) const {
+  out.push_back(std::abs(sim.particles().drive_vel[top_.front()][axis_]));
+}
+
 void DirectTensionTest::control(Simulation& sim) {
-  // The speed at the middle of the coming step, so that the grips travel the ramp's integral.
-  const VelocityRamp ramp{t0_, ramp_};
-  const double v = p_.platen_speed * ramp.factor(sim.time() + 0.5 * sim.time_step());
+  if (adaptive_.on()) adapt_speed(sim);
+  const double factor = speed_factor(sim.time(), sim.time_step());
+  if (adaptive_.on()) paced_steps_ += std::max(1.0, factor);
+  const double v = p_.platen_speed * factor;
   ParticleStore& ps = sim.particles_mut();
   for (std::uint32_t i : bottom_) ps.drive_vel[i][axis_] = -v;
   for (std::uint32_t i : top_) ps.drive_vel[i][axis_] = v;
@@ -188,8 +232,10 @@ void DirectTensionTest::transfer(Archive& a) {
   a.vector(left_);
   a.vector(right_);
   for (double* v : {&origin_, &length_, &area_, &width_, &depth_, &grip_, &free_length_,
-                    &separation0_, &w0_, &t0_, &ramp_, &peak_})
+                    &separation0_, &w0_, &t0_, &ramp_, &peak_, &paced_steps_, &cracks_at_start_})
     a.value(*v);
+  a.value(adaptive_);
+  a.value(change_);
   a.string(stop_reason_);
 }
 
@@ -221,6 +267,7 @@ void DirectTensionTest::summarise_curve(const analysis::CompressionResult& an,
       "sigma_t = F / A at the largest mean grip force F over the cross-section A (direct "
       "tension)";
   out["peak_force_n"] = an.peak_deviatoric * area_;
+  if (adaptive_.on()) out["adaptive_loading"] = adaptive_loading_summary(adaptive_);
   out["tensile_strength_reading"] = {
       {"name", "direct tensile strength"},
       {"formula", "F/A"},

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "breccia/law/param_table.hpp"
+#include "breccia/protocol/adaptive_platens.hpp"
 #include "breccia/protocol/protocol.hpp"
 
 namespace breccia {
@@ -34,9 +35,10 @@ class DirectTensionTest final : public Protocol, public StressStrainTest {
   struct Params {
     double platen_speed = 0.02, ramp_time = 0.0, max_strain = 0.01, stop_fraction = 0.5;
     double grip_length = 0.0;
+    double adaptive_speed_ratio = 1.0, adaptive_crack_rate = 2e-4, adaptive_kinetic_ratio = 2.5e-4;
   };
-  static constexpr std::array<ParamField<Params>, 5> fields() {
-    return {{
+  static constexpr std::array<ParamField<Params>, 8> fields() {
+    std::array<ParamField<Params>, 8> f{{
         {"platen_speed", "m/s", &Params::platen_speed, 0, kInf, false, true,
          "speed of each grip away from the other"},
         {"ramp_time", "s", &Params::ramp_time, 0, kInf, true, true,
@@ -49,6 +51,9 @@ class DirectTensionTest final : public Protocol, public StressStrainTest {
          "each grip holds the grains whose centres lie this close to its end face; 0 = two "
          "largest grain diameters"},
     }};
+    const auto adaptive = adaptive_loading_fields<Params>();
+    for (std::size_t k = 0; k < 3; ++k) f[5 + k] = adaptive[k];
+    return f;
   }
   // Shapes the test accepts, and grips that leave the middle of the sample free.
   static void check(const Params& p, const SampleInfo& s, const std::string& where);
@@ -61,6 +66,14 @@ class DirectTensionTest final : public Protocol, public StressStrainTest {
   std::string label() const override { return "direct tension"; }
   std::uint64_t start(Simulation& sim, double bar_wave_speed) override;
   void control(Simulation& sim) override;
+  // Every grain on the steps where adaptive loading reads the kinetic energy, else none.
+  GrainReads grains_read_by_control(const Simulation& sim) const override;
+  double paced_steps(const Simulation& sim) const override {
+    return adaptive_.on() ? paced_steps_ : static_cast<double>(sim.step_count());
+  }
+  // history.csv gains the grips' speed (each).
+  std::vector<std::string> history_columns() const override { return {"grip_speed_m_per_s"}; }
+  void history_values(const Simulation& sim, std::vector<double>& out) const override;
   AxialState measure(const Simulation& sim) const override;
   // The gripped grains and those at the width's extremes at mid-height.
   GrainReads grains_read_by_measure() const override;
@@ -112,6 +125,14 @@ class DirectTensionTest final : public Protocol, public StressStrainTest {
   double origin_ = 0.0, length_ = 0.0, area_ = 0.0, width_ = 0.0, depth_ = 0.0;
   double grip_ = 0.0, free_length_ = 0.0, separation0_ = 0.0, w0_ = 0.0;
   double t0_ = 0.0, ramp_ = 0.0, peak_ = 0.0;
+  // Adaptive loading: the controller, the cosine between its last two speeds, the paced steps
+  // and the cracks when loading began.
+  AdaptiveLoading adaptive_;
+  VelocityRamp change_;
+  double paced_steps_ = 0.0, cracks_at_start_ = 0.0;
+  // The grips' speed over the floor for the step that starts at `time`.
+  double speed_factor(double time, double time_step) const;
+  void adapt_speed(Simulation& sim);
   std::string stop_reason_;
 };
 

@@ -512,9 +512,22 @@ void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string
 void set_platen_speed(ExperimentSpec& spec, double speed, const std::string& where) {
   PlatenLoading loading = sweepable_loading<false>(spec, where, "strain-rate");
   loading.platen_speed = speed;
+  loading.adaptive_speed_ratio = 1.0;  // the rate is what the sweep varies: constant throughout
   visit_lab_test(spec.test, [&]<class T>(const typename T::Params& p) {
     if constexpr (PlatenLoaded<T>) {
       typename T::Params q = p;
+      T::set_loading(q, loading);
+      spec.test = q;
+    }
+  });
+}
+
+void load_at_constant_speed(ExperimentSpec& spec) {
+  visit_lab_test(spec.test, [&]<class T>(const typename T::Params& p) {
+    if constexpr (PlatenLoaded<T>) {
+      typename T::Params q = p;
+      PlatenLoading loading = T::loading(p);
+      loading.adaptive_speed_ratio = 1.0;
       T::set_loading(q, loading);
       spec.test = q;
     }

@@ -127,9 +127,11 @@ double confining_stress(const ExperimentSpec& spec);
 // The compression test of the same loading at confining stress `sigma3`: "ucs" at 0, "triaxial"
 // (3D) or "biaxial" (2D) above (sweeps). Throws InputError for tests that are not compression.
 void set_confining_stress(ExperimentSpec& spec, double sigma3, const std::string& where);
-// Sets the platens' speed of the experiment's compression test (strain-rate sweeps). Throws
-// InputError for tests that are not compression.
+// Sets the platens' speed of the experiment's compression test (strain-rate sweeps), constant
+// throughout (no adaptive loading). Throws InputError for tests that are not compression.
 void set_platen_speed(ExperimentSpec& spec, double speed, const std::string& where);
+// Turns adaptive loading off in the experiment's compression test (nothing for other tests).
+void load_at_constant_speed(ExperimentSpec& spec);
 // The platens' speed of the experiment's compression test, m/s; 0 for tests without platens.
 double platen_speed(const ExperimentSpec& spec);
 // The [sample] radius distribution of a generated sample.
