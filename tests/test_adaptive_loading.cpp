@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "breccia/boundary/adaptive_loading.hpp"
+#include "breccia/protocol/compression.hpp"
+#include "breccia/spec/experiment.hpp"
 #include "cli_harness.hpp"
 
 using namespace breccia;
@@ -263,4 +265,27 @@ TEST(AdaptiveLoading, TheDirectTensionTestKeepsItsStrengthInFewerSteps) {
   const std::vector<double> v = column(b / "history.csv", "grip_speed_m_per_s");
   EXPECT_NEAR(v.back(), 0.02, 1e-12) << "at the floor once the sample breaks";
   fs::remove_all(out);
+}
+
+// Which loadings are adaptive: the UCS by default, not the confined tests; two-speed loading
+// replaces it; strain-rate sweeps and calibrations load at a constant speed.
+TEST(AdaptiveLoading, TheUcsLoadsAdaptivelyByDefaultAndSweepsOfTheRateDoNot) {
+  EXPECT_EQ(UcsTest::Params{}.adaptive_speed_ratio, 8.0);
+  EXPECT_EQ(TriaxialTest::Params{}.adaptive_speed_ratio, 1.0);
+  EXPECT_EQ(BiaxialTest::Params{}.adaptive_speed_ratio, 1.0);
+  UcsTest::Params two_speed;
+  two_speed.elastic_speed = 0.1;
+  EXPECT_EQ(platen_settings(platen_loading(two_speed)).adaptive_speed_ratio, 1.0);
+  EXPECT_EQ(platen_settings(platen_loading(UcsTest::Params{})).adaptive_speed_ratio, 8.0);
+  const auto ratio = [](const ExperimentSpec& s) {
+    return std::get<UcsTest::Params>(s.test).adaptive_speed_ratio;
+  };
+  ExperimentSpec spec = default_experiment();
+  EXPECT_EQ(ratio(spec), 8.0);
+  set_platen_speed(spec, 0.1, "test");
+  EXPECT_EQ(ratio(spec), 1.0) << "a strain-rate sweep's test";
+  ExperimentSpec calibrated = default_experiment();
+  load_at_constant_speed(calibrated);
+  EXPECT_EQ(ratio(calibrated), 1.0) << "a calibration's test";
+  EXPECT_EQ(std::get<UcsTest::Params>(calibrated.test).platen_speed, 0.03);
 }
