@@ -33,7 +33,7 @@ AdaptiveLoading controller() {
 double quiet_checks(AdaptiveLoading& a, int n, double& strain, double strain_per_check) {
   for (int k = 0; k < n; ++k) {
     strain += strain_per_check * a.factor();
-    a.update({.strain = strain}, a.factor());
+    a.update({.strain = strain});
   }
   return a.factor();
 }
@@ -77,7 +77,7 @@ TEST(AdaptiveLoading, CrackingHoldsEachTransitToItsBudgetOfBrokenBonds) {
   for (int k = 1; k <= 40; ++k) {
     strain += 1e-4;
     if (k % 4 == 0) cracks += 1.0;
-    const double f = a.update({.strain = strain, .cracks = cracks}, a.factor());
+    const double f = a.update({.strain = strain, .cracks = cracks});
     EXPECT_GE(f, last / AdaptiveLoading::kDownPerCheck * (1 - 1e-15))
         << "at most a halving a transit, check " << k;
     last = f;
@@ -87,13 +87,13 @@ TEST(AdaptiveLoading, CrackingHoldsEachTransitToItsBudgetOfBrokenBonds) {
   for (int k = 1; k <= 40; ++k) {
     strain += 1e-4;
     if (k % 2 == 0) cracks += 1.0;
-    a.update({.strain = strain, .cracks = cracks}, a.factor());
+    a.update({.strain = strain, .cracks = cracks});
   }
   EXPECT_NEAR(a.factor(), 2.0, 1e-12);
   for (int k = 1; k <= 40; ++k) {
     strain += 1e-4;
     cracks += 2.0;
-    a.update({.strain = strain, .cracks = cracks}, a.factor());
+    a.update({.strain = strain, .cracks = cracks});
   }
   EXPECT_EQ(a.factor(), 1.0);
 }
@@ -105,23 +105,23 @@ TEST(AdaptiveLoading, KineticEnergyAndPlatenImbalanceScaleTheSpeedDown) {
   // E'_kin / E_strain at 1.5625e-4 is the target over 1.6: the speed may rise by sqrt(1.6), but
   // not past the ceiling; at 4 times the target it should halve, by 2^(1/4) at most a check.
   strain += 1e-5;
-  EXPECT_EQ(a.update({.strain = strain, .kinetic_ratio = 1.5625e-4}, 8.0), 8.0);
+  EXPECT_EQ(a.update({.strain = strain, .kinetic_ratio = 1.5625e-4}), 8.0);
   strain += 1e-5;
-  EXPECT_NEAR(a.update({.strain = strain, .kinetic_ratio = 1e-3}, 8.0),
+  EXPECT_NEAR(a.update({.strain = strain, .kinetic_ratio = 1e-3}),
               8.0 / AdaptiveLoading::kDownPerCheck, 1e-12);
   // Between the limits: E'_kin at 1.0 x the target over (1.05)^2 lets it rise by 1.05 only.
   strain += 1e-5;
   const double f = a.factor();
-  EXPECT_NEAR(a.update({.strain = strain, .kinetic_ratio = 2.5e-4 / (1.05 * 1.05)}, f), 1.05 * f,
+  EXPECT_NEAR(a.update({.strain = strain, .kinetic_ratio = 2.5e-4 / (1.05 * 1.05)}), 1.05 * f,
               1e-12);
   // The platens' imbalance 0.025 (twice the target 0.0125): a halving, limited to 2^(1/4).
   strain += 1e-5;
   const double g = a.factor();
-  EXPECT_NEAR(a.update({.strain = strain, .imbalance = 0.025}, g),
-              g / AdaptiveLoading::kDownPerCheck, 1e-12);
+  EXPECT_NEAR(a.update({.strain = strain, .imbalance = 0.025}), g / AdaptiveLoading::kDownPerCheck,
+              1e-12);
   strain += 1e-5;
   const double h = a.factor();
-  EXPECT_NEAR(a.update({.strain = strain, .imbalance = 0.0125 / 1.02}, h), 1.02 * h, 1e-12);
+  EXPECT_NEAR(a.update({.strain = strain, .imbalance = 0.0125 / 1.02}), 1.02 * h, 1e-12);
 }
 
 namespace {

@@ -78,9 +78,9 @@ class AdaptiveLoading {
     return on() && time >= start_time_ && (step + 1) % check_steps_ == 0;
   }
 
-  // The speed factor to move to from `reading`, and the factor now (the speed the platens move at
-  // over the floor).
-  double update(const LoadingReading& r, double factor_now) noexcept {
+  // The speed factor (over the floor) to move to from the reading `r` at a check.
+  double update(const LoadingReading& r) noexcept {
+    const double factor_now = factor_;
     const int slot = checks_ % kWindow;
     const double strain_then = window_strain_[static_cast<std::size_t>(slot)];
     const double cracks_then = window_cracks_[static_cast<std::size_t>(slot)];

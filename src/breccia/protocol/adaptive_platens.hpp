@@ -37,7 +37,7 @@ inline std::array<double, 2> steer_platens(AdaptiveLoading& a, const LoadingRead
                                            Wall& bottom, Wall& top, int axis, double time,
                                            double time_step) {
   const double before = a.factor();
-  const double after = a.update(r, before);
+  const double after = a.update(r);
   if (after == before) return {before, after};
   Vec3 up{};
   up[axis] = 1.0;

@@ -136,7 +136,7 @@ void DirectTensionTest::adapt_speed(Simulation& sim) {
   const double fb = grip_tension(sim, bottom_, -1.0), ft = grip_tension(sim, top_, 1.0);
   if (fb + ft > 0.0) r.imbalance = std::abs(ft - fb) / (0.5 * (fb + ft));
   const double before = adaptive_.factor();
-  const double after = adaptive_.update(r, before);
+  const double after = adaptive_.update(r);
   if (after != before)
     change_ = {sim.time(), static_cast<double>(adaptive_.check_steps()) * sim.time_step(),
                before / after};
