@@ -283,24 +283,27 @@ LoopEnd run_loading_loop(const ExperimentSpec& spec, Session& ss, const RunOptio
                       folder.string()));
       return e;
     }
-    if (sim.step_count() % interval == 0) sim.request_energy_sample();
     // A split sample's ranks share the grains each reader declares (gather_grains is nothing
     // otherwise), and every grain at a row.
     const double paced_before = test.paced_steps(sim);
     sim.gather_grains(test.grains_read_by_control(sim));
     test.control(sim);
+    // A row every `interval` paced steps (with the first step's): every interval steps at a
+    // constant speed. An adaptive test has counted the coming step in its control (at least
+    // one); the others count it when it is taken. The row's step samples the energies.
+    const auto rows_by = [&](double paced) {
+      return std::floor((paced - 1.0) / static_cast<double>(interval));
+    };
+    const bool row_due =
+        rows_by(std::max(test.paced_steps(sim), paced_before + 1.0)) != rows_by(paced_before);
+    if (row_due) sim.request_energy_sample();
     sim.request_stop(signalled);
     sim.step();
     for (const auto& r : ss.recorders) {
       sim.gather_grains(r->grains_read_after_step(sim, test));
       r->after_step(sim, test);
     }
-    // A row every `interval` paced steps (with the first step's): every interval steps at a
-    // constant speed.
-    const auto rows_by = [&](double paced) {
-      return std::floor((paced - 1.0) / static_cast<double>(interval));
-    };
-    if (rows_by(test.paced_steps(sim)) == rows_by(paced_before)) continue;
+    if (!row_due) continue;
     sim.gather_particles();
     const AxialState a = test.measure(sim);
     check_finite_state(sim, a);
