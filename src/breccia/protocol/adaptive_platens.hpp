@@ -8,6 +8,7 @@
 
 #include "breccia/boundary/adaptive_loading.hpp"
 #include "breccia/boundary/wall.hpp"
+#include "breccia/engine/simulation.hpp"
 #include "breccia/law/param_table.hpp"
 
 namespace breccia {
@@ -28,6 +29,40 @@ constexpr std::array<ParamField<P>, 3> adaptive_loading_fields() {
        "adaptive loading: the kinetic over strain energy it holds the loading to above the floor "
        "speed (the quasi-static check's limit is 1e-3)"},
   }};
+}
+
+// The controller a test's keys ask for (off unless adaptive_speed_ratio > 1; P also has
+// platen_speed, the floor), acting from `start_time`, the end of the start-up ramp. `length` is
+// the sample's along the load.
+template <class P>
+AdaptiveLoading adaptive_loading_of(const P& p, double bar_wave_speed, double length,
+                                    const Simulation& sim, double start_time) {
+  if (!(p.adaptive_speed_ratio > 1.0)) return {};
+  return AdaptiveLoading({p.adaptive_speed_ratio, p.adaptive_crack_rate, p.adaptive_kinetic_ratio},
+                         p.platen_speed, bar_wave_speed, length, sim.time_step(),
+                         static_cast<double>(sim.intact_bond_sites()), start_time);
+}
+
+// True when the coming step is a check; the step before one samples the stored energy for it.
+inline bool adaptive_check_now(const AdaptiveLoading& a, Simulation& sim) {
+  if (a.due_next(sim.step_count(), sim.time())) sim.request_energy_sample();
+  return a.due(sim.step_count(), sim.time());
+}
+
+// What a check reads: the strain and the bonds broken since loading began, the kinetic energy the
+// loading does not prescribe (over the stored energy of the step before), and the loading forces
+// at the two ends (compression- or tension-positive), whose imbalance the run's check judges.
+inline LoadingReading loading_reading(const Simulation& sim, double strain, double cracks,
+                                      double fluctuating_kinetic, double force_bottom,
+                                      double force_top) {
+  LoadingReading r;
+  r.strain = strain;
+  r.cracks = cracks;
+  const double stored = sim.ledger().bond.total() + sim.ledger().contact;
+  if (stored > 0.0) r.kinetic_ratio = fluctuating_kinetic / stored;
+  const double mean = 0.5 * (force_bottom + force_top);
+  if (mean > 0.0) r.imbalance = std::abs(force_top - force_bottom) / mean;
+  return r;
 }
 
 // At a check: the controller's new speed factor from `r`, which two platens moving toward each

@@ -99,30 +99,20 @@ std::uint64_t BrazilianTest::start(Simulation& sim, double bar_wave_speed) {
   }
   peak_ = 0.0;
   cracks_at_start_ = static_cast<double>(sim.cracks().size());
-  if (p_.adaptive_speed_ratio > 1.0)
-    adaptive_ = AdaptiveLoading(
-        {p_.adaptive_speed_ratio, p_.adaptive_crack_rate, p_.adaptive_kinetic_ratio},
-        p_.platen_speed, bar_wave_speed, d0_, sim.time_step(),
-        static_cast<double>(sim.intact_bond_sites()), sim.time() + ramp);
+  adaptive_ = adaptive_loading_of(p_, bar_wave_speed, d0_, sim, sim.time() + ramp);
   paced_steps_ = static_cast<double>(sim.step_count());
   return 0;
 }
 
 void BrazilianTest::control(Simulation& sim) {
   if (!adaptive_.on()) return;
-  const std::uint64_t step = sim.step_count();
   auto& W = sim.walls();
   paced_steps_ += paced_step(W[top_], 1, p_.platen_speed, sim.time(), sim.time_step());
-  if (adaptive_.due_next(step, sim.time())) sim.request_energy_sample();
-  if (!adaptive_.due(step, sim.time())) return;
-  LoadingReading r;
-  r.strain = (d0_ - (W[top_].point.y - W[bottom_].point.y)) / d0_;
-  r.cracks = static_cast<double>(sim.cracks().size()) - cracks_at_start_;
-  const double stored = sim.ledger().bond.total() + sim.ledger().contact;
-  if (stored > 0.0) r.kinetic_ratio = fluctuating_kinetic_energy(sim) / stored;
-  const double fb = dot(W[bottom_].force, W[bottom_].normal);
-  const double ft = dot(W[top_].force, W[top_].normal);
-  if (fb + ft > 0.0) r.imbalance = std::abs(ft - fb) / (0.5 * (fb + ft));
+  if (!adaptive_check_now(adaptive_, sim)) return;
+  const LoadingReading r = loading_reading(
+      sim, (d0_ - (W[top_].point.y - W[bottom_].point.y)) / d0_,
+      static_cast<double>(sim.cracks().size()) - cracks_at_start_, fluctuating_kinetic_energy(sim),
+      dot(W[bottom_].force, W[bottom_].normal), dot(W[top_].force, W[top_].normal));
   steer_platens(adaptive_, r, W[bottom_], W[top_], 1, sim.time(), sim.time_step());
 }
 

@@ -234,22 +234,14 @@ GrainReads PlatenCompression::grains_read_by_control(const Simulation& sim) cons
 }
 
 void PlatenCompression::adapt_speed(Simulation& sim) {
-  const std::uint64_t step = sim.step_count();
   auto& W = sim.walls();
   // The start-up ramp counts as the floor, as a constant-speed run's rows would stand there.
   paced_steps_ += paced_step(W[top_], axis_, st_.platen_speed, sim.time(), sim.time_step());
-  // The check reads the stored energy of the step before it, sampled for it.
-  if (adaptive_.due_next(step, sim.time())) sim.request_energy_sample();
-  if (!adaptive_.due(step, sim.time())) return;
-  LoadingReading r;
-  r.strain = (h0_ - height(sim)) / h0_;
-  r.cracks = static_cast<double>(sim.cracks().size() - broken_at_start_);
-  const double stored = sim.ledger().bond.total() + sim.ledger().contact;
-  if (stored > 0.0) r.kinetic_ratio = fluctuating_kinetic_energy(sim) / stored;
-  const double fb = dot(W[bottom_].force, W[bottom_].normal);
-  const double ft = dot(W[top_].force, W[top_].normal);
-  const double fbar = 0.5 * (fb + ft);  // the quasi-static check's own measure
-  if (fbar > 0.0) r.imbalance = std::abs(ft - fb) / fbar;
+  if (!adaptive_check_now(adaptive_, sim)) return;
+  const LoadingReading r = loading_reading(
+      sim, (h0_ - height(sim)) / h0_, static_cast<double>(sim.cracks().size() - broken_at_start_),
+      fluctuating_kinetic_energy(sim), dot(W[bottom_].force, W[bottom_].normal),
+      dot(W[top_].force, W[top_].normal));
   const auto [before, after] =
       steer_platens(adaptive_, r, W[bottom_], W[top_], axis_, sim.time(), sim.time_step());
   // The lateral servo keeps its cap at ten times the platens' speed, as at the floor.
@@ -367,11 +359,7 @@ std::uint64_t PlatenCompression::start(Simulation& sim, double bar_wave_speed) {
   slow_down_cracks_ = std::max<std::size_t>(
       1, static_cast<std::size_t>(std::ceil(st_.slow_down_broken_fraction *
                                             static_cast<double>(sim.intact_bond_sites()))));
-  if (st_.adaptive_speed_ratio > 1.0)
-    adaptive_ = AdaptiveLoading(
-        {st_.adaptive_speed_ratio, st_.adaptive_crack_rate, st_.adaptive_kinetic_ratio},
-        st_.platen_speed, bar_wave_speed, h0_, sim.time_step(),
-        static_cast<double>(sim.intact_bond_sites()), sim.time() + ramp);
+  adaptive_ = adaptive_loading_of(st_, bar_wave_speed, h0_, sim, sim.time() + ramp);
   paced_steps_ = static_cast<double>(sim.step_count());
   return sim.step_count() - step0;
 }

@@ -101,11 +101,7 @@ std::uint64_t DirectTensionTest::start(Simulation& sim, double bar_wave_speed) {
   w0_ = width_between(sim.particles(), left_, right_, across_);
   peak_ = 0.0;
   cracks_at_start_ = static_cast<double>(sim.cracks().size());
-  if (p_.adaptive_speed_ratio > 1.0)
-    adaptive_ = AdaptiveLoading(
-        {p_.adaptive_speed_ratio, p_.adaptive_crack_rate, p_.adaptive_kinetic_ratio},
-        p_.platen_speed, bar_wave_speed, length_, sim.time_step(),
-        static_cast<double>(sim.intact_bond_sites()), t0_ + ramp_);
+  adaptive_ = adaptive_loading_of(p_, bar_wave_speed, length_, sim, t0_ + ramp_);
   paced_steps_ = static_cast<double>(sim.step_count());
   return 0;
 }
@@ -125,16 +121,11 @@ GrainReads DirectTensionTest::grains_read_by_control(const Simulation& sim) cons
 // At a check: the state adaptive loading reads, and the cosine to its new speed over the check's
 // interval.
 void DirectTensionTest::adapt_speed(Simulation& sim) {
-  const std::uint64_t step = sim.step_count();
-  if (adaptive_.due_next(step, sim.time())) sim.request_energy_sample();
-  if (!adaptive_.due(step, sim.time())) return;
-  LoadingReading r;
-  r.strain = (mean_position(sim, top_) - mean_position(sim, bottom_) - separation0_) / free_length_;
-  r.cracks = static_cast<double>(sim.cracks().size()) - cracks_at_start_;
-  const double stored = sim.ledger().bond.total() + sim.ledger().contact;
-  if (stored > 0.0) r.kinetic_ratio = fluctuating_kinetic_energy(sim) / stored;
-  const double fb = grip_tension(sim, bottom_, -1.0), ft = grip_tension(sim, top_, 1.0);
-  if (fb + ft > 0.0) r.imbalance = std::abs(ft - fb) / (0.5 * (fb + ft));
+  if (!adaptive_check_now(adaptive_, sim)) return;
+  const LoadingReading r = loading_reading(
+      sim, (mean_position(sim, top_) - mean_position(sim, bottom_) - separation0_) / free_length_,
+      static_cast<double>(sim.cracks().size()) - cracks_at_start_, fluctuating_kinetic_energy(sim),
+      grip_tension(sim, bottom_, -1.0), grip_tension(sim, top_, 1.0));
   const double before = adaptive_.factor();
   const double after = adaptive_.update(r);
   if (after != before)
