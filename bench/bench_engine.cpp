@@ -181,6 +181,11 @@ int main(int argc, char** argv) {
   bool split = false;
   app.add_flag("--split", split,
                "under mpirun: split the sample over the ranks (each steps its own particles)");
+  std::string instruction_set = "auto";
+  app.add_option("--instruction-set", instruction_set,
+                 "the kernels' instruction set (engine.instruction_set): auto, baseline or "
+                 "x86-64-v3")
+      ->check(CLI::IsMember({"auto", "baseline", "x86-64-v3"}));
   CLI11_PARSE(app, argc, argv);
   if (sample == "cylinder" && dim != 3) {
     std::fprintf(stderr, "bench_engine: --sample cylinder is 3D only (got --dim %d)\n", dim);
@@ -207,6 +212,7 @@ int main(int argc, char** argv) {
   cfg.energy_interval = 100;
   cfg.skin = skin;
   cfg.keep_pair_forces = keep_pair_forces;
+  if (instruction_set != "auto") cfg.instruction_set = instruction_set_from_name(instruction_set);
   LinearContact::Params lp, wall;
   wall.friction = 0.0;
   Simulation sim(std::move(ps), cfg, make_contact_model<LinearContact>(lp, wall));
@@ -315,6 +321,7 @@ int main(int argc, char** argv) {
                    {"ranks", n_ranks},
                    {"split", sim.split()},
                    {"threads", threads},
+                   {"instruction_set", instruction_set_name(sim.instruction_set())},
                    {"steps", steps},
                    {"repeats", repeats},
                    {"particle_steps_per_s", rate},

@@ -1,5 +1,6 @@
 #pragma once
 #include <functional>
+#include <optional>
 // A bonded FCC block between two platens, the small standard system of several tests.
 #include <cmath>
 
@@ -12,13 +13,15 @@ namespace breccia::test {
 inline Simulation compressed_block(int nx, int ny, int nz, double platen_speed,
                                    double bond_strength, double damping = 0.7,
                                    const std::function<void(Simulation&)>& before_start = {},
-                                   bool keep_pair_forces = false) {
+                                   bool keep_pair_forces = false,
+                                   std::optional<InstructionSet> instruction_set = {}) {
   const double R = 0.5e-3;
   ParticleStore ps = fcc_block(nx, ny, nz, R, 2650);
   EngineConfig cfg;
   cfg.local_damping = damping;
   cfg.energy_interval = 50;
   cfg.keep_pair_forces = keep_pair_forces;
+  cfg.instruction_set = instruction_set;
   LinearContact::Params lp;
   LinearContact::Params wall = lp;
   wall.friction = 0.0;
@@ -48,7 +51,8 @@ inline Simulation compressed_block(int nx, int ny, int nz, double platen_speed,
 // platens: spheres in an FCC block, or disks in a hexagonal one for a law made for 2D.
 // `size` scales the block's edges: 64 size^3 spheres, or 60 size^2 disks.
 template <class CL, class BL>
-Simulation law_block(bool keep_pair_forces = false, int size = 1) {
+Simulation law_block(bool keep_pair_forces = false, int size = 1,
+                     std::optional<InstructionSet> instruction_set = {}) {
   const double R = 0.5e-3;
   ParticleStore ps = planar_only_law<BL> ? hex_block(6 * size, 10 * size, R, 2650, 1e-3)
                                          : fcc_block(2 * size, 2 * size, 4 * size, R, 2650);
@@ -59,6 +63,7 @@ Simulation law_block(bool keep_pair_forces = false, int size = 1) {
   EngineConfig cfg;
   cfg.energy_interval = 20;
   cfg.keep_pair_forces = keep_pair_forces;
+  cfg.instruction_set = instruction_set;
   // A contact layout with the rolling moments runs with rolling and twisting resistance on.
   typename CL::Params cp = CL::example_params();
   if constexpr (CL::rolling) {

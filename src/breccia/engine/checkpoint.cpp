@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "breccia/core/archive.hpp"
+#include "breccia/core/format.hpp"
 #include "breccia/engine/simulation.hpp"
 
 namespace breccia {
@@ -218,7 +219,7 @@ void Simulation::transfer(Archive& a) {
   // are saved by law, so a new law needs nothing here.
   static_assert(sizeof(Simulation) - sizeof(ContactModel) - sizeof(wall_contacts_) -
                         sizeof(BondSets) - sizeof(JointSets) ==
-                    1960,
+                    1968,
                 "Simulation changed: update engine/checkpoint.cpp");
   a.label("simulation");
   if constexpr (Archive::reading)
@@ -255,6 +256,9 @@ void Simulation::transfer(Archive& a) {
   a.vector(drive_force_prev_);
   a.value(max_disp2_);
   a.value(radius_growth_);
+  // The kernels' instruction set goes on with the run, so that the continuation is bitwise the
+  // uninterrupted run (restore() falls back where the CPU lacks it).
+  a.value(isa_);
 
   transfer_cracks(a);
 
@@ -292,6 +296,14 @@ void Simulation::save_state(ArchiveWriter& a) const {
 Simulation Simulation::restore(ArchiveReader& a) {
   Simulation s{RestoreTag{}};
   s.transfer(a);
+  if (!instruction_set_supported(s.isa_)) {
+    const InstructionSet saved = s.isa_;
+    s.isa_ = best_instruction_set();
+    s.warnings_.push_back(fmt::format(
+        "the run computed in the instruction set '{}', which this CPU lacks: it goes on in '{}', "
+        "so it is no longer the same to the bit as the uninterrupted run (docs/physics.md §1.7)",
+        instruction_set_name(saved), instruction_set_name(s.isa_)));
+  }
 
   // Consistency of what the hot loops index without checks.
   const std::size_t n = s.p_.size();

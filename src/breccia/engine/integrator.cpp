@@ -140,53 +140,55 @@ void Simulation::integrate_for(ContactSet<CL>& c, bool sample) {
   const bool turning = !central_forces_only(c);
   const IndexRange own = owned_blocks(owned_particles(), kBlock);
   for_blocks_in(own.begin, own.end, n, [&](std::size_t begin, std::size_t end, std::size_t blk) {
-    IntegrateBlock acc;
-    for (std::size_t i = begin; i < end; ++i) {
-      if (i + kCrossAhead < end) prefetch_cross(c.pairs, cross_slots_, i + kCrossAhead);
-      Vec3 f, t, f_user;
-      total_loads(c.pairs, i, has_user_force, f, t, f_user);
-      const double m = p_.mass[i], inertia = p_.inertia[i];
-      f += gravity * m;
-      if (planar) {
-        f.z = 0.0;
-        t.x = 0.0;
-        t.y = 0.0;
+    with_instruction_set(isa_, [&] {
+      IntegrateBlock acc;
+      for (std::size_t i = begin; i < end; ++i) {
+        if (i + kCrossAhead < end) prefetch_cross(c.pairs, cross_slots_, i + kCrossAhead);
+        Vec3 f, t, f_user;
+        total_loads(c.pairs, i, has_user_force, f, t, f_user);
+        const double m = p_.mass[i], inertia = p_.inertia[i];
+        f += gravity * m;
+        if (planar) {
+          f.z = 0.0;
+          t.x = 0.0;
+          t.y = 0.0;
+        }
+        if (!turning) t = {};  // the walls' torques too are rounding then
+        Kick k{p_.vel[i], p_.angvel[i], {}, {}};
+        if (p_.motion[i] == Motion::Free)
+          kick_free(f, t, m, inertia, dt,
+                    damped_less_until && now < damped_less_until[i] ? alpha_near_crack : alpha,
+                    sample, k, acc);
+        else
+          kick_driven(p_.motion[i] == Motion::Fixed, p_.drive_vel[i], p_.drive_angvel[i], planar, f,
+                      t, m, inertia, dt, drive_force_prev_[2 * i], drive_force_prev_[2 * i + 1], k,
+                      acc);
+        acc.gravity += m * dot(gravity, k.v_old) * dt;
+        if (has_user_force) {
+          acc.external += 0.5 * dot(f_user, k.v_old + k.v_new) * dt;
+          if (sample) acc.external_boundary += 0.5 * dot(f_user, k.v_new) * dt;
+        }
+        // The drift and the rotation update.
+        p_.vel[i] = k.v_new;
+        p_.angvel[i] = k.w_new;
+        const Vec3 dx = k.v_new * dt;
+        p_.pos_rad[i].x += dx;
+        p_.displacement[i] += dx;
+        if (planar)
+          p_.angle[i] += k.w_new.z * dt;
+        else if (turning || norm2(k.w_new) > 0.0)  // central forces leave a grain at rest unturned
+          p_.orientation[i] = integrate_orientation(p_.orientation[i], k.w_new, dt);
+        acc.max_disp2 = std::max(acc.max_disp2, norm2(p_.pos_rad[i].x - x_at_build_[i]));
+        if (sample) {
+          // Kinetic energy at t_n as leapfrog conserves it: (1/2) m v^{n-1/2} . v^{n+1/2}. With the
+          // trapezoidal work rule the balance of §2.4 then closes exactly for linear springs (it
+          // differs from (1/2) m v^2 by O(dt^2)).
+          acc.ke_t += 0.5 * m * dot(k.v_old, k.v_new);
+          acc.ke_r += 0.5 * inertia * dot(k.w_old, k.w_new);
+        }
       }
-      if (!turning) t = {};  // the walls' torques too are rounding then
-      Kick k{p_.vel[i], p_.angvel[i], {}, {}};
-      if (p_.motion[i] == Motion::Free)
-        kick_free(f, t, m, inertia, dt,
-                  damped_less_until && now < damped_less_until[i] ? alpha_near_crack : alpha,
-                  sample, k, acc);
-      else
-        kick_driven(p_.motion[i] == Motion::Fixed, p_.drive_vel[i], p_.drive_angvel[i], planar, f,
-                    t, m, inertia, dt, drive_force_prev_[2 * i], drive_force_prev_[2 * i + 1], k,
-                    acc);
-      acc.gravity += m * dot(gravity, k.v_old) * dt;
-      if (has_user_force) {
-        acc.external += 0.5 * dot(f_user, k.v_old + k.v_new) * dt;
-        if (sample) acc.external_boundary += 0.5 * dot(f_user, k.v_new) * dt;
-      }
-      // The drift and the rotation update.
-      p_.vel[i] = k.v_new;
-      p_.angvel[i] = k.w_new;
-      const Vec3 dx = k.v_new * dt;
-      p_.pos_rad[i].x += dx;
-      p_.displacement[i] += dx;
-      if (planar)
-        p_.angle[i] += k.w_new.z * dt;
-      else if (turning || norm2(k.w_new) > 0.0)  // central forces leave a grain at rest unturned
-        p_.orientation[i] = integrate_orientation(p_.orientation[i], k.w_new, dt);
-      acc.max_disp2 = std::max(acc.max_disp2, norm2(p_.pos_rad[i].x - x_at_build_[i]));
-      if (sample) {
-        // Kinetic energy at t_n as leapfrog conserves it: (1/2) m v^{n-1/2} . v^{n+1/2}. With the
-        // trapezoidal work rule the balance of §2.4 then closes exactly for linear springs (it
-        // differs from (1/2) m v^2 by O(dt^2)).
-        acc.ke_t += 0.5 * m * dot(k.v_old, k.v_new);
-        acc.ke_r += 0.5 * inertia * dot(k.w_old, k.w_new);
-      }
-    }
-    block_int_[blk] = acc;
+      block_int_[blk] = acc;
+    });
   });
   if (split_) {
     // A sampled step's kinetic energy is read within it; the other steps' partials travel with

@@ -220,11 +220,12 @@ class Simulation::PairWalk {
   // the same order (and needs no shape for them where the law's contact is off between bonded
   // grains); a bond whose result does not stand goes through the law's compute().
   template <std::size_t... L>
-  void evaluate_lanes(std::size_t begin, std::size_t end, std::index_sequence<L...>) {
+  [[gnu::always_inline]] void evaluate_lanes(std::size_t begin, std::size_t end,
+                                             std::index_sequence<L...>) {
     (void)((lanes_for<static_cast<std::uint32_t>(L)>(std::get<L>(sim_.bonds_), begin, end)) || ...);
   }
   template <std::uint32_t LawIndex, class Law>
-  bool lanes_for(BondSet<Law>& set, std::size_t begin, std::size_t end) {
+  [[gnu::always_inline]] bool lanes_for(BondSet<Law>& set, std::size_t begin, std::size_t end) {
     if constexpr (!has_lane_kernel<Law>) {
       return false;
     } else {
@@ -405,31 +406,38 @@ void Simulation::compute_pairs_for(ContactSet<CL>& c) {
   else if (c.kept_force.size() != c.pairs.size())
     c.kept_force.assign(c.pairs.size(), Vec3{});
   for_each_item(own.size(), [&](std::size_t k) {
-    const std::size_t blk = own.begin + k;
-    const std::size_t begin = blk * kParticleBlock, end = std::min(n, begin + kParticleBlock);
-    std::fill(p_.force.begin() + static_cast<std::ptrdiff_t>(begin),
-              p_.force.begin() + static_cast<std::ptrdiff_t>(end), Vec3{});
-    std::fill(p_.torque.begin() + static_cast<std::ptrdiff_t>(begin),
-              p_.torque.begin() + static_cast<std::ptrdiff_t>(end), Vec3{});
-    block_failures_[blk].clear();
-    PairGeometry g;
-    PairDissipation dis, joint_dis;
-    PairWalk<CL>(*this, c, block_failures_[blk], g, dis, joint_dis)
-        .walk(c.pairs.offsets[begin], c.pairs.offsets[end], static_cast<std::uint32_t>(end),
-              c.pairs.cross_begin[blk], c.stores[blk]);
-    // New contacts append: once an eighth of the block's states came since it was last in pair
-    // order, it is put back in order.
-    std::vector<typename CL::State>& store = c.stores[blk];
-    if (store.size() > c.packed[blk] + c.packed[blk] / 8 + 32) {
-      repack_history(c.pairs.offsets[begin], c.pairs.offsets[end], c.history, store);
-      c.packed[blk] = static_cast<std::uint32_t>(store.size());
-    }
-    block_dis_[blk] = dis;
-    block_joint_dis_[blk] = joint_dis;
+    with_instruction_set(isa_, [&] { compute_pair_block(c, own.begin + k); });
   });
   process_failures(own.begin, own.end);
   // A split sample adds the sums once the wall pass has exchanged the partials.
   if (!split_) add_pair_dissipation();
+}
+
+// One particle block's pairs: its particles' loads zeroed, its walk, its contact states put back in
+// pair order where new ones piled up.
+template <class CL>
+void Simulation::compute_pair_block(ContactSet<CL>& c, std::size_t blk) {
+  const std::size_t n = p_.size();
+  const std::size_t begin = blk * kParticleBlock, end = std::min(n, begin + kParticleBlock);
+  std::fill(p_.force.begin() + static_cast<std::ptrdiff_t>(begin),
+            p_.force.begin() + static_cast<std::ptrdiff_t>(end), Vec3{});
+  std::fill(p_.torque.begin() + static_cast<std::ptrdiff_t>(begin),
+            p_.torque.begin() + static_cast<std::ptrdiff_t>(end), Vec3{});
+  block_failures_[blk].clear();
+  PairGeometry g;
+  PairDissipation dis, joint_dis;
+  PairWalk<CL>(*this, c, block_failures_[blk], g, dis, joint_dis)
+      .walk(c.pairs.offsets[begin], c.pairs.offsets[end], static_cast<std::uint32_t>(end),
+            c.pairs.cross_begin[blk], c.stores[blk]);
+  // New contacts append: once an eighth of the block's states came since it was last in pair
+  // order, it is put back in order.
+  std::vector<typename CL::State>& store = c.stores[blk];
+  if (store.size() > c.packed[blk] + c.packed[blk] / 8 + 32) {
+    repack_history(c.pairs.offsets[begin], c.pairs.offsets[end], c.history, store);
+    c.packed[blk] = static_cast<std::uint32_t>(store.size());
+  }
+  block_dis_[blk] = dis;
+  block_joint_dis_[blk] = joint_dis;
 }
 
 void Simulation::add_pair_dissipation() {

@@ -39,6 +39,11 @@ Simulation::Simulation(ParticleStore particles, EngineConfig config, ContactMode
       throw InputError(where, key, num(value), "allowed: 0 <= value <= 1");
   set_dynamic_damping(cfg_.dynamic_damping_alpha, cfg_.dynamic_damping_radius,
                       cfg_.dynamic_damping_time);
+  isa_ = cfg_.instruction_set.value_or(best_instruction_set());
+  if (!instruction_set_supported(isa_))
+    throw InputError(where, "instruction_set", std::string(instruction_set_name(isa_)),
+                     fmt::format("this CPU (or this build) runs at most '{}'",
+                                 instruction_set_name(best_instruction_set())));
   if (!(cfg_.skin >= 0.0) || !std::isfinite(cfg_.skin))
     throw InputError(where, "skin", num(cfg_.skin), "must be >= 0 m (0 = automatic)");
   std::visit(

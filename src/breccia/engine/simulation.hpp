@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "breccia/boundary/wall.hpp"
+#include "breccia/core/instruction_set.hpp"
 #include "breccia/engine/crack_catalogue.hpp"
 #include "breccia/engine/domain.hpp"
 #include "breccia/engine/events.hpp"
@@ -50,6 +51,9 @@ struct EngineConfig {
   // The reference path of Simulation::pair_force: the pair pass keeps every pair's force in an
   // array even where the laws' states give it back (tests compare the two).
   bool keep_pair_forces = false;
+  // The instruction set of the pair pass and the integrator (core/instruction_set.hpp); none =
+  // the best this CPU runs.
+  std::optional<InstructionSet> instruction_set;
 };
 
 // One sample of the energy budget at time t_n (docs/physics.md §2.4). Cumulative terms count from
@@ -338,6 +342,8 @@ class Simulation {
   const ParticleStore& particles() const noexcept { return p_; }
   ParticleStore& particles_mut() noexcept { return p_; }  // protocols: drives and fixities only
   const EngineConfig& config() const noexcept { return cfg_; }
+  // The instruction set the hot kernels run in (the config's, or the best this CPU runs).
+  InstructionSet instruction_set() const noexcept { return isa_; }
   double time_step() const noexcept { return dt_; }
   double critical_time_step() const noexcept { return dt_crit_; }
   double time() const noexcept { return time_; }
@@ -387,14 +393,17 @@ class Simulation {
   // sum of the pair's bond, joint and contact state forces in the pair pass's order, the pass's
   // number to the bit, and the engine holds no array of pair forces (24 B a pair); otherwise
   // (dashpots, beams, laws judged on the interface) the pass keeps one and this reads it.
+  // The sum runs in the pass's instruction set: the pass's fused multiply-adds are its rounding.
   template <class CL>
   Vec3 pair_force(const ContactSet<CL>& c, std::size_t k) const noexcept {
     if (keep_pair_forces_) return c.kept_force[k];
     Vec3 f;
-    std::apply([&](const auto&... set) { (add_state_force(set, k, true, f), ...); }, bonds_);
-    std::apply([&](const auto&... set) { (add_state_force(set, k, false, f), ...); }, joints_);
-    if constexpr (has_state_force<CL>)
-      if (c.history[k] != kNoHistory) f += CL::state_force(c.state(k));
+    with_instruction_set(isa_, [&] {
+      std::apply([&](const auto&... set) { (add_state_force(set, k, true, f), ...); }, bonds_);
+      std::apply([&](const auto&... set) { (add_state_force(set, k, false, f), ...); }, joints_);
+      if constexpr (has_state_force<CL>)
+        if (c.history[k] != kNoHistory) f += CL::state_force(c.state(k));
+    });
     return f;
   }
   // Whether the pair pass keeps the array of pair forces (above).
@@ -506,6 +515,8 @@ class Simulation {
   void rebuild_for(ContactSet<CL>& contacts);
   template <class CL>
   void compute_pairs_for(ContactSet<CL>& contacts);
+  template <class CL>
+  void compute_pair_block(ContactSet<CL>& contacts, std::size_t block);
   template <class CL>
   class PairWalk;  // one block's walk of the pair pass (pair_pass.cpp)
   void process_failures(std::size_t first_block, std::size_t last_block);
@@ -643,6 +654,7 @@ class Simulation {
 
   ParticleStore p_;
   EngineConfig cfg_;
+  InstructionSet isa_ = InstructionSet::baseline;
   ContactModel contact_;
   BondSets bonds_;
   JointSets joints_;

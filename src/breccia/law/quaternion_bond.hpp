@@ -106,8 +106,9 @@ struct QuaternionBond : beam::BeamLaw<QuaternionBond> {
   // Four 3D bonds at a time (beam_lanes.hpp), for a run in 3D (p.run not planar): compute() of
   // each bond where it stands (to the bit without fused multiply-adds). A bond that breaks or
   // leaves the series' range stands false and goes through compute().
-  static void compute_lanes(const Params& p, const beam::LaneBond (&b)[beam::kLanes],
-                            beam::LaneResult (&out)[beam::kLanes]) noexcept {
+  [[gnu::always_inline]] static void compute_lanes(const Params& p,
+                                                   const beam::LaneBond (&b)[beam::kLanes],
+                                                   beam::LaneResult (&out)[beam::kLanes]) noexcept {
     beam::LaneLoads L;
     beam::lanes_half_length_beams(b, p.modulus, moduli(p).shear, L);
     for (int l = 0; l < beam::kLanes; ++l) {

@@ -743,6 +743,7 @@ json initial_manifest(const ExperimentSpec& spec, const Built& b, const RunOptio
             {"seed", spec.engine.seed},
             {"threads", max_threads()},
             {"machine", machine_description()},
+            {"instruction_set", instruction_set_name(b.sim.instruction_set())},
             {"status", "running"},
             {"density_scaling", spec.density_scaling},
             {"grain_density_kg_m3", spec.density},
@@ -979,7 +980,8 @@ RunResult resume_run(const std::string& folder_name, const ResumeOptions& ro,
              {"when", fmt::format("{:%Y-%m-%dT%H:%M:%S}", fmt::localtime(std::time(nullptr)))},
              {"command", opt.command_line},
              {"threads", max_threads()},
-             {"machine", machine_description()}};
+             {"machine", machine_description()},
+             {"instruction_set", instruction_set_name(sim.instruction_set())}};
   if (opt.split_over_ranks) {
     sim.split_over_ranks();
     entry["mpi"] = decomposition(sim);

@@ -118,7 +118,9 @@ std::string sample_key(const ExperimentSpec& s) {
   // The packing cycles with the test's contact law: its parameters define the sample too.
   const std::size_t c0 = text.find("\n[contact]"), c1 = text.find("\n[bond]");
   if (c0 != std::string::npos && c1 != std::string::npos) sample_part += text.substr(c0, c1 - c0);
-  sample_part += "|packing-7";
+  sample_part += "|packing-7|";
+  // The fused multiply-adds of the higher instruction sets round the packing's forces otherwise.
+  sample_part += instruction_set_name(instruction_set_of(s));
   return fmt::format("{:016x}", fnv1a64(sample_part));
 }
 
@@ -133,8 +135,26 @@ ContactModel contact_model(const ExperimentSpec& s) {
   });
 }
 
+InstructionSet instruction_set_of(const ExperimentSpec& s) {
+  if (s.instruction_set == "auto") return best_instruction_set();
+  const std::optional<InstructionSet> set = instruction_set_from_name(s.instruction_set);
+  if (!set)
+    throw InputError(s.source, "engine.instruction_set", s.instruction_set,
+                     "allowed: auto, baseline, x86-64-v3");
+  if (!instruction_set_supported(*set)) {
+    std::string runs;
+    for (InstructionSet each : kInstructionSets)
+      if (instruction_set_supported(each))
+        runs += (runs.empty() ? "" : ", ") + std::string(instruction_set_name(each));
+    throw InputError(s.source, "engine.instruction_set", s.instruction_set,
+                     "this CPU (or this build) runs: auto, " + runs);
+  }
+  return *set;
+}
+
 PackingSettings packing_settings(const ExperimentSpec& s) {
   PackingSettings p;
+  p.instruction_set = instruction_set_of(s);
   p.shape = s.shape == "cylinder"                   ? SampleShape::Cylinder
             : s.shape == "rectangle"                ? SampleShape::Rectangle
             : s.shape == "disk"                     ? SampleShape::Disk
@@ -516,6 +536,7 @@ Built assemble(const ExperimentSpec& s, const std::function<void(const std::stri
   ParticleStore ps = g.make_store(s.grain_body());
   decltype(g.particles)().swap(g.particles);  // the store holds them now
   EngineConfig cfg = s.engine;
+  cfg.instruction_set = instruction_set_of(s);
   cfg.gravity = s.dimension == 2 ? Vec3{0, -s.gravity, 0} : Vec3{0, 0, -s.gravity};
   Simulation sim(std::move(ps), cfg, contact_model(s));
   visit_params<BondLaws>(s.bond, [&]<class Law>(const typename Law::Params& p) {

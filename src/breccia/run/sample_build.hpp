@@ -22,6 +22,9 @@ struct GeneratedSample {
   nlohmann::json report;
 };
 PackingSettings packing_settings(const ExperimentSpec& spec);
+// The instruction set the experiment's kernels run in (engine.instruction_set, "auto" = the best
+// this CPU runs); InputError naming the file when the CPU does not run the one it names.
+InstructionSet instruction_set_of(const ExperimentSpec& spec);
 // The contact law of the experiment (particles and walls).
 ContactModel contact_model(const ExperimentSpec& spec);
 // Packs the sample of `spec` ([sample] keys) and, when `path` is not empty, writes it there as a

@@ -30,9 +30,10 @@ constexpr const char* kCheckpointMagic = "breccia-checkpoint";
 // with rolling and twisting springs; 20: parallel-bond and beam states without their radius and
 // stiffness per unit area (derived from the grains' radii), bond tags in 32 bits; 21, 22: crack
 // records and AE logs beyond the resident ones in the run folder; 23: pair forces kept only where
-// the laws' states do not give them back. A new law, lab test or recorder needs no new number:
+// the laws' states do not give them back; 24: the adaptive loading's controller; 25: the
+// instruction set of the run's kernels. A new law, lab test or recorder needs no new number:
 // laws and tests are found by name, and each recorder checks its own label.
-constexpr std::uint32_t kCheckpointFormat = 24;
+constexpr std::uint32_t kCheckpointFormat = 25;
 
 // Layout: magic, format, version, commit, the resolved experiment, the state of every part, and
 // last the FNV-1a hash of all bytes before it, so that a damaged file is refused before any of

@@ -156,6 +156,7 @@ Simulation vessel_simulation(const std::vector<PosRad>& particles, const Region&
   cfg.local_damping = 0.7;
   cfg.energy_interval = 0;
   cfg.seed = s.seed;
+  cfg.instruction_set = s.instruction_set;
   double rsum = 0.0;
   for (const PosRad& q : particles) rsum += q.r;
   cfg.skin = 0.4 * rsum / static_cast<double>(particles.size());
@@ -299,6 +300,7 @@ std::array<double, 9> contact_stress_sum(const std::vector<PosRad>& p, const Reg
     store.add({.tag = i + 1, .position = p[i].x, .radius = p[i].r, .density = s.density});
   EngineConfig cfg;
   cfg.energy_interval = 0;
+  cfg.instruction_set = s.instruction_set;
   Simulation sim(std::move(store), cfg, packing::frictionless(s.contact));
   sim.initialise();
   sim.step();

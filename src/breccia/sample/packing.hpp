@@ -54,6 +54,8 @@ struct PackingSettings {
   int floater_contacts = 3;         // N_f: grains with fewer contacts are grown (expansion)
   double floater_max_growth = 0.2;  // largest relative radius growth of a floater (P&C: 20 %)
   std::uint64_t seed = 1;
+  // The packing's kernels (core/instruction_set.hpp); none = the best this CPU runs.
+  std::optional<InstructionSet> instruction_set;
   std::size_t max_particles = 2'000'000;
   std::uint64_t max_steps = 400'000;         // cycling limit of the whole packing
   std::uint64_t insertion_failures = 5'000;  // insertion: consecutive failed fits that end it

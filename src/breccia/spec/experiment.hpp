@@ -35,6 +35,9 @@ struct ExperimentSpec {
   double gravity = 0.0;          // m/s^2 along -z (3D) or -y (2D)
   EngineConfig engine;           // gravity is filled from `gravity` when the simulation is built
   double density_scaling = 1.0;  // mass and inertia factor for quasi-static runs (>= 1)
+  // The hot kernels' instruction set: "auto" (the fastest this CPU runs), "baseline" or
+  // "x86-64-v3" (core/instruction_set.hpp); resolved into engine.instruction_set when built.
+  std::string instruction_set = "auto";
   // Dynamic damping (engine.dynamic_damping_*; radius and time 0 = resolved when the sample is
   // built: the AE source radius and its event duration).
   bool dynamic_damping = false;

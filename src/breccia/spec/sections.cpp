@@ -264,6 +264,21 @@ std::vector<SpecField> engine_fields() {
        1, kInf},
       {"engine", "energy_interval", "", engine_at<&EngineConfig::energy_interval>,
        "steps between energy-ledger samples", 1, 1e9},
+      {"engine",
+       "instruction_set",
+       "",
+       at<&S::instruction_set>,
+       "the instruction set of the pair pass and the integrator (the packing's too): auto = "
+       "x86-64-v3 where the CPU has it (AVX2 with fused multiply-adds), else baseline (the "
+       "build's own flags: the portable x86-64 of the README's build); the run's manifest names "
+       "the set. Results are the same to the bit within one set at any thread and rank count and "
+       "differ between sets by the rounding of fused multiply-adds (docs/physics.md §1.7): name "
+       "one to reproduce a run of another machine to the bit",
+       0,
+       kText,
+       true,
+       true,
+       {"auto", "baseline", "x86-64-v3"}},
   };
 }
 
