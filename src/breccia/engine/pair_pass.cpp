@@ -219,6 +219,8 @@ class Simulation::PairWalk {
   // the lane kernel of the first law that has one and holds bonds. The walk takes the results in
   // the same order (and needs no shape for them where the law's contact is off between bonded
   // grains); a bond whose result does not stand goes through the law's compute().
+  // Always inlined, with lanes_for and the laws' compute_lanes: GCC's flatten leaves them out of
+  // the walk's x86-64-v3 copy otherwise (core/instruction_set.hpp), and there they are most of it.
   template <std::size_t... L>
   [[gnu::always_inline]] void evaluate_lanes(std::size_t begin, std::size_t end,
                                              std::index_sequence<L...>) {

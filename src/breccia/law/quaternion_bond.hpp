@@ -105,7 +105,8 @@ struct QuaternionBond : beam::BeamLaw<QuaternionBond> {
 
   // Four 3D bonds at a time (beam_lanes.hpp), for a run in 3D (p.run not planar): compute() of
   // each bond where it stands (to the bit without fused multiply-adds). A bond that breaks or
-  // leaves the series' range stands false and goes through compute().
+  // leaves the series' range stands false and goes through compute(). Always inlined, so that
+  // the pair pass's x86-64-v3 copy holds it (core/instruction_set.hpp).
   [[gnu::always_inline]] static void compute_lanes(const Params& p,
                                                    const beam::LaneBond (&b)[beam::kLanes],
                                                    beam::LaneResult (&out)[beam::kLanes]) noexcept {
