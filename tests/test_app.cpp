@@ -14,6 +14,7 @@
 #include "breccia/analysis/stress_strain.hpp"
 #include "breccia/calibrate/calibration_file.hpp"
 #include "breccia/core/error.hpp"
+#include "breccia/core/instruction_set.hpp"
 #include "breccia/core/ranks.hpp"
 #include "breccia/run/memory_budget.hpp"
 #include "breccia/spec/experiment.hpp"
@@ -115,6 +116,7 @@ TEST(App, SmallUcsWritesACompleteRunFolder) {
   EXPECT_EQ(manifest["seed"], 1);
   EXPECT_EQ(manifest["density_scaling"], 100.0);
   EXPECT_FALSE(manifest["machine"].get<std::string>().empty());
+  EXPECT_EQ(manifest["instruction_set"], instruction_set_name(best_instruction_set()));
   // A peak exists and is followed by the drop that ended the test; cracks are recorded.
   EXPECT_TRUE(summary["peak_reached"].get<bool>());
   EXPECT_GT(summary["peak_deviatoric_stress_pa"].get<double>(), 1e6);
