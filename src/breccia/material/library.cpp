@@ -490,8 +490,9 @@ std::string law_limits_notes() {
          "for which that loading is not quasi-static, on 150,800 grains at its calibration's "
          "loading 21.58 GPa and 61.0 MPa against 22.80 GPa and 63.0 MPa. "
          "`berea_2d` on the 59,817-grain benchmark sample of bench/biaxial-60k (19 x 30 mm, "
-         "24-72 um grains, porosity 0.134, density scaling 500, platens at 0.15 m/s) gives E_t50 "
-         "13.8 GPa and a peak q of 204.5 MPa at 15 MPa confinement, against 8.5 GPa and 123.7 "
+         "24-72 um grains, pushed rows at porosity 0.134, density scaling 500, platens at "
+         "0.15 m/s) gave E_t50 13.8 GPa and a peak q of 204.5 MPa at 15 MPa confinement, against "
+         "8.5 GPa and 123.7 "
          "MPa on the 3,400 grains of 20-60 um it was calibrated for "
          "(examples/biaxial-berea-2d.toml, 0.03 m/s, density scaling 100): +62 % and +65 %. The "
          "strength is inertia: the benchmark's platen speed times the square root of its density "
@@ -500,14 +501,16 @@ std::string law_limits_notes() {
          "204.5 MPa (128.6 MPa at the preset's own loading; validation/preset-resolution, "
          "\"Inertia\"). A preset carries to a larger sample at its calibration's platen speed "
          "and density scaling. Inertia raises the modulus too, by 27 % on that packing (7.34 to "
-         "9.31 GPa), not by the 62 %. The rest is not the size: with the preset's `rows` "
-         "compaction E is flat from 3,453 to 13,706 disks. The benchmark's `homogeneous` "
-         "compaction makes larger samples denser and stiffer (porosity 0.150, 0.142, 0.134 and "
-         "E +7 % from 2,394 to 9,507 disks at the benchmark's inertia), which explains part of "
-         "it; the step to 13.8 GPa is steeper than that trend and not yet explained "
-         "(validation/preset-resolution, \"The 60k-disk modulus\"). Presets are calibrated "
-         "at one resolution (grain size and sample size in each record); DEM moduli and strengths "
-         "depend on it, so a sample of other grains should be calibrated again.\n";
+         "9.31 GPa), not by the 62 %. With the preset's `rows` compaction E is flat from 3,453 "
+         "to 13,706 disks at the preset's loading. At the benchmark's inertia the step remains on "
+         "today's homogeneous 60k sample (E_t50 13.2 GPa against 9.1 on 9,507 disks) but it is "
+         "not the packing: windows of 2,500 and 10,009 disks cut from the 60k packing read 8.4 "
+         "and 10.5 GPa, and over q 30-70 MPa the 10k and 60k samples share one modulus "
+         "(9.4-9.6 GPa); the large sample stays stiff above 60 MPa, where E_t50 is read, while "
+         "the smaller ones soften. Whether that survives at the preset's own loading is not yet "
+         "measured (validation/preset-resolution, \"The 60k-disk modulus\"). Presets are "
+         "calibrated at one resolution (grain size and sample size in each record); DEM moduli "
+         "and strengths depend on it, so a sample of other grains should be calibrated again.\n";
 }
 
 // One row per preset with a resolution block: how far E and the UCS move over its sample sizes.
