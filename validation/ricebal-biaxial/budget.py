@@ -5,7 +5,11 @@ platen-force imbalance before the peak) and the work budget over the loading (fr
 history row), the membranes' work included: friction, damping, kinetic, stored, and the
 remainder W_ext - W_int - W_frac that seed 002 books as friction (compare.py's estimators).
 
-Usage: budget.py OUT NAME...
+Usage: budget.py [--to-strain X | --split-at-peak] OUT NAME...
+  --to-strain X: the budget from the first history row to the last at or below axial strain X
+  (runs that went on further are compared over the same strain); by default to the last row.
+  --split-at-peak: where the work goes up to the peak row and after it, each as a share of the
+  whole test's work (the stored energy after the peak is what the failure released).
 """
 import csv
 import glob
@@ -44,9 +48,11 @@ def damage_index_at_peak(path, peak_strain):
     return float(rows[-1]["damage_index"])
 
 
-def row(name, path):
+def row(name, path, to_strain=None):
     s = json.load(open(os.path.join(path, "summary.json")))
     hist = list(csv.DictReader(open(os.path.join(path, "history.csv"))))
+    if to_strain is not None:
+        hist = [h for h in hist if float(h["axial_strain"]) <= to_strain] or hist[:1]
     g = gains(hist[0], hist[-1])
     gain = lambda *keys: sum(g[k] for k in keys)
     w = g["work_j"]
@@ -66,7 +72,33 @@ def row(name, path):
             + " | ".join(f"{100 * v / w:.0f}" for v in shares) + " |")
 
 
-def main(out, names):
+def split_row(name, path):
+    s = json.load(open(os.path.join(path, "summary.json")))
+    hist = list(csv.DictReader(open(os.path.join(path, "history.csv"))))
+    q = [float(h["deviatoric_stress_pa"]) for h in hist]
+    peak = max(range(len(q)), key=q.__getitem__)
+    before, after = gains(hist[0], hist[peak]), gains(hist[peak], hist[-1])
+    total = before["work_j"] + after["work_j"]
+    pc = lambda g, *keys: f"{100 * sum(g[k] for k in keys) / total:.0f}"
+    damping = ("local_damping_j", "viscous_damping_j")
+    return (f"| {name} | {round(s['confining_stress_pa'] / 1e6)} | "
+            f"{pc(before, 'work_j')} / {pc(before, *STORED)} / {pc(before, 'friction_j')} / "
+            f"{pc(before, *damping)} | {pc(after, 'work_j')} / "
+            f"{100 * -sum(after[k] for k in STORED) / total:.0f} / {pc(after, 'friction_j')} / "
+            f"{pc(after, *damping)} / {pc(after, 'released_by_breaks_j')} |")
+
+
+def main_split(out, names):
+    print("| run | sigma_3 (MPa) | to the peak: work / stored / friction / damping (%) "
+          "| after the peak: work / stored released / friction / damping / breaks (%) |")
+    print("|" + "---|" * 4)
+    for name in names:
+        for p in sorted(glob.glob(os.path.join(out, name, "*", "*", "summary.json")),
+                        key=lambda p: json.load(open(p))["confining_stress_pa"]):
+            print(split_row(name, os.path.dirname(p)))
+
+
+def main(out, names, to_strain=None):
     print("| run | sigma_3 (MPa) | peak q (MPa) | E_t50 (GPa) | shear (%) | damage index at peak "
           "| kinetic / strain energy before the peak (limit 0.001) | platen imbalance before "
           "the peak (limit 0.05) | friction / W_ext (%) | damping (%) | kinetic (%) | stored (%) "
@@ -76,10 +108,22 @@ def main(out, names):
         tests = glob.glob(os.path.join(out, name, "*", "*", "summary.json"))
         summaries = sorted(tests, key=lambda p: json.load(open(p))["confining_stress_pa"])
         for p in summaries:
-            print(row(name, os.path.dirname(p)))
+            print(row(name, os.path.dirname(p), to_strain))
 
 
 if __name__ == "__main__":
-    if len(sys.argv) < 3:
+    args = sys.argv[1:]
+    to_strain = None
+    if args[:1] == ["--split-at-peak"]:
+        if len(args) < 3:
+            sys.exit(__doc__)
+        main_split(args[1], args[2:])
+        sys.exit(0)
+    if args[:1] == ["--to-strain"]:
+        if len(args) < 2:
+            sys.exit(__doc__)
+        to_strain = float(args[1])
+        args = args[2:]
+    if len(args) < 2:
         sys.exit(__doc__)
-    main(sys.argv[1], sys.argv[2:])
+    main(args[0], args[1:], to_strain)

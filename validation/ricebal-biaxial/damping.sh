@@ -3,10 +3,13 @@
 # their mu_b-0 reading (seed-parameters.sh) with the local damping of 0.7 at eight confinements
 # (where the damage index changes sign), then at 0, 15 and 50 MPa with dynamic damping added and
 # with the local damping lowered to 0.1 and 0.02 at the seed-parameters loading (10 /s), and at
-# 0.1 with the platens ten times slower (0 and 50 MPa).
+# 0.1 with the platens ten times slower (0 and 50 MPa), or adaptive between that and the usual
+# speed (the loading slows wherever the sample is not quasi-static; 0 and 5 MPa to 5 % strain,
+# and 0.7 the same way at 0 MPa beside it).
 # Prints the peak, the damage index, the quasi-static checks and the work budget, the membranes'
 # work included. Run by hand: 26 min on 2 cores for the first two variants (measured), about 15
-# more for 0.1 and 0.02 and 25 more for the slow variant.
+# more for 0.1 and 0.02 and 25 more for the slow variant; the two adaptive variants about 25 min
+# (measured: 8-15 min of running a test).
 #   validation/ricebal-biaxial/damping.sh [output folder] [variant names: all when none]
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -23,6 +26,8 @@ variants=(
   "alpha-0.1:0 15 50:engine.local_damping=0.1"
   "alpha-0.02:0 15 50:engine.local_damping=0.02"
   "alpha-0.1-slow:0 50:engine.local_damping=0.1 test.platen_speed=0.0015"
+  "alpha-0.1-adaptive:0 5:engine.local_damping=0.1 test.platen_speed=0.0015 test.adaptive_speed_ratio=10 test.max_strain=0.05"
+  "alpha-0.7-adaptive:0:engine.local_damping=0.7 test.platen_speed=0.0015 test.adaptive_speed_ratio=10 test.max_strain=0.05"
 )
 for v in "${variants[@]}"; do
   IFS=: read -r name pcs overrides <<<"$v"
