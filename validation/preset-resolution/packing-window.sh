@@ -5,7 +5,8 @@
 # 3.8 x 6 and 7.6 x 12 mm cut from its middle (crop.py: its grains and bonds, so its porosity and
 # bonds per grain), and samples of those sizes packed on their own the same way. Every run stops
 # once q has fallen to 0.7 of its peak. README, "The 60k-disk modulus". Run by hand, not by CI:
-# about 50 min on 2 cores (the 60k run alone half of it).
+# about 45 min on 2 cores (the 60k run alone 31 min of it). Prints the samples' porosity and
+# bonds per grain (crop.py --describe) and each run's moduli and cracks (window_moduli.py).
 #   validation/preset-resolution/packing-window.sh OUT
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -42,9 +43,4 @@ run cut-76 & run own-76 & wait
   --set "output.directory=\"$out/runs\"" --set "name=\"full-60k\"" --quiet > "$out/full-60k.log" 2>&1 &&
   touch "$out/full-60k.done"; }
 "$py" "$root/validation/preset-resolution/crop.py" --describe "$out"/sample-60k.geom "$out"/cut-*.geom "$out"/own-*.geom
-for f in "$out"/runs/*/summary.json; do
-  "$py" -c "import json,sys; s=json.load(open(sys.argv[1])); \
-print(s['experiment'], s['particles'], 'disks: E_t50', round(s['youngs_modulus_pa']/1e9, 2), \
-'GPa, nu', round(s.get('poissons_ratio') or float('nan'), 3), 'peak q', \
-round(s['peak_deviatoric_stress_pa']/1e6, 1), 'MPa,', s['steps'], 'steps,', round(s['wall_seconds']), 's')" "$f"
-done
+"$py" "$root/validation/preset-resolution/window_moduli.py" "$out"/runs/*/
