@@ -10,6 +10,8 @@
 # (validation/tumlin-full-size: Brenna x 1.802, Radkow x 1.473, Mucharz x 1.123, Tumlin x 0.746);
 # a preset's E and UCS carry over to a packing scaled as a whole. Tumlin's runs then take about
 # 3.2 times as long (2.4 times the grains, a time step 0.746 times as long), Brenna's a tenth.
+# ROCKS="tumlin radkow" runs only those rocks; THICKNESSES="6e-3" only those slab thicknesses
+# (impact, cantilever, vibration) instead of the two each test's sweep has by default.
 # then:  /usr/bin/python3 validation/slab-tests/table.py OUT
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -41,12 +43,23 @@ sweep() {  # test rock key values...
     "${grains[@]}" --over "$key" "$@"
 }
 
+rocks=(${ROCKS:-brenna mucharz radkow tumlin})
+for rock in "${rocks[@]}"; do
+  case $rock in brenna | mucharz | radkow | tumlin) ;; *)
+    echo "ROCKS: unknown rock '$rock'; expected brenna, mucharz, radkow or tumlin" >&2
+    exit 2 ;;
+  esac
+done
+thicknesses() {  # the test's default thicknesses, or THICKNESSES
+  if [ -n "${THICKNESSES:-}" ]; then echo "$THICKNESSES"; else echo "$@"; fi
+}
+
 for test in ${tests[*]}; do
-  for rock in brenna mucharz radkow tumlin; do
+  for rock in "${rocks[@]}"; do
     case $test in
-      impact) sweep impact $rock sample.slab_thickness 5e-3 10e-3 ;;
-      cantilever) sweep cantilever $rock sample.slab_thickness 6e-3 10e-3 ;;
-      vibration) sweep vibration $rock sample.slab_thickness 5e-3 10e-3 ;;
+      impact) sweep impact $rock sample.slab_thickness $(thicknesses 5e-3 10e-3) ;;
+      cantilever) sweep cantilever $rock sample.slab_thickness $(thicknesses 6e-3 10e-3) ;;
+      vibration) sweep vibration $rock sample.slab_thickness $(thicknesses 5e-3 10e-3) ;;
       abrasion) sweep abrasion $rock test.normal_stress 2e6 30e6 60e6 ;;
       *) echo "unknown test '$test': impact, cantilever, vibration or abrasion" >&2; exit 2 ;;
     esac
