@@ -72,6 +72,13 @@ def row(name, path, to_strain=None):
             + " | ".join(f"{100 * v / w:.0f}" for v in shares) + " |")
 
 
+def tests_of(out, name):
+    """The run folders of sweep NAME in OUT, by confining stress."""
+    summaries = glob.glob(os.path.join(out, name, "*", "*", "summary.json"))
+    summaries.sort(key=lambda p: json.load(open(p))["confining_stress_pa"])
+    return [os.path.dirname(p) for p in summaries]
+
+
 def split_row(name, path):
     s = json.load(open(os.path.join(path, "summary.json")))
     hist = list(csv.DictReader(open(os.path.join(path, "history.csv"))))
@@ -93,9 +100,8 @@ def main_split(out, names):
           "| after the peak: work / stored released / friction / damping / breaks (%) |")
     print("|" + "---|" * 4)
     for name in names:
-        for p in sorted(glob.glob(os.path.join(out, name, "*", "*", "summary.json")),
-                        key=lambda p: json.load(open(p))["confining_stress_pa"]):
-            print(split_row(name, os.path.dirname(p)))
+        for path in tests_of(out, name):
+            print(split_row(name, path))
 
 
 def main(out, names, to_strain=None):
@@ -105,10 +111,8 @@ def main(out, names, to_strain=None):
           "| remainder W_ext - W_int - W_frac (%) |")
     print("|" + "---|" * 13)
     for name in names:
-        tests = glob.glob(os.path.join(out, name, "*", "*", "summary.json"))
-        summaries = sorted(tests, key=lambda p: json.load(open(p))["confining_stress_pa"])
-        for p in summaries:
-            print(row(name, os.path.dirname(p), to_strain))
+        for path in tests_of(out, name):
+            print(row(name, path, to_strain))
 
 
 if __name__ == "__main__":
